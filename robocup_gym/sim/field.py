@@ -1,0 +1,62 @@
+"""The soccer field of rcssserver3d: dimensions, landmarks and the lines vision reports (spec §6)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+FIELD_LENGTH = 30.0
+"""m, x from −15 to +15."""
+FIELD_WIDTH = 20.0
+"""m, y from −10 to +10."""
+GOAL_WIDTH = 2.1
+GOAL_DEPTH = 0.6
+GOAL_HEIGHT = 0.8
+PENALTY_LENGTH = 1.8
+PENALTY_HALF_WIDTH = 3.0
+"""Half of the drawn/used penalty-area width (PenaltyWidth + GoalWidth)/2, m."""
+CENTRE_CIRCLE_RADIUS = 2.0
+
+#: Landmarks seen by vision, in the server's model order (world frame, not mirrored), m.
+LANDMARKS: dict[str, tuple[float, float, float]] = {
+    "G1L": (-15.0, 1.05, 0.8),
+    "G2L": (-15.0, -1.05, 0.8),
+    "G2R": (15.0, -1.05, 0.8),
+    "G1R": (15.0, 1.05, 0.8),
+    "F1L": (-15.0, 10.0, 0.0),
+    "F2L": (-15.0, -10.0, 0.0),
+    "F1R": (15.0, 10.0, 0.0),
+    "F2R": (15.0, -10.0, 0.0),
+}
+
+
+def _field_lines() -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    lines = [
+        ((0.0, -10.0), (0.0, 10.0)),
+        ((15.0, -10.0), (15.0, 10.0)),
+        ((-15.0, -10.0), (-15.0, 10.0)),
+        ((15.0, 10.0), (-15.0, 10.0)),
+        ((15.0, -10.0), (-15.0, -10.0)),
+        ((13.2, 3.0), (13.2, -3.0)),
+        ((13.2, 3.0), (15.0, 3.0)),
+        ((13.2, -3.0), (15.0, -3.0)),
+        ((-13.2, 3.0), (-13.2, -3.0)),
+        ((-13.2, 3.0), (-15.0, 3.0)),
+        ((-13.2, -3.0), (-15.0, -3.0)),
+    ]
+    pts = [
+        (
+            CENTRE_CIRCLE_RADIUS * math.cos(math.radians(a)),
+            CENTRE_CIRCLE_RADIUS * math.sin(math.radians(a)),
+        )
+        for a in range(0, 360, 36)
+    ]
+    lines += [(pts[i], pts[(i + 1) % 10]) for i in range(10)]
+    return lines
+
+
+#: The 21 field lines of spec §6.4 as ((x1, y1), (x2, y2)), all at z = 0.
+FIELD_LINES = _field_lines()
+#: The same as an array of shape (21, 2, 3) (end points with z = 0).
+FIELD_LINE_POINTS = np.array([[[a[0], a[1], 0.0], [b[0], b[1], 0.0]] for a, b in FIELD_LINES])

@@ -1,0 +1,166 @@
+"""Assemble the MJCF of a world: field, goals, walls, ball and any number of Naos.
+
+Geometry from spec §6 (field 30 × 20 m, goals 2.1 × 0.6 × 0.8 m at x = ±15, walls) and §5 (ball).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from robocup_gym.robot.mjcf import MOTOR_ARMATURE, robot_xml, self_collision_excludes
+from robocup_gym.robot.nao import nao_model
+from robocup_gym.sim.field import FIELD_LINES
+from robocup_gym.sim.physics import (
+    BALL_GROUND_ERP_CFM,
+    BALL_MASS,
+    BALL_RADIUS,
+    BALL_ROBOT_ERP_CFM,
+    MOTOR_MAX_TORQUE,
+    SURFACE_LAYER,
+    PhysicsConfig,
+)
+
+FIELD_LENGTH = 30.0
+FIELD_WIDTH = 20.0
+GOAL_WIDTH = 2.1
+GOAL_DEPTH = 0.6
+GOAL_HEIGHT = 0.8
+
+TEAM_COLOURS = {"left": "0.2 0.4 0.95 1", "right": "0.95 0.3 0.2 1", None: "0.5 0.5 0.5 1"}
+
+
+@dataclass(frozen=True)
+class RobotSlot:
+    """One robot in the scene: its name prefix, robot type and team (for colours)."""
+
+    prefix: str
+    type_index: int = 0
+    team: str | None = "left"
+
+
+def _box(name: str, pos, size, rgba: str = "0.9 0.9 0.9 1", cls: str = "static") -> str:
+    half = " ".join(f"{s / 2:.6g}" for s in size)
+    p = " ".join(f"{x:.6g}" for x in pos)
+    return (
+        f'    <geom name="{name}" type="box" pos="{p}" size="{half}" class="{cls}" rgba="{rgba}"/>'
+    )
+
+
+def _goal(side: int) -> list[str]:
+    """Goal walls and bar (spec §6.3); ``side`` −1 = left goal at x = −15.3, +1 = right."""
+    s = "L" if side < 0 else "R"
+    x0 = side * 15.3
+    return [
+        _box(f"goal{s}_post1", (x0, 1.07, 0.4), (0.6, 0.04, 0.8)),
+        _box(f"goal{s}_post2", (x0, -1.07, 0.4), (0.6, 0.04, 0.8)),
+        _box(f"goal{s}_back", (side * 15.58, 0, 0.4), (0.04, 2.1, 0.8)),
+        _box(f"goal{s}_bar", (x0, 0, 0.82), (0.6, 2.18, 0.04)),
+    ]
+
+
+def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> str:
+    """The complete MJCF of a world with ``robots`` (may be empty), ball and field."""
+    ph = physics or PhysicsConfig()
+    ball_robot = ph.ball_solref(*BALL_ROBOT_ERP_CFM)
+    ball_ground = ph.ball_solref(*BALL_GROUND_ERP_CFM)
+    bodies, tendons, motors, excludes, pairs = [], [], [], [], []
+    for slot in robots:
+        b, t, m = robot_xml(slot.prefix, slot.type_index, accent=TEAM_COLOURS.get(slot.team, ""))
+        bodies.append(b)
+        tendons.append(t)
+        motors.append(m)
+        excludes.append(self_collision_excludes(slot.prefix, nao_model(slot.type_index)))
+    walls = [
+        _box("wall_left", (-24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
+        _box("wall_right", (24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
+        _box("wall_back", (0, 25, 0), (50.98, 1, 1), "0.5 0.5 0.5 1"),
+        _box("wall_front", (0, -25, 0), (50.98, 1, 1), "0.5 0.5 0.5 1"),
+    ]
+    pairs.append(
+        f'    <pair geom1="ball" geom2="ground" condim="3" '
+        f'friction="{ph.ball_friction} {ph.ball_friction} 0.005 0.0001 0.0001" '
+        f'solref="{ball_ground}" solimp="0.99 0.99 0.001"/>'
+    )
+    return f"""<mujoco model="robocup_gym">
+  <compiler angle="radian" autolimits="true"/>
+  <option timestep="{ph.timestep}" gravity="0 0 -9.81" integrator="implicitfast"
+          solver="Newton" iterations="{ph.iterations}" ls_iterations="{ph.ls_iterations}"
+          cone="pyramidal"/>
+  <size memory="8M"/>
+  <visual>
+    <global offwidth="1280" offheight="720"/>
+    <quality shadowsize="2048"/>
+  </visual>
+  <default>
+    <default class="robot">
+      <geom condim="3" friction="{ph.robot_friction} 0.005 0.0001"
+            solref="{ph.robot_ground_solref()}" solimp="0.95 0.99 0.001" group="1"/>
+    </default>
+    <default class="visual">
+      <geom contype="0" conaffinity="0" group="3" mass="0"/>
+    </default>
+    <default class="robot_joint">
+      <joint limited="true" solreflimit="{2 * ph.timestep:.6g} 1" solimplimit="0.95 0.99 0.001"/>
+    </default>
+    <default class="motor_dof">
+      <joint armature="{MOTOR_ARMATURE:.6g}" limited="false"/>
+    </default>
+    <default class="motor">
+      <tendon frictionloss="{MOTOR_MAX_TORQUE}" solreffriction="{2 * ph.timestep:.6g} 1"
+              solimpfriction="0.999 0.9999 0.001"/>
+    </default>
+    <default class="static">
+      <geom condim="3" friction="{ph.robot_friction} 0.005 0.0001"
+            solref="{ph.robot_ground_solref()}" solimp="0.95 0.99 0.001" group="0"/>
+    </default>
+  </default>
+  <asset>
+    <texture name="grass" type="2d" builtin="checker" rgb1="0.2 0.55 0.2" rgb2="0.22 0.6 0.22"
+             width="512" height="512"/>
+    <material name="grass" texture="grass" texrepeat="15 10"/>
+    <texture name="sky" type="skybox" builtin="gradient" rgb1="0.6 0.75 0.95" rgb2="0.2 0.3 0.5"
+             width="256" height="256"/>
+  </asset>
+  <worldbody>
+    <light pos="-10 10 10" dir="0.5 -0.5 -1" diffuse="0.8 0.8 0.8"/>
+    <light pos="10 -10 10" dir="-0.5 0.5 -1" diffuse="0.4 0.4 0.4"/>
+    <geom name="ground" type="plane" pos="0 0 {-SURFACE_LAYER}" size="25 25 0.1"
+          material="grass" class="static" contype="4" conaffinity="1"/>
+{chr(10).join(walls)}
+{chr(10).join(_goal(-1) + _goal(1))}
+    <body name="ball" pos="0 0 {BALL_RADIUS}">
+      <freejoint name="ball"/>
+      <geom name="ball" type="sphere" size="{BALL_RADIUS}" mass="{BALL_MASS}" priority="1"
+            contype="2" conaffinity="1" condim="3" friction="{ph.ball_friction} 0.005 0.0001"
+            solref="{ball_robot}" solimp="0.99 0.99 0.001" rgba="1 0.9 0.9 1"/>
+    </body>
+{chr(10).join(bodies)}
+{chr(10).join(motors)}
+  </worldbody>
+  <tendon>
+{chr(10).join(tendons)}
+  </tendon>
+  <contact>
+{chr(10).join(pairs)}
+{chr(10).join(excludes)}
+  </contact>
+</mujoco>
+"""
+
+
+def _field_lines_xml() -> list[str]:
+    """White field lines as thin visual-only boxes (rendering only; vision uses the line table)."""
+    out = []
+    for i, (a, b) in enumerate(FIELD_LINES):
+        ax, ay = a
+        bx, by = b
+        cx, cy = (ax + bx) / 2, (ay + by) / 2
+        length = math.hypot(bx - ax, by - ay)
+        yaw = math.atan2(by - ay, bx - ax)
+        out.append(
+            f'    <geom name="line{i}" type="box" pos="{cx:.5g} {cy:.5g} 0.0005" '
+            f'size="{length / 2:.5g} 0.025 0.0005" euler="0 0 {yaw:.6g}" class="visual" '
+            f'rgba="1 1 1 1"/>'
+        )
+    return out

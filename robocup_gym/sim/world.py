@@ -1,0 +1,763 @@
+"""The embedded SimSpark world on MuJoCo: robots, ball, field, 20 ms cycles, perception.
+
+:class:`World` is the in-process simulator every environment drives by default. One
+:meth:`World.step` is one SimSpark agent cycle (0.02 s). Joints are velocity-controlled exactly as
+on rcssserver3d (target angular velocity in rad/s, clipped to the joint's max speed, driven by a
+10 N·m motor; commands are ignored while a joint is at or beyond a stop), with a configurable dead
+time between a command and its effect (one cycle by default, as SimSpark). Perception is built on
+demand in SimSpark's units and frames (:class:`robocup_gym.types.Perception`).
+
+Example::
+
+    world = World(robot_types=[0])
+    world.place_robot(0, x=-1.0, y=0.0, heading_deg=0.0)
+    world.place_ball((-0.8, -0.055))
+    for _ in range(50):
+        world.step({0: AgentCommand({"rle3": -6.14})})
+    p = world.perceive(0)
+    print(p.joint("rlj3"), p.ground_truth.ball_pos)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim import physics as phys
+from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
+from robocup_gym.sim.scene import RobotSlot, scene_xml
+from robocup_gym.sim.vision import CALIBRATION_ERROR_M, PLAYER_PARTS, VisionConfig, see
+from robocup_gym.types import (
+    AgentCommand,
+    ForceResistance,
+    GameState,
+    GroundTruth,
+    HeardMessage,
+    Perception,
+)
+
+PAUSED_MODES = ("BeforeKickOff", "GameOver")
+"""Play modes in which the game clock stands still."""
+SAY_MAX_CHARS = 20
+HEARING_RANGE_M = 50.0
+
+
+class SimulationDivergedError(RuntimeError):
+    """The physics produced NaN/inf or MuJoCo reported an instability; call :meth:`World.reset`."""
+
+
+@dataclass
+class RobotState:
+    """Book-keeping of one robot in the world (ids into the MuJoCo model and agent state)."""
+
+    index: int
+    prefix: str
+    model: NaoModel
+    team: str | None = None
+    """Team side ``"left"``/``"right"``."""
+    team_name: str | None = None
+    unum: int | None = None
+    announce_team: bool = False
+    """True until the next GS carries unum/team (sent once after init)."""
+    qpos_root: int = 0
+    qvel_root: int = 0
+    qpos_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    qvel_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    qvel_motors: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    torso_body: int = 0
+    head_body: int = 0
+    part_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    foot_geoms: dict[int, str] = field(default_factory=dict)
+    foot_bodies: dict[str, int] = field(default_factory=dict)
+    robot_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    robot_geoms: frozenset = frozenset()
+    targets: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Active motor targets, rad/s, canonical order."""
+    pending: list = field(default_factory=list)
+    """Commands waiting out the dead time: list of (due_cycle, velocities array or None mask)."""
+    accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
+    prev_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    perception_counter: int = 0
+    calibration: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    heard: list[HeardMessage] = field(default_factory=list)
+    hear_capacity: dict[str, int] = field(default_factory=lambda: {"team": 2, "opp": 2})
+    last_frp: dict[str, ForceResistance] = field(default_factory=dict)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Perceptor names (canonical order)."""
+        return self.model.perceptor_names
+
+    @property
+    def effector_names(self) -> tuple[str, ...]:
+        """Effector names (canonical order)."""
+        return self.model.effector_names
+
+
+def yaw_quat(yaw_rad: float) -> np.ndarray:
+    """Quaternion (w, x, y, z) of a rotation by ``yaw_rad`` about world z."""
+    return np.array([math.cos(yaw_rad / 2), 0.0, 0.0, math.sin(yaw_rad / 2)])
+
+
+def heading_to_quat(heading_deg: float) -> np.ndarray:
+    """Torso orientation for a robot whose forward (+y of the torso) points at ``heading_deg``
+    (0 = world +x, counter-clockwise positive)."""
+    return yaw_quat(math.radians(heading_deg - 90.0))
+
+
+class World:
+    """The SimSpark Nao world on MuJoCo.
+
+    Args:
+        robot_types: One entry per robot (types 0–4). Robot ``i`` is addressed by index ``i``.
+        teams: ``"left"``/``"right"`` per robot (default: all left). Decides the colour, the mirror
+            of team-frame coordinates, and hearing.
+        physics: MuJoCo settings (see :mod:`robocup_gym.sim.physics`).
+        dead_time_cycles: Cycles between a command and the physics step it first acts in, counted
+            like SimSpark: with 1 (the default, as rcssserver3d) a command given to
+            :meth:`step` ``k`` acts from step ``k + 1`` on; with 0 it acts in step ``k``.
+        vision: ``See`` settings (noise, field of view, interval, ground-truth extensions).
+        seed: Seed for the vision noise and calibration offsets (deterministic when given).
+    """
+
+    def __init__(
+        self,
+        robot_types: Sequence[int] = (0,),
+        *,
+        teams: Sequence[str | None] | None = None,
+        physics: PhysicsConfig | None = None,
+        dead_time_cycles: int = 1,
+        vision: VisionConfig | None = None,
+        seed: int | None = None,
+    ) -> None:
+        if dead_time_cycles < 0:
+            raise ValueError(f"dead_time_cycles must be >= 0, got {dead_time_cycles}")
+        robot_types = list(robot_types)
+        if teams is None:
+            teams = ["left"] * len(robot_types)
+        if len(teams) != len(robot_types):
+            raise ValueError("teams must have one entry per robot")
+        for side in ("left", "right"):
+            if sum(t == side for t in teams) > 11:
+                raise ValueError(f"at most 11 robots per team, got more on the {side} team")
+        self.physics = physics or PhysicsConfig()
+        self.dead_time_cycles = int(dead_time_cycles)
+        self.vision_config = vision or VisionConfig()
+        self._substeps = self.physics.substeps
+        slots = [RobotSlot(f"r{i}_", int(t), teams[i]) for i, t in enumerate(robot_types)]
+        self.xml = scene_xml(slots, self.physics)
+        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        self._ball_body = m.body("ball").id
+        self._ball_qpos = int(m.jnt_qposadr[m.joint("ball").id])
+        self._ball_qvel = int(m.jnt_dofadr[m.joint("ball").id])
+        # Ball drag (spec §5) as damping of its free joint: translational dofs are world-frame
+        # velocities, so this is exactly F = -0.01 v; rotational damping is isotropic.
+        m.dof_damping[self._ball_qvel : self._ball_qvel + 3] = phys.BALL_LINEAR_DRAG
+        m.dof_damping[self._ball_qvel + 3 : self._ball_qvel + 6] = phys.BALL_ANGULAR_DRAG
+        self.robots: list[RobotState] = []
+        drag_bodies = []
+        for i, slot in enumerate(slots):
+            r = self._index_robot(i, slot)
+            r.team = slot.team
+            self.robots.append(r)
+            drag_bodies.extend(r.robot_bodies.tolist())
+        self._drag_bodies = np.array(drag_bodies, dtype=int)
+        self._drag_roots = (
+            m.body_rootid[self._drag_bodies] if len(drag_bodies) else np.zeros(0, int)
+        )
+        self._motor_dofs = (
+            np.concatenate([r.qvel_motors for r in self.robots])
+            if self.robots
+            else np.zeros(0, int)
+        )
+        self._gravity = np.array([0.0, 0.0, -phys.GRAVITY])
+        self.seed = seed
+        self.rng = np.random.default_rng(seed)
+        self.cycle = 0
+        self.time = 0.0
+        self.game = GameState()
+        self._qpos0 = self.data.qpos.copy()
+        self._warning_counts = np.zeros(len(self.data.warning), dtype=int)
+        self.reset(seed=seed)
+
+    # ------------------------------------------------------------------ construction helpers
+    def _index_robot(self, i: int, slot: RobotSlot) -> RobotState:
+        m = self.model
+        model = nao_model(slot.type_index)
+        p = slot.prefix
+        root = m.joint(f"{p}root").id
+        r = RobotState(index=i, prefix=p, model=model)
+        r.qpos_root = int(m.jnt_qposadr[root])
+        r.qvel_root = int(m.jnt_dofadr[root])
+        r.qpos_joints = np.array([m.jnt_qposadr[m.joint(p + e).id] for e in model.effector_names])
+        r.qvel_joints = np.array([m.jnt_dofadr[m.joint(p + e).id] for e in model.effector_names])
+        r.qvel_motors = np.array(
+            [m.jnt_dofadr[m.joint(f"{p}motor_{e}").id] for e in model.effector_names]
+        )
+        r.torso_body = m.body(f"{p}torso").id
+        r.head_body = m.body(f"{p}head").id
+        r.part_bodies = np.array([m.body(p + part).id for part in PLAYER_PARTS])
+        r.robot_bodies = np.array([m.body(p + b.name).id for b in model.bodies])
+        r.robot_geoms = frozenset(m.geom(p + b.name).id for b in model.bodies if b.collides)
+        feet = {"rf": "rfoot", "lf": "lfoot"}
+        if model.robot_type.has_toes:
+            feet.update({"rf1": "rtoe", "lf1": "ltoe"})
+        r.foot_geoms = {m.geom(p + body).id: name for name, body in feet.items()}
+        r.foot_bodies = {name: m.body(p + body).id for name, body in feet.items()}
+        r.targets = np.zeros(len(model.joints))
+        return r
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def n_robots(self) -> int:
+        """Number of robots in the world."""
+        return len(self.robots)
+
+    @property
+    def substeps(self) -> int:
+        """MuJoCo steps per 20 ms cycle."""
+        return self._substeps
+
+    def robot(self, index: int) -> RobotState:
+        """The robot with index ``index``.
+
+        Raises:
+            IndexError: naming the valid range.
+        """
+        if not 0 <= index < len(self.robots):
+            raise IndexError(f"robot index {index} out of range 0..{len(self.robots) - 1}")
+        return self.robots[index]
+
+    # ------------------------------------------------------------------ reset / placement
+    def reset(self, seed: int | None = None) -> None:
+        """Restore the initial state: robots lined up on their side lines (as after ``init``),
+        joints at 0, ball at the centre spot, time 0, BeforeKickOff. Also recovers from a
+        diverged simulation."""
+        if seed is not None:
+            self.seed = seed
+            self.rng = np.random.default_rng(seed)
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[:] = self._qpos0
+        self.cycle = 0
+        self.time = 0.0
+        self.game = GameState()
+        self._warning_counts[:] = 0
+        for r in self.robots:
+            r.targets[:] = 0.0
+            r.pending.clear()
+            r.perception_counter = 0
+            r.heard.clear()
+            r.hear_capacity = {"team": 2, "opp": 2}
+            r.last_frp = {}
+            r.calibration = self.rng.uniform(-CALIBRATION_ERROR_M, CALIBRATION_ERROR_M, 3)
+        counts = {"left": 0, "right": 0, None: 0}
+        for r in self.robots:
+            n = counts[r.team]
+            counts[r.team] += 1
+            col, row = divmod(n, 17)
+            x = -14.2 + 0.8 * col
+            y = 9.2 - 1.2 * row
+            if r.team == "right":
+                self.place_robot(r.index, x=-x, y=y, heading_deg=180.0)
+            else:
+                self.place_robot(r.index, x=x, y=y, heading_deg=0.0)
+        self.place_ball((0.0, 0.0))
+        mujoco.mj_forward(self.model, self.data)
+
+    def place_robot(
+        self,
+        index: int,
+        x: float,
+        y: float,
+        *,
+        heading_deg: float = 0.0,
+        z: float | None = None,
+        joint_angles_deg: Mapping[str, float] | np.ndarray | None = None,
+        quat: Sequence[float] | None = None,
+    ) -> None:
+        """Teleport a robot instantly: no warm-up cycles, no controller loop.
+
+        Args:
+            index: Robot index.
+            x, y: Torso centre in world coordinates, m.
+            heading_deg: Direction the robot faces (0 = world +x, CCW positive). Ignored if ``quat``.
+            z: Torso centre height, m. ``None`` puts the robot's lowest point on the ground
+                (resting 1 mm deep, as ODE's surface layer does).
+            joint_angles_deg: Joint angles in degrees, by effector/perceptor name (others 0) or as
+                an array in canonical order. ``None`` keeps the current angles.
+            quat: Full torso orientation ``(w, x, y, z)`` instead of ``heading_deg``.
+
+        All velocities and joint targets are zeroed.
+        """
+        r = self.robot(index)
+        d = self.data
+        if joint_angles_deg is not None:
+            angles = self._angles_array(r, joint_angles_deg)
+            d.qpos[r.qpos_joints] = np.radians(angles)
+        q = np.asarray(quat, float) if quat is not None else heading_to_quat(heading_deg)
+        if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
+            raise ValueError(f"quat must be 4 finite numbers, got {quat!r}")
+        for name, v in (("x", x), ("y", y), ("z", z)):
+            if v is not None and not math.isfinite(v):
+                raise ValueError(f"robot placement {name} must be finite, got {v}")
+        a = r.qpos_root
+        d.qpos[a : a + 3] = (x, y, 1.0 if z is None else z)
+        d.qpos[a + 3 : a + 7] = q / np.linalg.norm(q)
+        d.qvel[r.qvel_root : r.qvel_root + 6] = 0.0
+        d.qvel[r.qvel_joints] = 0.0
+        d.qvel[r.qvel_motors] = 0.0
+        r.targets[:] = 0.0
+        r.pending.clear()
+        r.prev_vel = np.zeros(3)
+        r.accel = np.array([0.0, 0.0, phys.GRAVITY])
+        if z is None:
+            mujoco.mj_kinematics(self.model, d)
+            lowest = self._lowest_point(r)
+            d.qpos[a + 2] += -phys.SURFACE_LAYER - lowest
+        mujoco.mj_forward(self.model, d)
+
+    def _lowest_point(self, r: RobotState) -> float:
+        m, d = self.model, self.data
+        low = np.inf
+        for g in r.robot_geoms:
+            pos = d.geom_xpos[g]
+            mat = d.geom_xmat[g].reshape(3, 3)
+            if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX:
+                half = m.geom_size[g]
+                low = min(low, pos[2] - float(np.abs(mat[2, :]) @ half))
+            elif m.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE:
+                low = min(low, pos[2] - m.geom_size[g][0])
+            else:  # capsule along local z
+                rad, half_len = m.geom_size[g][0], m.geom_size[g][1]
+                low = min(low, pos[2] - abs(mat[2, 2]) * half_len - rad)
+        return float(low)
+
+    def place_ball(
+        self,
+        pos: Sequence[float],
+        vel: Sequence[float] = (0.0, 0.0, 0.0),
+        angular_vel: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        """Put the ball at ``pos`` (x, y[, z]; z defaults to resting on the ground) with linear
+        velocity ``vel`` (m/s) and angular velocity ``angular_vel`` (rad/s, world frame)."""
+        p = np.asarray(pos, float)
+        if p.shape not in ((2,), (3,)) or not np.all(np.isfinite(p)):
+            raise ValueError(f"ball position must be 2 or 3 finite numbers, got {pos!r}")
+        v = np.asarray(vel, float)
+        w = np.asarray(angular_vel, float)
+        if (
+            v.shape != (3,)
+            or w.shape != (3,)
+            or not (np.isfinite(v).all() and np.isfinite(w).all())
+        ):
+            raise ValueError("ball velocities must be 3 finite numbers each")
+        z = p[2] if p.shape == (3,) else phys.BALL_RADIUS - phys.SURFACE_LAYER
+        a = self._ball_qpos
+        self.data.qpos[a : a + 3] = (p[0], p[1], z)
+        self.data.qpos[a + 3 : a + 7] = (1.0, 0.0, 0.0, 0.0)
+        b = self._ball_qvel
+        self.data.qvel[b : b + 3] = v
+        # free-joint angular velocity is in the body frame; the ball's frame is the world's here
+        self.data.qvel[b + 3 : b + 6] = w
+        mujoco.mj_forward(self.model, self.data)
+
+    def set_game(
+        self,
+        *,
+        play_mode: str | None = None,
+        game_time: float | None = None,
+        score_left: int | None = None,
+        score_right: int | None = None,
+    ) -> None:
+        """Set play mode (wire name, e.g. ``"PlayOn"``), game clock (s) and scores instantly."""
+        if play_mode is not None:
+            self.game.play_mode = play_mode
+        if game_time is not None:
+            self.game.game_time = float(game_time)
+        if score_left is not None:
+            self.game.score_left = int(score_left)
+        if score_right is not None:
+            self.game.score_right = int(score_right)
+
+    def set_team(self, index: int, side: str, team_name: str, unum: int) -> None:
+        """Give robot ``index`` its team (as ``init`` does): it is then seen by others, can hear,
+        and the next GS carries ``unum``/``team`` once."""
+        if side not in ("left", "right"):
+            raise ValueError(f"side must be 'left' or 'right', got {side!r}")
+        r = self.robot(index)
+        r.team, r.team_name, r.unum = side, team_name, int(unum)
+        r.announce_team = True
+
+    # ------------------------------------------------------------------ commands
+    def _angles_array(self, r: RobotState, angles) -> np.ndarray:
+        if isinstance(angles, Mapping):
+            out = np.zeros(len(r.model.joints))
+            for name, v in angles.items():
+                out[self._joint_index(r, name)] = float(v)
+        else:
+            out = np.asarray(angles, float)
+            if out.shape != (len(r.model.joints),):
+                raise ValueError(
+                    f"joint angle array must have shape ({len(r.model.joints)},), got {out.shape}"
+                )
+        bad = ~np.isfinite(out)
+        if bad.any():
+            raise ValueError(
+                f"joint angle of {r.effector_names[int(np.argmax(bad))]} is not finite"
+            )
+        return out
+
+    def _joint_index(self, r: RobotState, name: str) -> int:
+        idx = r.model.__dict__.setdefault("_name_index", {})
+        if not idx:
+            for i, j in enumerate(r.model.joints):
+                idx[j.effector] = i
+                idx[j.perceptor] = i
+        try:
+            return idx[name]
+        except KeyError:
+            raise KeyError(
+                f"unknown joint {name!r} for robot type {r.model.robot_type.index}; valid effector "
+                f"names: {', '.join(r.effector_names)}"
+            ) from None
+
+    def command_array(self, index: int, velocities: Mapping[str, float] | np.ndarray) -> np.ndarray:
+        """Validate a joint-velocity command (rad/s) and return it as a canonical-order array in
+        which NaN marks "no command for this joint" (targets are sticky).
+
+        Raises:
+            KeyError: unknown effector name (lists the valid ones).
+            ValueError: NaN/inf value (names the joint) or wrong array shape.
+        """
+        r = self.robot(index)
+        n = len(r.model.joints)
+        if isinstance(velocities, Mapping):
+            out = np.full(n, np.nan)
+            for name, v in velocities.items():
+                i = self._joint_index(r, name)
+                v = float(v)
+                if not math.isfinite(v):
+                    raise ValueError(f"velocity command for joint {r.effector_names[i]} is {v}")
+                out[i] = v
+            return out
+        out = np.asarray(velocities, dtype=float)
+        if out.shape != (n,):
+            raise ValueError(
+                f"velocity array must have shape ({n},) in effector order "
+                f"{', '.join(r.effector_names)}; got {out.shape}"
+            )
+        bad = ~np.isfinite(out)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ValueError(f"velocity command for joint {r.effector_names[i]} is {out[i]}")
+        return out.copy()
+
+    def command(self, index: int, command: AgentCommand | Mapping[str, float] | np.ndarray) -> None:
+        """Queue one cycle's command for robot ``index`` (it acts after the dead time)."""
+        r = self.robot(index)
+        if isinstance(command, AgentCommand):
+            vel = self.command_array(index, command.joint_velocities)
+            if command.beam is not None:
+                self.beam(index, *command.beam)
+            if command.say is not None:
+                self.say(index, command.say)
+        else:
+            vel = self.command_array(index, command)
+        r.pending.append((self.cycle + self.dead_time_cycles, vel))
+
+    def _realise_commands(self, r: RobotState) -> None:
+        """Write due commands into the motors (SimSpark's hinge effector, spec §8.3)."""
+        if not r.pending or r.pending[0][0] > self.cycle:
+            return
+        q = self.data.qpos[r.qpos_joints]
+        lo, hi = r.model.ranges_deg.T
+        q_deg = np.degrees(q)
+        inside = (q_deg > lo) & (q_deg < hi)
+        vmax = r.model.max_speeds
+        while r.pending and r.pending[0][0] <= self.cycle:
+            _, vel = r.pending.pop(0)
+            given = ~np.isnan(vel)
+            take = given & inside
+            r.targets[take] = np.clip(vel[take], -vmax[take], vmax[take])
+
+    def beam(self, index: int, x: float, y: float, rot_deg: float) -> bool:
+        """SimSpark ``beam`` in the robot's team frame (spec §9.4): only in BeforeKickOff and the
+        goal modes; adds the spec's noise when vision noise is on; torso at z = 0.4 m, upright.
+        Returns whether the beam was applied."""
+        if self.game.play_mode not in ("BeforeKickOff", "Goal_Left", "Goal_Right"):
+            return False
+        vals = (x, y, rot_deg)
+        if not all(math.isfinite(float(v)) for v in vals):
+            return False
+        r = self.robot(index)
+        if self.vision_config.noise:
+            x += self.rng.uniform(-1, 1) * 0.05
+            y += self.rng.uniform(-1, 1) * 0.05
+            rot_deg += self.rng.uniform(-1, 1) * 10.0
+        x = min(max(x, -15.0), 0.0)
+        y = min(max(y, -10.0), 10.0)
+        heading = rot_deg
+        if r.team == "right":
+            x, y, heading = -x, -y, rot_deg + 180.0
+        d = self.data
+        vel = r.targets.copy()
+        self.place_robot(index, x, y, z=0.4, heading_deg=heading)
+        r.targets[:] = vel
+        d.qvel[r.qvel_motors] = vel
+        return True
+
+    def say(self, index: int, message: str) -> None:
+        """Broadcast ``message`` (≤ 20 printable characters, no spaces/parentheses) from robot
+        ``index`` to every robot with a team within 50 m (spec §4.8); heard in the next percept."""
+        r = self.robot(index)
+        if not message or len(message) > SAY_MAX_CHARS or r.team is None:
+            return
+        if any(not (0x21 <= ord(c) <= 0x7E) or c in "()" for c in message):
+            return
+        src = self.data.xpos[r.torso_body]
+        for other in self.robots:
+            if other.team is None:
+                continue
+            if other is r:
+                other.heard.append(HeardMessage(r.team_name, self.game.game_time, None, message))
+                continue
+            dst = self.data.xpos[other.torso_body]
+            delta = src[:2] - dst[:2]
+            if float(np.hypot(*delta)) > HEARING_RANGE_M:
+                continue
+            key = "team" if other.team == r.team else "opp"
+            if other.hear_capacity[key] < 2:
+                continue
+            other.hear_capacity[key] -= 2
+            if other.team == "right":
+                delta = -delta
+            direction = math.degrees(math.atan2(delta[1], delta[0]))
+            other.heard.append(HeardMessage(r.team_name, self.game.game_time, direction, message))
+
+    # ------------------------------------------------------------------ stepping
+    def step(
+        self,
+        commands: Mapping[int, AgentCommand | Mapping[str, float] | np.ndarray]
+        | AgentCommand
+        | None = None,
+    ) -> None:
+        """Advance the world by one 20 ms cycle.
+
+        Args:
+            commands: ``{robot index: command}`` (an :class:`AgentCommand`, a ``{effector: rad/s}``
+                mapping or a canonical-order array), or one :class:`AgentCommand` for robot 0.
+                Joints without a command keep their previous target.
+
+        Raises:
+            SimulationDivergedError: the physics blew up (state is left as is; call reset()).
+        """
+        if commands is not None:
+            if isinstance(commands, AgentCommand):
+                self.command(0, commands)
+            else:
+                for i, c in commands.items():
+                    self.command(i, c)
+        d = self.data
+        for r in self.robots:
+            self._realise_commands(r)
+            d.qvel[r.qvel_motors] = r.targets
+            # accelerometer, sampled before the physics step (spec §4.5)
+            v = d.qvel[r.qvel_root : r.qvel_root + 3].copy()
+            a_world = (v - r.prev_vel) / CYCLE_S - self._gravity
+            r.prev_vel = v
+            r.accel = d.xmat[r.torso_body].reshape(3, 3).T @ a_world
+        self._apply_drag()
+        mujoco.mj_step(self.model, d, nstep=self._substeps)
+        self.cycle += 1
+        self.time = round(self.time + CYCLE_S, 10)
+        if self.game.play_mode not in PAUSED_MODES:
+            self.game.game_time = round(self.game.game_time + CYCLE_S, 10)
+        for r in self.robots:
+            r.perception_counter += 1
+        self._check_state()
+
+    def _apply_drag(self) -> None:
+        """Drag F = −0.01 v, τ = −0.01 ω on every robot body (spec §7.5), held over the cycle."""
+        if len(self._drag_bodies) == 0:
+            return
+        d = self.data
+        cvel = d.cvel[self._drag_bodies]
+        w = cvel[:, :3]
+        offset = d.xipos[self._drag_bodies] - d.subtree_com[self._drag_roots]
+        v = cvel[:, 3:] + np.cross(w, offset)
+        d.xfrc_applied[self._drag_bodies, :3] = -phys.BODY_LINEAR_DRAG * v
+        d.xfrc_applied[self._drag_bodies, 3:] = -phys.BODY_ANGULAR_DRAG * w
+
+    def _check_state(self) -> None:
+        d = self.data
+        counts = np.array([w.number for w in d.warning])
+        new = counts > self._warning_counts
+        if new.any() or not np.isfinite(d.qpos).all() or not np.isfinite(d.qvel).all():
+            names = [mujoco.mjtWarning(i).name for i in np.flatnonzero(new)]
+            self._warning_counts = counts
+            raise SimulationDivergedError(
+                f"simulation diverged at cycle {self.cycle} (t = {self.time:.2f} s)"
+                + (f"; MuJoCo warnings: {', '.join(names)}" if names else "; NaN/inf state")
+                + ". Call World.reset() to continue."
+            )
+
+    # ------------------------------------------------------------------ perception
+    def ground_truth(self, index: int = 0) -> GroundTruth:
+        """Exact ball and torso state of robot ``index`` (world frame)."""
+        r = self.robot(index)
+        d = self.data
+        a, b = r.qpos_root, r.qvel_root
+        rot = d.xmat[r.torso_body].reshape(3, 3)
+        bq, bv = self._ball_qpos, self._ball_qvel
+        return GroundTruth(
+            ball_pos=d.qpos[bq : bq + 3].copy(),
+            ball_vel=d.qvel[bv : bv + 3].copy(),
+            torso_pos=d.qpos[a : a + 3].copy(),
+            torso_quat=d.qpos[a + 3 : a + 7].copy(),
+            torso_vel=d.qvel[b : b + 3].copy(),
+            torso_ang_vel=rot @ d.qvel[b + 3 : b + 6],
+        )
+
+    def ball_position(self) -> np.ndarray:
+        """Ball centre, world, m."""
+        return self.data.qpos[self._ball_qpos : self._ball_qpos + 3].copy()
+
+    def ball_velocity(self) -> np.ndarray:
+        """Ball linear velocity, world, m/s."""
+        return self.data.qvel[self._ball_qvel : self._ball_qvel + 3].copy()
+
+    def torso_position(self, index: int = 0) -> np.ndarray:
+        """Torso centre of robot ``index``, world, m."""
+        a = self.robot(index).qpos_root
+        return self.data.qpos[a : a + 3].copy()
+
+    def torso_up(self, index: int = 0) -> np.ndarray:
+        """The torso's up axis (+z of the torso frame) in world coordinates."""
+        return self.data.xmat[self.robot(index).torso_body].reshape(3, 3)[:, 2].copy()
+
+    def joint_angles_deg(self, index: int = 0) -> np.ndarray:
+        """Joint angles of robot ``index`` in degrees, canonical order."""
+        return np.degrees(self.data.qpos[self.robot(index).qpos_joints])
+
+    def joint_velocities(self, index: int = 0) -> np.ndarray:
+        """Joint angular velocities of robot ``index`` in rad/s, canonical order."""
+        return self.data.qvel[self.robot(index).qvel_joints].copy()
+
+    def gyro(self, index: int = 0) -> np.ndarray:
+        """Torso angular velocity in the torso frame, deg/s (``GYR``)."""
+        b = self.robot(index).qvel_root
+        return np.degrees(self.data.qvel[b + 3 : b + 6])
+
+    def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
+        """``FRP`` readings of robot ``index`` from the contacts of the last physics step: force
+        (N) and force-weighted centre of pressure (m), both in the foot's own frame."""
+        r = self.robot(index)
+        m, d = self.model, self.data
+        acc: dict[str, list] = {}
+        f6 = np.zeros(6)
+        for i in range(d.ncon):
+            c = d.contact[i]
+            g1, g2 = int(c.geom1), int(c.geom2)
+            if g1 in r.foot_geoms:
+                name, sign = r.foot_geoms[g1], -1.0
+            elif g2 in r.foot_geoms:
+                name, sign = r.foot_geoms[g2], 1.0
+            else:
+                continue
+            if c.efc_address < 0:
+                continue
+            mujoco.mj_contactForce(m, d, i, f6)
+            frame = c.frame.reshape(3, 3)
+            f_world = sign * (frame.T @ f6[:3])
+            acc.setdefault(name, []).append((c.pos.copy(), f_world))
+        out = {}
+        for name, items in acc.items():
+            body = r.foot_bodies[name]
+            rot = d.xmat[body].reshape(3, 3)
+            origin = d.xpos[body]
+            forces = np.array([f for _, f in items])
+            points = np.array([p for p, _ in items])
+            total = forces.sum(axis=0)
+            mags = np.linalg.norm(forces, axis=1)
+            if mags.sum() <= 0:
+                if name in r.last_frp:
+                    out[name] = r.last_frp[name]
+                continue
+            cop = (mags[:, None] * points).sum(axis=0) / mags.sum()
+            out[name] = ForceResistance(point=rot.T @ (cop - origin), force=rot.T @ total)
+        r.last_frp = out
+        return out
+
+    def perceive(self, index: int = 0, *, vision: bool | None = None) -> Perception:
+        """Robot ``index``'s perception of the current state, as rcssserver3d would send it.
+
+        Vision (``See``) is included every ``vision.interval``-th cycle (or when ``vision`` is
+        forced True/False). GS carries unum/team once after :meth:`set_team`. Messages heard since
+        the last call are returned and cleared. Ground truth is always attached.
+        """
+        r = self.robot(index)
+        d = self.data
+        game = GameState(
+            play_mode=self.game.play_mode,
+            game_time=self.game.game_time,
+            score_left=self.game.score_left,
+            score_right=self.game.score_right,
+        )
+        if r.announce_team:
+            game.unum, game.team_side = r.unum, r.team
+            r.announce_team = False
+        due = r.perception_counter % self.vision_config.interval == 0 and r.perception_counter > 0
+        if vision is None:
+            vision = due
+        vis = self.vision(index) if vision else None
+        heard = r.heard
+        r.heard = []
+        for k in r.hear_capacity:
+            r.hear_capacity[k] = min(2, r.hear_capacity[k] + 1)
+        return Perception(
+            time=self.time,
+            game=game,
+            gyro=self.gyro(index),
+            accel=r.accel.copy(),
+            joint_names=r.joint_names,
+            joint_angles_deg=np.degrees(d.qpos[r.qpos_joints]),
+            force_sensors=self.force_sensors(index),
+            vision=vis,
+            heard=heard,
+            ground_truth=self.ground_truth(index),
+        )
+
+    def vision(self, index: int = 0):
+        """The ``See`` percept of robot ``index`` for the current state (ignores the interval)."""
+        r = self.robot(index)
+        d = self.data
+        players = [
+            (o.team_name, o.unum, d.xpos[o.part_bodies])
+            for o in self.robots
+            if o.team_name is not None and o.unum is not None
+        ]
+        return see(
+            head_pos=d.xpos[r.head_body].copy(),
+            head_rot=d.xmat[r.head_body].reshape(3, 3).copy(),
+            ball_pos=self.ball_position(),
+            players=players,
+            calibration=r.calibration,
+            rng=self.rng,
+            config=self.vision_config,
+            mirror=r.team == "right",
+        )
+
+    # ------------------------------------------------------------------ misc
+    def state(self) -> np.ndarray:
+        """Full physics state (qpos, qvel, act, time) for save/restore."""
+        spec = mujoco.mjtState.mjSTATE_PHYSICS
+        out = np.empty(mujoco.mj_stateSize(self.model, spec))
+        mujoco.mj_getState(self.model, self.data, out, spec)
+        return out

@@ -1,0 +1,195 @@
+"""The two types every backend shares: what a robot perceives and what it commands.
+
+An environment talks to a simulator only through these: :class:`Perception` (one robot's view of
+one 20 ms cycle, in SimSpark's units and frames) and :class:`AgentCommand` (what the robot's agent
+sends for one cycle). The embedded MuJoCo world, the real rcssserver3d backend and the protocol
+parser all produce and consume exactly these types, so an environment never knows which simulator
+is behind it.
+
+Units (as on the rcssserver3d wire):
+
+* joint angles in **degrees**, joint velocity commands in **rad/s**;
+* gyro in **deg/s**, accelerometer in **m/s²**, both in the torso frame
+  (x = robot's right, y = robot's forward, z = up);
+* foot force sensors: point in **m** and force in **N**, in the foot (toe) body frame;
+* vision: polar ``(distance m, horizontal deg, vertical deg)`` relative to the head;
+* ground truth: world frame (origin field centre, x towards the right team's goal, z up), metres,
+  m/s, rad/s, quaternions ``(w, x, y, z)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "AgentCommand",
+    "ForceResistance",
+    "GameState",
+    "GroundTruth",
+    "HeardMessage",
+    "Perception",
+    "SeenPlayer",
+    "Vision",
+]
+
+
+@dataclass
+class ForceResistance:
+    """One foot (``lf``/``rf``) or toe (``lf1``/``rf1``) pressure sensor reading (``FRP``).
+
+    Present only in cycles in which that foot or toe touched something.
+    """
+
+    point: np.ndarray
+    """Centre of pressure ``c`` in m, in the foot's own frame (origin at the foot box centre)."""
+    force: np.ndarray
+    """Total contact force ``f`` on the foot in N, foot frame (z ≈ +22.6 N when standing)."""
+
+
+@dataclass
+class GameState:
+    """The ``GS`` perceptor: score, game clock and play mode."""
+
+    play_mode: str = "BeforeKickOff"
+    """Play-mode name as on the wire (``BeforeKickOff``, ``PlayOn``, ``KickOff_Left``, …)."""
+    game_time: float = 0.0
+    """Match clock ``t`` in s (stops in BeforeKickOff and GameOver)."""
+    score_left: int = 0
+    score_right: int = 0
+    unum: int | None = None
+    """Uniform number; the server sends it only once, in the first GS after ``init``."""
+    team_side: str | None = None
+    """``"left"`` or ``"right"``; sent only once, like :attr:`unum`."""
+
+
+@dataclass
+class HeardMessage:
+    """One ``hear`` predicate."""
+
+    team: str | None
+    """Team name of the speaker (``None`` when the server does not label messages)."""
+    time: float
+    """Game time in s when heard."""
+    direction_deg: float | None
+    """Direction to the speaker in the listener's team frame, deg; ``None`` for the own message."""
+    message: str
+
+    @property
+    def is_self(self) -> bool:
+        """True for the robot's own message (``self`` on the wire)."""
+        return self.direction_deg is None
+
+
+@dataclass
+class SeenPlayer:
+    """A player in the ``See`` perceptor (team-mates, opponents and the robot's own parts)."""
+
+    team: str
+    unum: int
+    parts: dict[str, np.ndarray] = field(default_factory=dict)
+    """Visible parts (``head``, ``rlowerarm``, ``llowerarm``, ``rfoot``, ``lfoot``) → polar
+    ``(d m, θ deg, φ deg)``."""
+
+
+@dataclass
+class Vision:
+    """The ``See`` perceptor: restricted vision, every third cycle."""
+
+    objects: dict[str, np.ndarray] = field(default_factory=dict)
+    """Landmarks and ball (``B``, ``F1L``, ``G2R``, …) → polar ``(d m, θ deg, φ deg)``; θ > 0 is
+    to the robot's left, φ > 0 is up, both relative to the head."""
+    players: list[SeenPlayer] = field(default_factory=list)
+    lines: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3)))
+    """Visible field lines, shape ``(n, 2, 3)``: two polar end points per line."""
+    my_pos: np.ndarray | None = None
+    """Ground-truth extension ``mypos``: head centre in the team frame, m (only when enabled)."""
+    my_orientation_deg: float | None = None
+    """Ground-truth extension ``myorien``: heading of the head in the team frame, deg."""
+    ball_pos: np.ndarray | None = None
+    """Ground-truth extension ``ballpos``: ball centre in the team frame, m."""
+
+    @property
+    def ball(self) -> np.ndarray | None:
+        """Polar position of the ball, or ``None`` when it is not in view."""
+        return self.objects.get("B")
+
+
+@dataclass
+class GroundTruth:
+    """Exact world state for rewards, tests and logging (never sent to competition agents).
+
+    All in the world frame (not team-mirrored).
+    """
+
+    ball_pos: np.ndarray
+    """Ball centre, m."""
+    ball_vel: np.ndarray
+    """Ball linear velocity, m/s."""
+    torso_pos: np.ndarray
+    """Torso centre, m."""
+    torso_quat: np.ndarray
+    """Torso orientation ``(w, x, y, z)`` of the torso frame (x right, y forward, z up)."""
+    torso_vel: np.ndarray | None = None
+    """Torso linear velocity, m/s (``None`` where the backend cannot measure it)."""
+    torso_ang_vel: np.ndarray | None = None
+    """Torso angular velocity in the world frame, rad/s (``None`` where unknown)."""
+
+
+@dataclass
+class Perception:
+    """Everything one robot perceives in one cycle, as rcssserver3d would send it.
+
+    ``joint_names`` / ``joint_angles_deg`` use the perceptor names (``hj1``, ``raj1``, …,
+    ``llj7``) in the robot's canonical order (see :mod:`robocup_gym.robot.joints`).
+    """
+
+    time: float
+    """Simulation time ``(time (now …))`` in s since the server started."""
+    game: GameState
+    gyro: np.ndarray
+    """Torso angular velocity in deg/s, torso frame (``GYR``)."""
+    accel: np.ndarray
+    """Torso proper acceleration in m/s², torso frame (``ACC``); ≈ (0, 0, 9.81) at rest."""
+    joint_names: tuple[str, ...]
+    """Perceptor names of the joints, in the order of :attr:`joint_angles_deg`."""
+    joint_angles_deg: np.ndarray
+    """Hinge angles in degrees (``HJ``)."""
+    force_sensors: dict[str, ForceResistance] = field(default_factory=dict)
+    """``FRP`` by name (``lf``, ``rf``, ``lf1``, ``rf1``); a missing name means no contact."""
+    vision: Vision | None = None
+    """``See`` (every third cycle), else ``None``."""
+    heard: list[HeardMessage] = field(default_factory=list)
+    ground_truth: GroundTruth | None = None
+    """Exact state when the backend knows it (always on the embedded world)."""
+
+    def joint(self, name: str) -> float:
+        """Angle in degrees of the joint with perceptor name ``name`` (e.g. ``"rlj3"``).
+
+        Raises:
+            KeyError: for an unknown name, listing the valid ones.
+        """
+        try:
+            return float(self.joint_angles_deg[self.joint_names.index(name)])
+        except ValueError:
+            raise KeyError(
+                f"unknown joint perceptor {name!r}; valid names: {', '.join(self.joint_names)}"
+            ) from None
+
+
+@dataclass
+class AgentCommand:
+    """What one agent sends in one cycle.
+
+    ``joint_velocities`` maps effector names (``he1``, ``rle3``, …) to target angular velocities in
+    **rad/s**. As on rcssserver3d, targets are sticky: joints not named keep their previous target.
+    A full array in the robot's canonical effector order is also accepted.
+    """
+
+    joint_velocities: Mapping[str, float] | np.ndarray = field(default_factory=dict)
+    beam: tuple[float, float, float] | None = None
+    """``(x m, y m, rot deg)`` in the team frame; only honoured before kick-off and after goals."""
+    say: str | None = None
+    """At most 20 printable characters, no spaces or parentheses."""
