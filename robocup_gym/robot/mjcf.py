@@ -57,10 +57,10 @@ def robot_xml(
 ) -> tuple[str, str, str]:
     """MJCF fragments for one Nao whose names all start with ``prefix``.
 
-    Returns ``(bodies, tendons, motors)``: the robot's body tree (torso with a free joint, placed at
-    the origin in the zero pose; the world moves it), the motor tendons, and one body per
-    auxiliary motor dof (MuJoCo allows at most 6 dofs per body). Geoms of the robot use default class ``robot``; non-colliding mass-only
-    spheres get no collision geom (a small visual sphere in group 3).
+    Returns ``(bodies, tendons, motors)``: the robot's body tree (torso with a free joint at the
+    origin in the zero pose; the world moves it), the motor tendons, and one body per auxiliary
+    motor dof (MuJoCo allows at most 6 dofs per body). Robot geoms use default class ``robot``;
+    the non-colliding mass-only spheres get a visual-only sphere (group 3).
     """
     model = nao_model(type_index)
     children: dict[str | None, list[Body]] = {}

@@ -1,4 +1,4 @@
-"""The soccer field of rcssserver3d: dimensions, landmarks and the lines vision reports (spec §6)."""
+"""The soccer field of rcssserver3d: dimensions, landmarks, lines seen by vision (spec §6)."""
 
 from __future__ import annotations
 

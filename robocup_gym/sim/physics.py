@@ -34,10 +34,12 @@ MOTOR_MAX_TORQUE = 10.0
 
 BALL_RESTITUTION = 0.8
 """Ball contact bounce (spec §5); ODE applies it above 0.8 m/s approach speed."""
+BALL_BOUNCE_MIN_SPEED = 0.8
+"""Approach speed above which ODE applies the ball's restitution, m/s."""
 
 
 def damping_ratio_for_restitution(e: float) -> float:
-    """Damping ratio ζ of a linear spring-damper contact whose coefficient of restitution is ``e``."""
+    """Damping ratio ζ of a linear spring-damper contact with coefficient of restitution ``e``."""
     le = math.log(e)
     return -le / math.sqrt(math.pi**2 + le * le)
 
@@ -61,9 +63,12 @@ class PhysicsConfig:
             roll within a few ms; μ = 1 converts sliding to rolling within ~0.05 s.
     """
 
-    timestep: float = 0.004
-    iterations: int = 20
-    ls_iterations: int = 8
+    timestep: float = 0.005
+    iterations: int = 50
+    tolerance: float = 1e-10
+    """Newton solver tolerance: the stiff motor rows need a converged solve (MuJoCo's default
+    1e-8 stops after one iteration here and lets the robot creep)."""
+    ls_iterations: int = 50
     robot_friction: float = 2.0
     ball_friction: float = 1.0
 
@@ -81,18 +86,28 @@ class PhysicsConfig:
         (time constant 2·timestep), critically damped: no bounce, as in SimSpark."""
         return f"{2 * self.timestep:.6g} 1"
 
-    def ball_solref(self, erp: float, cfm: float) -> str:
-        """Direct (negative) solref for a ball contact with ODE ``erp``/``cfm``.
+    def ball_solref(self, erp: float, cfm: float, *, bouncy: bool = True) -> str:
+        """Direct (negative) solref ``"-k/m -c/m"`` for a ball contact with ODE ``erp``/``cfm``.
 
-        Stiffness per unit ball mass k/m from the ODE spring equivalent; damping for restitution
-        0.8 (the ball's bounce) instead of ODE's damping term, because ODE's bounce mode imposes
-        the restitution on top of its damping.
+        Stiffness per unit ball mass from the ODE spring equivalent. ODE's bounce mode imposes
+        restitution 0.8 when the approach speed exceeds 0.8 m/s and otherwise leaves the
+        (over-damped) ODE spring: ``bouncy=True`` gives the damping of a spring with restitution
+        0.8, ``bouncy=False`` ODE's own damping.
         """
-        k, _ = spring_from_ode(erp, cfm)
+        k, c = spring_from_ode(erp, cfm)
         k_acc = k / BALL_MASS
-        zeta = damping_ratio_for_restitution(BALL_RESTITUTION)
-        b_acc = 2 * zeta * math.sqrt(k_acc)
+        if bouncy:
+            b_acc = 2 * damping_ratio_for_restitution(BALL_RESTITUTION) * math.sqrt(k_acc)
+        else:
+            # ODE's damping is over-critical (ζ ≈ 2); MuJoCo's explicit reference acceleration is
+            # unstable for b·timestep > 2, so it is capped at critical damping (no bounce either).
+            b_acc = min(c / BALL_MASS, 2 * math.sqrt(k_acc))
         return f"{-k_acc:.6g} {-b_acc:.6g}"
+
+    def ball_solref_values(self, erp: float, cfm: float, *, bouncy: bool) -> tuple[float, float]:
+        """:meth:`ball_solref` as numbers (for switching a contact pair at run time)."""
+        a, b = self.ball_solref(erp, cfm, bouncy=bouncy).split()
+        return float(a), float(b)
 
 
 # ODE mixed contact parameters (spec §7.4).

@@ -63,7 +63,7 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
     """The complete MJCF of a world with ``robots`` (may be empty), ball and field."""
     ph = physics or PhysicsConfig()
     ball_robot = ph.ball_solref(*BALL_ROBOT_ERP_CFM)
-    ball_ground = ph.ball_solref(*BALL_GROUND_ERP_CFM)
+    ball_ground = ph.ball_solref(*BALL_GROUND_ERP_CFM, bouncy=False)
     bodies, tendons, motors, excludes, pairs = [], [], [], [], []
     for slot in robots:
         b, t, m = robot_xml(slot.prefix, slot.type_index, accent=TEAM_COLOURS.get(slot.team, ""))
@@ -84,8 +84,9 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
     )
     return f"""<mujoco model="robocup_gym">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{ph.timestep}" gravity="0 0 -9.81" integrator="implicitfast"
+  <option timestep="{ph.timestep}" gravity="0 0 -9.81" integrator="Euler"
           solver="Newton" iterations="{ph.iterations}" ls_iterations="{ph.ls_iterations}"
+          tolerance="{ph.tolerance}"
           cone="pyramidal"/>
   <size memory="8M"/>
   <visual>

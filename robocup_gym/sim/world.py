@@ -43,7 +43,14 @@ from robocup_gym.types import (
 
 PAUSED_MODES = ("BeforeKickOff", "GameOver")
 """Play modes in which the game clock stands still."""
+CREEP_WINDOW_RAD = math.radians(0.5)
+"""Largest position error the motor creep compensation corrects (anti-windup), rad."""
 SAY_MAX_CHARS = 20
+_DIVERGENCE_WARNINGS = (
+    int(mujoco.mjtWarning.mjWARN_BADQACC),
+    int(mujoco.mjtWarning.mjWARN_BADQVEL),
+    int(mujoco.mjtWarning.mjWARN_BADQPOS),
+)
 HEARING_RANGE_M = 50.0
 
 
@@ -76,8 +83,14 @@ class RobotState:
     foot_bodies: dict[str, int] = field(default_factory=dict)
     robot_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     robot_geoms: frozenset = frozenset()
+    motor_tendons: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    range_rad: tuple = (np.zeros(0), np.zeros(0))
+    """(lower, upper) joint limits in rad, canonical order."""
+    max_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
     targets: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Active motor targets, rad/s, canonical order."""
+    q_ref: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Integral of the commanded velocities (rad) used for creep compensation."""
     pending: list = field(default_factory=list)
     """Commands waiting out the dead time: list of (due_cycle, velocities array or None mask)."""
     accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
@@ -161,6 +174,13 @@ class World:
         # velocities, so this is exactly F = -0.01 v; rotational damping is isotropic.
         m.dof_damping[self._ball_qvel : self._ball_qvel + 3] = phys.BALL_LINEAR_DRAG
         m.dof_damping[self._ball_qvel + 3 : self._ball_qvel + 6] = phys.BALL_ANGULAR_DRAG
+        # ball-ground contact pair: ODE bounces only above 0.8 m/s approach (switched per cycle)
+        self._ball_ground_pair = 0
+        self._ball_ground_solref = {
+            b: self.physics.ball_solref_values(*phys.BALL_GROUND_ERP_CFM, bouncy=b)
+            for b in (False, True)
+        }
+        self._ball_bouncy = False
         self.robots: list[RobotState] = []
         drag_bodies = []
         for i, slot in enumerate(slots):
@@ -172,6 +192,7 @@ class World:
         self._drag_roots = (
             m.body_rootid[self._drag_bodies] if len(drag_bodies) else np.zeros(0, int)
         )
+        self._xfrc = np.zeros((len(self._drag_bodies), 6))
         self._motor_dofs = (
             np.concatenate([r.qvel_motors for r in self.robots])
             if self.robots
@@ -184,7 +205,7 @@ class World:
         self.time = 0.0
         self.game = GameState()
         self._qpos0 = self.data.qpos.copy()
-        self._warning_counts = np.zeros(len(self.data.warning), dtype=int)
+        self._warning_counts = [0] * len(_DIVERGENCE_WARNINGS)
         self.reset(seed=seed)
 
     # ------------------------------------------------------------------ construction helpers
@@ -211,7 +232,11 @@ class World:
             feet.update({"rf1": "rtoe", "lf1": "ltoe"})
         r.foot_geoms = {m.geom(p + body).id: name for name, body in feet.items()}
         r.foot_bodies = {name: m.body(p + body).id for name, body in feet.items()}
+        r.motor_tendons = np.array([m.tendon(f"{p}motor_{e}").id for e in model.effector_names])
+        r.range_rad = tuple(np.radians(model.ranges_deg).T.copy())
+        r.max_speeds = model.max_speeds
         r.targets = np.zeros(len(model.joints))
+        r.q_ref = np.zeros(len(model.joints))
         return r
 
     # ------------------------------------------------------------------ properties
@@ -248,7 +273,7 @@ class World:
         self.cycle = 0
         self.time = 0.0
         self.game = GameState()
-        self._warning_counts[:] = 0
+        self._warning_counts = [0] * len(_DIVERGENCE_WARNINGS)
         for r in self.robots:
             r.targets[:] = 0.0
             r.pending.clear()
@@ -287,7 +312,7 @@ class World:
         Args:
             index: Robot index.
             x, y: Torso centre in world coordinates, m.
-            heading_deg: Direction the robot faces (0 = world +x, CCW positive). Ignored if ``quat``.
+            heading_deg: Direction the robot faces (0 = world +x, CCW positive); see ``quat``.
             z: Torso centre height, m. ``None`` puts the robot's lowest point on the ground
                 (resting 1 mm deep, as ODE's surface layer does).
             joint_angles_deg: Joint angles in degrees, by effector/perceptor name (others 0) or as
@@ -315,6 +340,7 @@ class World:
         d.qvel[r.qvel_motors] = 0.0
         r.targets[:] = 0.0
         r.pending.clear()
+        r.q_ref = d.qpos[r.qpos_joints].copy()
         r.prev_vel = np.zeros(3)
         r.accel = np.array([0.0, 0.0, phys.GRAVITY])
         if z is None:
@@ -472,20 +498,25 @@ class World:
             vel = self.command_array(index, command)
         r.pending.append((self.cycle + self.dead_time_cycles, vel))
 
-    def _realise_commands(self, r: RobotState) -> None:
-        """Write due commands into the motors (SimSpark's hinge effector, spec §8.3)."""
-        if not r.pending or r.pending[0][0] > self.cycle:
-            return
+    def _realise_commands(self, r: RobotState) -> np.ndarray:
+        """Write due commands into the motors (SimSpark's hinge effector, spec §8.3).
+
+        A command is taken only while the joint is strictly inside its limits; otherwise the
+        previous target stays. Returns the mask of joints resting at a stop with a motor target
+        that does not pull them away from it.
+        """
         q = self.data.qpos[r.qpos_joints]
-        lo, hi = r.model.ranges_deg.T
-        q_deg = np.degrees(q)
-        inside = (q_deg > lo) & (q_deg < hi)
-        vmax = r.model.max_speeds
-        while r.pending and r.pending[0][0] <= self.cycle:
-            _, vel = r.pending.pop(0)
-            given = ~np.isnan(vel)
-            take = given & inside
-            r.targets[take] = np.clip(vel[take], -vmax[take], vmax[take])
+        lo, hi = r.range_rad
+        at_lo = q <= lo
+        at_hi = q >= hi
+        if r.pending and r.pending[0][0] <= self.cycle:
+            inside = ~(at_lo | at_hi)
+            vmax = r.max_speeds
+            while r.pending and r.pending[0][0] <= self.cycle:
+                _, vel = r.pending.pop(0)
+                take = ~np.isnan(vel) & inside
+                r.targets[take] = np.clip(vel[take], -vmax[take], vmax[take])
+        return (at_lo & (r.targets <= 0.0)) | (at_hi & (r.targets >= 0.0))
 
     def beam(self, index: int, x: float, y: float, rot_deg: float) -> bool:
         """SimSpark ``beam`` in the robot's team frame (spec §9.4): only in BeforeKickOff and the
@@ -566,14 +597,28 @@ class World:
                     self.command(i, c)
         d = self.data
         for r in self.robots:
-            self._realise_commands(r)
-            d.qvel[r.qvel_motors] = r.targets
+            at_stop = self._realise_commands(r)
+            # Creep compensation: MuJoCo regularises the motor rows, so a held joint creeps
+            # slowly under load where ODE's rigid motor row does not. Each motor follows the
+            # integral of its commanded velocity; the small difference is corrected within a
+            # cycle. Anti-windup keeps saturated motors ODE-like (lost motion is never caught up).
+            q = d.qpos[r.qpos_joints]
+            np.clip(r.q_ref, q - CREEP_WINDOW_RAD, q + CREEP_WINDOW_RAD, out=r.q_ref)
+            r.q_ref[at_stop] = q[at_stop]
+            d.qvel[r.qvel_motors] = r.targets + (r.q_ref - q) / CYCLE_S
+            r.q_ref += r.targets * CYCLE_S
+            # ODE's motor "fudge factor" (spec §2.4): at a stop the motor barely acts unless it
+            # pulls the joint away from the stop; modelled by relaxing that motor row this cycle.
+            self.model.tendon_frictionloss[r.motor_tendons] = np.where(
+                at_stop, 0.0, phys.MOTOR_MAX_TORQUE
+            )
             # accelerometer, sampled before the physics step (spec §4.5)
             v = d.qvel[r.qvel_root : r.qvel_root + 3].copy()
             a_world = (v - r.prev_vel) / CYCLE_S - self._gravity
             r.prev_vel = v
             r.accel = d.xmat[r.torso_body].reshape(3, 3).T @ a_world
         self._apply_drag()
+        self._ball_ground_contact_mode()
         mujoco.mj_step(self.model, d, nstep=self._substeps)
         self.cycle += 1
         self.time = round(self.time + CYCLE_S, 10)
@@ -583,6 +628,19 @@ class World:
             r.perception_counter += 1
         self._check_state()
 
+    def _ball_ground_contact_mode(self) -> None:
+        """Bouncy ball-ground contact only if the ball will hit the ground this cycle faster than
+        0.8 m/s (ODE's bounce threshold, spec §5); otherwise ODE's over-damped soft contact."""
+        z = self.data.qpos[self._ball_qpos + 2]
+        vz = self.data.qvel[self._ball_qvel + 2]
+        bouncy = bool(
+            vz < -phys.BALL_BOUNCE_MIN_SPEED
+            and z - phys.BALL_RADIUS + phys.SURFACE_LAYER + vz * CYCLE_S < 0.0
+        )
+        if bouncy != self._ball_bouncy:
+            self.model.pair_solref[self._ball_ground_pair] = self._ball_ground_solref[bouncy]
+            self._ball_bouncy = bouncy
+
     def _apply_drag(self) -> None:
         """Drag F = −0.01 v, τ = −0.01 ω on every robot body (spec §7.5), held over the cycle."""
         if len(self._drag_bodies) == 0:
@@ -590,17 +648,30 @@ class World:
         d = self.data
         cvel = d.cvel[self._drag_bodies]
         w = cvel[:, :3]
-        offset = d.xipos[self._drag_bodies] - d.subtree_com[self._drag_roots]
-        v = cvel[:, 3:] + np.cross(w, offset)
-        d.xfrc_applied[self._drag_bodies, :3] = -phys.BODY_LINEAR_DRAG * v
-        d.xfrc_applied[self._drag_bodies, 3:] = -phys.BODY_ANGULAR_DRAG * w
+        r = d.xipos[self._drag_bodies] - d.subtree_com[self._drag_roots]
+        v = cvel[:, 3:].copy()
+        # v += w × r (written out: np.cross is slow for small arrays)
+        v[:, 0] += w[:, 1] * r[:, 2] - w[:, 2] * r[:, 1]
+        v[:, 1] += w[:, 2] * r[:, 0] - w[:, 0] * r[:, 2]
+        v[:, 2] += w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
+        xf = self._xfrc
+        xf[:, :3] = v
+        xf[:, :3] *= -phys.BODY_LINEAR_DRAG
+        xf[:, 3:] = w
+        xf[:, 3:] *= -phys.BODY_ANGULAR_DRAG
+        d.xfrc_applied[self._drag_bodies] = xf
 
     def _check_state(self) -> None:
         d = self.data
-        counts = np.array([w.number for w in d.warning])
-        new = counts > self._warning_counts
-        if new.any() or not np.isfinite(d.qpos).all() or not np.isfinite(d.qvel).all():
-            names = [mujoco.mjtWarning(i).name for i in np.flatnonzero(new)]
+        counts = [d.warning[i].number for i in _DIVERGENCE_WARNINGS]
+        if counts != self._warning_counts or not np.isfinite(d.qvel).all():
+            names = [
+                mujoco.mjtWarning(i).name
+                for i, n, old in zip(
+                    _DIVERGENCE_WARNINGS, counts, self._warning_counts, strict=True
+                )
+                if n > old
+            ]
             self._warning_counts = counts
             raise SimulationDivergedError(
                 f"simulation diverged at cycle {self.cycle} (t = {self.time:.2f} s)"
