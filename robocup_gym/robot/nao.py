@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 
 import numpy as np
 
@@ -107,22 +107,22 @@ class NaoModel:
         """Sum of all body masses, kg (4.6071 for every type)."""
         return sum(b.mass for b in self.bodies)
 
-    @property
+    @cached_property
     def effector_names(self) -> tuple[str, ...]:
         """Effector names in canonical order."""
         return tuple(j.effector for j in self.joints)
 
-    @property
+    @cached_property
     def perceptor_names(self) -> tuple[str, ...]:
         """Perceptor names in canonical order."""
         return tuple(j.perceptor for j in self.joints)
 
-    @property
+    @cached_property
     def max_speeds(self) -> np.ndarray:
         """Max joint speeds in canonical order, rad/s."""
         return np.array([j.max_speed for j in self.joints])
 
-    @property
+    @cached_property
     def ranges_deg(self) -> np.ndarray:
         """Joint limits in canonical order, shape (n, 2), degrees."""
         return np.array([(j.min_deg, j.max_deg) for j in self.joints])

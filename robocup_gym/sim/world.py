@@ -205,6 +205,7 @@ class World:
         self.time = 0.0
         self.game = GameState()
         self._qpos0 = self.data.qpos.copy()
+        self._tendon_frictionloss0 = self.model.tendon_frictionloss.copy()
         self._warning_counts = [0] * len(_DIVERGENCE_WARNINGS)
         self.reset(seed=seed)
 
@@ -270,6 +271,7 @@ class World:
             self.rng = np.random.default_rng(seed)
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = self._qpos0
+        self._restore_run_time_parameters()
         self.cycle = 0
         self.time = 0.0
         self.game = GameState()
@@ -295,6 +297,14 @@ class World:
                 self.place_robot(r.index, x=x, y=y, heading_deg=0.0)
         self.place_ball((0.0, 0.0))
         mujoco.mj_forward(self.model, self.data)
+
+    def _restore_run_time_parameters(self) -> None:
+        """Undo the per-cycle parameter switches (motor relaxation at stops, ball bounce mode) and
+        the solver's warm start, so that a reset or placement never depends on the past."""
+        self.model.tendon_frictionloss[:] = self._tendon_frictionloss0
+        self.model.pair_solref[self._ball_ground_pair] = self._ball_ground_solref[False]
+        self._ball_bouncy = False
+        self.data.qacc_warmstart[:] = 0.0
 
     def place_robot(
         self,
@@ -340,6 +350,9 @@ class World:
         d.qvel[r.qvel_motors] = 0.0
         r.targets[:] = 0.0
         r.pending.clear()
+        r.last_frp = {}
+        self.model.tendon_frictionloss[r.motor_tendons] = phys.MOTOR_MAX_TORQUE
+        d.qacc_warmstart[:] = 0.0
         r.q_ref = d.qpos[r.qpos_joints].copy()
         r.prev_vel = np.zeros(3)
         r.accel = np.array([0.0, 0.0, phys.GRAVITY])
@@ -389,6 +402,9 @@ class World:
         self.data.qpos[a : a + 3] = (p[0], p[1], z)
         self.data.qpos[a + 3 : a + 7] = (1.0, 0.0, 0.0, 0.0)
         b = self._ball_qvel
+        self.model.pair_solref[self._ball_ground_pair] = self._ball_ground_solref[False]
+        self._ball_bouncy = False
+        self.data.qacc_warmstart[:] = 0.0
         self.data.qvel[b : b + 3] = v
         # free-joint angular velocity is in the body frame; the ball's frame is the world's here
         self.data.qvel[b + 3 : b + 6] = w

@@ -1,0 +1,308 @@
+"""Throughput of the embedded world and of the Gymnasium environments.
+
+Usage::
+
+    python benchmarks/throughput.py           # ~30 s
+    python benchmarks/throughput.py --quick   # a few seconds, for smoke tests
+
+Prints one line per measurement and, as its LAST line, one JSON object:
+
+* ``world_cycles_per_s``: :meth:`World.step` (one robot + ball, random joint velocities on all
+  joints, robot re-placed upright every 60 cycles), one core, in-process;
+* ``raw_cycles_per_s``: the same model and substeps stepped with bare
+  ``mujoco.mj_step(model, data, nstep=world.substeps)``, no Python work in between (from the
+  placed robot, motor velocities set once per 60-cycle chunk, so its motion is tamer than the
+  world's: this is a ceiling, not the same workload);
+* ``raw_same_states_cycles_per_s``: bare ``mj_step`` timed on exactly the states the world
+  stepped through (recorded, then replayed one ``mj_step`` at a time) — the same workload, so
+  ``world_vs_raw_same_states`` is the cost of the world's Python work;
+* ``env_steps_per_s``: ``VelocityKick`` with random actions, counting every simulated cycle (the
+  wait steps after each episode included) over the whole time, resets included;
+* ``reset_ms``: mean wall time of ``env.reset()`` (no simulated warm-up cycles);
+* ``env_steps_per_s_2_workers``: the same with ``gymnasium.vector.AsyncVectorEnv`` and 2 worker
+  processes (cycles of both workers per second); ``scaling_2_workers`` is its ratio to
+  ``env_steps_per_s``;
+* ratios ``world_vs_raw`` and ``env_vs_world``.
+
+Timings depend on the machine and its load; ``loadavg`` is recorded with them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import os
+import platform
+import sys
+import time
+import warnings
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+from robocup_gym.sim.world import SimulationDivergedError, World
+
+EPISODE_CYCLES = 60
+"""Cycles between re-placements in the world/raw measurements (≈ one VelocityKick episode:
+40 steps + 20 wait cycles)."""
+
+# ----------------------------------------------------------------------------------------------
+# HOOK for further measurements (the lead adds ``serve_sync_cycles_per_s`` here): every entry is
+# ``name -> function(quick: bool) -> float`` and its result is added to the JSON under ``name``.
+# Example:
+#     from robocup_gym.server.bench import serve_sync_cycles_per_s
+#     EXTRA_MEASUREMENTS["serve_sync_cycles_per_s"] = serve_sync_cycles_per_s
+EXTRA_MEASUREMENTS: dict[str, Callable[[bool], float]] = {}
+# ----------------------------------------------------------------------------------------------
+
+
+def _place(world: World) -> None:
+    world.place_robot(0, -1.0, 0.0, joint_angles_deg=np.zeros(len(world.robots[0].model.joints)))
+    world.place_ball((-0.8, -0.055))
+    world.set_game(play_mode="PlayOn", game_time=0.0)
+
+
+class WorldRunner:
+    """World.step with random joint velocities on all joints; the robot is re-placed upright
+    every ``EPISODE_CYCLES`` cycles (not timed). Also times bare mj_step on the same model."""
+
+    def __init__(self, seed: int = 0) -> None:
+        self.world = World([0], seed=seed)
+        rng = np.random.default_rng(seed)
+        vmax = self.world.robots[0].model.max_speeds
+        self.commands = rng.uniform(-1.0, 1.0, (4096, len(vmax))) * vmax
+        self.k = 0
+        self.cycles = self.busy = 0.0
+        self.raw_cycles = self.raw_busy = 0.0
+        self.diverged = 0
+        self.raw_data = mujoco.MjData(self.world.model)
+        _place(self.world)
+        self.run(20)  # warm up
+        self.cycles = self.busy = 0.0
+
+    def _next(self) -> np.ndarray:
+        self.k = (self.k + 1) % len(self.commands)
+        return self.commands[self.k]
+
+    def run(self, cycles: int) -> None:
+        world = self.world
+        done = 0
+        while done < cycles:
+            n = min(EPISODE_CYCLES, cycles - done)
+            batch = [self._next() for _ in range(n)]
+            ran = 0
+            t0 = time.perf_counter()
+            try:
+                for c in batch:
+                    world.step({0: c})
+                    ran += 1
+            except SimulationDivergedError:
+                self.diverged += 1  # the cycles that ran count; the recovery is not timed
+                self.busy += time.perf_counter() - t0
+                world.reset()
+            else:
+                self.busy += time.perf_counter() - t0
+            done += max(ran, 1)
+            _place(world)
+        self.cycles += done
+
+    def run_raw(self, cycles: int) -> None:
+        """Bare MuJoCo: same model (drag damping included) and substeps; motor velocities set
+        once per chunk (not timed), then ``mj_step`` back to back."""
+        world, m, d = self.world, self.world.model, self.raw_data
+        motors = world.robots[0].qvel_motors
+        sub = world.substeps
+        done = 0
+        while done < cycles:
+            n = min(EPISODE_CYCLES, cycles - done)
+            _place(world)
+            d.qpos[:] = world.data.qpos
+            d.qvel[:] = world.data.qvel
+            d.qvel[motors] = self._next()
+            mujoco.mj_forward(m, d)
+            t0 = time.perf_counter()
+            for _ in range(n):
+                mujoco.mj_step(m, d, nstep=sub)
+            self.raw_busy += time.perf_counter() - t0
+            done += n
+            if not np.isfinite(d.qvel).all():
+                mujoco.mj_resetData(m, d)
+        self.raw_cycles += done
+
+
+class _RecordingMujoco:
+    """Stands in for the ``mujoco`` module inside :mod:`robocup_gym.sim.world` while recording:
+    captures the complete input of every ``mj_step`` the world makes (untimed)."""
+
+    SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
+
+    def __init__(self, states: list) -> None:
+        self._states = states
+
+    def __getattr__(self, name: str):
+        return getattr(mujoco, name)
+
+    def mj_step(self, m, d, nstep=1):
+        buf = np.empty(mujoco.mj_stateSize(m, self.SPEC))
+        mujoco.mj_getState(m, d, buf, self.SPEC)
+        self._states.append((buf, m.tendon_frictionloss.copy(), m.pair_solref.copy(), int(nstep)))
+        mujoco.mj_step(m, d, nstep=nstep)
+
+
+def replay_cycles_per_s(runner: WorldRunner, cycles: int) -> float:
+    """Bare ``mj_step`` timed on exactly the states (and model settings) the world stepped
+    through: the world's own workload without its Python work around each step."""
+    from robocup_gym.sim import world as world_module
+
+    states: list = []
+    saved = world_module.mujoco
+    world_module.mujoco = _RecordingMujoco(states)
+    try:
+        k, cycles_before, busy_before = runner.k, runner.cycles, runner.busy
+        runner.run(cycles)
+        runner.k, runner.cycles, runner.busy = k, cycles_before, busy_before
+    finally:
+        world_module.mujoco = saved
+    m = copy.deepcopy(runner.world.model)
+    d = mujoco.MjData(m)
+    busy = 0.0
+    for buf, frictionloss, solref, nstep in states:
+        mujoco.mj_setState(m, d, buf, _RecordingMujoco.SPEC)
+        m.tendon_frictionloss[:] = frictionloss
+        m.pair_solref[:] = solref
+        t0 = time.perf_counter()
+        mujoco.mj_step(m, d, nstep=nstep)
+        busy += time.perf_counter() - t0
+    return len(states) / busy
+
+
+class EnvRunner:
+    """VelocityKick with random actions; counts every simulated cycle (wait steps included) over
+    the whole time, resets included."""
+
+    def __init__(self, seed: int = 0) -> None:
+        from robocup_gym.envs import VelocityKick
+
+        self.env = env = VelocityKick()
+        env.reset(seed=seed)
+        env.action_space.seed(seed)
+        self.actions = [env.action_space.sample() for _ in range(1000)]
+        self.k = 0
+        self.cycles = self.steps = self.episodes = 0
+        self.busy = 0.0
+        self.run(20)  # warm up
+        self.cycles = self.steps = self.episodes = 0
+        self.busy = 0.0
+
+    def run(self, steps: int) -> None:
+        env, actions = self.env, self.actions
+        cycles = episodes = 0
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            self.k = (self.k + 1) % len(actions)
+            _, _, te, tr, info = env.step(actions[self.k])
+            cycles += info["cycles"]
+            if te or tr:
+                episodes += 1
+                env.reset()
+        self.busy += time.perf_counter() - t0
+        self.cycles += cycles
+        self.steps += steps
+        self.episodes += episodes
+
+    def reset_ms(self, resets: int) -> float:
+        t0 = time.perf_counter()
+        for _ in range(resets):
+            self.env.reset()
+        return (time.perf_counter() - t0) / resets * 1e3
+
+
+def _make_velocity_kick():
+    from robocup_gym.envs import VelocityKick
+
+    return VelocityKick()
+
+
+def measure_vector_env(steps_per_worker: int, workers: int = 2, seed: int = 0) -> float:
+    """Cycles per second of all workers together in an AsyncVectorEnv (resets included)."""
+    import gymnasium as gym
+
+    vec = gym.vector.AsyncVectorEnv(
+        [_make_velocity_kick] * workers, autoreset_mode=gym.vector.AutoresetMode.SAME_STEP
+    )
+    try:
+        wait = int(vec.call("config")[0].wait_steps)
+        vec.reset(seed=seed)
+        vec.action_space.seed(seed)
+        for _ in range(10):
+            vec.step(vec.action_space.sample())
+        actions = [vec.action_space.sample() for _ in range(200)]
+        cycles = 0
+        t0 = time.perf_counter()
+        for i in range(steps_per_worker):
+            _, _, te, tr, _ = vec.step(actions[i % len(actions)])
+            cycles += workers + wait * int(np.count_nonzero(te | tr))
+        elapsed = time.perf_counter() - t0
+    finally:
+        vec.close()
+    return cycles / elapsed
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="few cycles (smoke test)")
+    args = parser.parse_args(argv)
+    quick = args.quick
+    warnings.simplefilter("ignore", RuntimeWarning)
+
+    results: dict = {
+        "quick": quick,
+        "cpu_count": os.cpu_count(),
+        "loadavg_1min": os.getloadavg()[0],
+        "python": platform.python_version(),
+        "mujoco": mujoco.__version__,
+    }
+    # world, raw and env are measured in interleaved rounds so that changes of the machine's load
+    # hit all three alike
+    world, env = WorldRunner(), EnvRunner()
+    rounds, chunk = (2, 150) if quick else (10, 600)
+    replay = []
+    for _ in range(rounds):
+        world.run(chunk)
+        world.run_raw(chunk)
+        replay.append(replay_cycles_per_s(world, chunk // 2))
+        env.run(chunk)
+    results["world_cycles_per_s"] = world.cycles / world.busy
+    results["raw_cycles_per_s"] = world.raw_cycles / world.raw_busy
+    results["raw_same_states_cycles_per_s"] = float(np.median(replay))
+    results["env_steps_per_s"] = env.cycles / env.busy
+    results["env_agent_steps_per_s"] = env.steps / env.busy
+    results["reset_ms"] = env.reset_ms(20 if quick else 500)
+    results["world_divergences"] = world.diverged
+    results["env_episodes"] = env.episodes
+    results["env_diverged_episodes"] = env.env.diverged_episodes
+    env.env.close()
+    print(f"world  {results['world_cycles_per_s']:9.0f} cycles/s", file=sys.stderr)
+    print(f"raw    {results['raw_cycles_per_s']:9.0f} cycles/s", file=sys.stderr)
+    print(f"replay {results['raw_same_states_cycles_per_s']:9.0f} cycles/s", file=sys.stderr)
+    print(f"env    {results['env_steps_per_s']:9.0f} cycles/s", file=sys.stderr)
+    print(f"reset  {results['reset_ms']:9.3f} ms", file=sys.stderr)
+    results["env_steps_per_s_2_workers"] = measure_vector_env(100 if quick else 3000, 2)
+    print(f"env×2  {results['env_steps_per_s_2_workers']:9.0f} cycles/s", file=sys.stderr)
+    for name, fn in EXTRA_MEASUREMENTS.items():
+        results[name] = fn(quick)
+    results["world_vs_raw"] = results["world_cycles_per_s"] / results["raw_cycles_per_s"]
+    results["world_vs_raw_same_states"] = (
+        results["world_cycles_per_s"] / results["raw_same_states_cycles_per_s"]
+    )
+    results["env_vs_world"] = results["env_steps_per_s"] / results["world_cycles_per_s"]
+    results["scaling_2_workers"] = results["env_steps_per_s_2_workers"] / results["env_steps_per_s"]
+    results["loadavg_1min_end"] = os.getloadavg()[0]
+    print(json.dumps(results))
+    return results
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,64 @@
+"""Gymnasium environments for the simulated RoboCup 3D Nao.
+
+Importing this package registers the tasks with Gymnasium::
+
+    import gymnasium
+    import robocup_gym.envs  # noqa: F401  (registers RobocupGym/*)
+
+    env = gymnasium.make("RobocupGym/VelocityKick-v0", wait_steps=20, robot_type=0)
+
+or use the classes directly (``VelocityKick()``, ``SimpleKick(max_episode_steps=60)``). The
+options are documented in :class:`EnvConfig` and ``docs/environments.md``.
+"""
+
+import gymnasium as _gym
+
+from robocup_gym.envs.base_env import BaseEnv, EpisodeStart
+from robocup_gym.envs.config import (
+    DEFAULT_OBSERVATIONS,
+    PAPER_STANDING_POSE_DEG,
+    ActionMode,
+    EnvConfig,
+    EnvConfigError,
+    Normalisation,
+)
+from robocup_gym.envs.observations import COMPONENTS, component_names
+from robocup_gym.envs.tasks import SimpleKick, SimpleKickConfig, VelocityKick, VelocityKickConfig
+
+__all__ = [
+    "COMPONENTS",
+    "DEFAULT_OBSERVATIONS",
+    "PAPER_STANDING_POSE_DEG",
+    "REGISTERED_IDS",
+    "ActionMode",
+    "BaseEnv",
+    "EnvConfig",
+    "EnvConfigError",
+    "EpisodeStart",
+    "Normalisation",
+    "SimpleKick",
+    "SimpleKickConfig",
+    "VelocityKick",
+    "VelocityKickConfig",
+    "component_names",
+    "register_envs",
+]
+
+_ENTRY_POINTS = {
+    "RobocupGym/SimpleKick-v0": "robocup_gym.envs.tasks.simple_kick:SimpleKick",
+    "RobocupGym/VelocityKick-v0": "robocup_gym.envs.tasks.velocity_kick:VelocityKick",
+}
+REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
+"""Every Gymnasium id this package registers."""
+
+
+def register_envs() -> None:
+    """Register the RobocupGym ids with Gymnasium (idempotent; done on import)."""
+    for env_id, entry_point in _ENTRY_POINTS.items():
+        if env_id not in _gym.registry:
+            # No max_episode_steps: the environments truncate themselves, after which they run
+            # their wait steps and pay the final reward (a TimeLimit wrapper would skip that).
+            _gym.register(id=env_id, entry_point=entry_point)
+
+
+register_envs()

@@ -1,0 +1,715 @@
+"""BaseEnv: the Gymnasium environment every RoboCup Gym task derives from.
+
+One environment step is one 20 ms agent cycle of one learning robot: the action becomes joint
+velocity commands, the backend (the embedded MuJoCo world by default) advances one cycle, and the
+robot's perception becomes the observation. Tasks override :meth:`BaseEnv._get_reward` (and, if
+they want, :meth:`~BaseEnv._is_terminated`, :meth:`~BaseEnv._is_truncated` and
+:meth:`~BaseEnv._initial_state`)::
+
+    class KickLeft(BaseEnv):
+        def _get_reward(self, action):
+            if not self.has_completed:          # reward only once, at the end
+                return 0.0
+            return float(self.ball_pos[1] - self.ball_spawn_pos[1])
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+
+from robocup_gym.backends import Backend, BackendDivergedError, RobotPose, make_backend
+from robocup_gym.envs.actions import ActionMapper
+from robocup_gym.envs.config import (
+    ActionMode,
+    EnvConfig,
+    EnvConfigError,
+    Normalisation,
+    resolve_angles,
+    resolve_joints,
+)
+from robocup_gym.envs.observations import (
+    COMPONENTS,
+    ObservationContext,
+    heading_frame,
+    torso_axes,
+)
+from robocup_gym.robot.nao import nao_model
+from robocup_gym.sim.physics import CYCLE_S
+from robocup_gym.types import AgentCommand, GroundTruth, Perception
+
+__all__ = ["BaseEnv", "EpisodeStart"]
+
+_RESET_OPTIONS = frozenset(
+    {"robot_pos", "robot_heading_deg", "joint_angles_deg", "ball_pos", "ball_vel", "kick_target"}
+)
+
+
+@dataclass
+class EpisodeStart:
+    """The start state of one episode (what :meth:`BaseEnv._initial_state` returns)."""
+
+    pose: RobotPose
+    """Robot placement and joint angles (deg, canonical order)."""
+    ball_pos: np.ndarray
+    """Ball centre (x, y, z), m, world frame."""
+    ball_vel: np.ndarray
+    """Ball velocity, m/s, world frame."""
+    kick_target: np.ndarray
+    """(distance m, angle deg) for the ``kick_target`` observation."""
+
+
+def _fallen_from_accel(acc: np.ndarray) -> bool:
+    """The paper's accelerometer fall test (used when the backend has no ground truth)."""
+    ax, ay, az = float(acc[0]), float(acc[1]), float(acc[2])
+    if (abs(ax) > az or abs(ay) > az) and az < 5:
+        return (ay < -6.5 and az < 3) or (ay > 7.5 and az < 3) or abs(ax) > 6.5
+    return False
+
+
+class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
+    """A Gymnasium environment for one learning Nao, configured by an :class:`EnvConfig`.
+
+    Args:
+        config: The configuration; ``None`` = :meth:`default_config` of the class.
+        backend: Simulator name (``"mujoco"``, the default; ``"rcssserver3d"`` once available) or
+            a ready :class:`~robocup_gym.backends.Backend` instance (its robot type must match).
+        render_mode: ``None`` or ``"rgb_array"`` (MuJoCo backend; needs OpenGL, e.g.
+            ``MUJOCO_GL=egl``).
+        render_size: ``(width, height)`` of rendered images, pixels.
+        **overrides: Any :class:`EnvConfig` field (or task field), applied on top of ``config``.
+
+    Observation: ``Box(-obs_clip, obs_clip, (frame_stack · Σ component sizes,), float32)``; the
+    layout is in :attr:`observation_labels`. Action: ``Box(-1, 1, (n,), float32)`` with one value
+    per controlled joint (two for ``"target_angle_max_speed"``); see :attr:`action_labels`.
+
+    Attributes available to tasks (all refreshed every step):
+        perception: the latest :class:`~robocup_gym.types.Perception`;
+        ground_truth: its :class:`~robocup_gym.types.GroundTruth` (``None`` if the backend has
+            none);
+        ball_pos / ball_vel: ball centre (m) / velocity (m/s), world frame;
+        ball_spawn_pos: where the ball started this episode (after spawn noise);
+        torso_pos: torso centre (m); fallen: whether the robot has fallen;
+        episode_step: steps taken in this episode; has_completed: True from the moment the
+        episode ended (during the final :meth:`_get_reward` call).
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}
+    config_class: ClassVar[type[EnvConfig]] = EnvConfig
+    """Config type of this environment (tasks use a subclass with their reward options)."""
+
+    @classmethod
+    def default_config(cls) -> EnvConfig:
+        """The configuration used when none is given."""
+        return cls.config_class()
+
+    # ================================================================== construction
+    def __init__(
+        self,
+        config: EnvConfig | None = None,
+        *,
+        backend: str | Backend = "mujoco",
+        render_mode: str | None = None,
+        render_size: tuple[int, int] = (480, 360),
+        **overrides: Any,
+    ) -> None:
+        super().__init__()
+        config = self._coerce_config(config, overrides)
+        self.config = config
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise EnvConfigError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                f"got {render_mode!r}"
+            )
+        self.render_mode = render_mode
+        self.render_size = (int(render_size[0]), int(render_size[1]))
+
+        model = nao_model(config.robot_type)
+        # ---- observation components (validated before a backend is started)
+        unknown = [n for n in config.observations if n not in COMPONENTS]
+        if unknown:
+            raise EnvConfigError(
+                f"unknown observation component(s) {', '.join(map(repr, unknown))}; valid: "
+                f"{', '.join(COMPONENTS)}"
+            )
+        comps = [COMPONENTS[n] for n in config.observations]
+        for c in comps:
+            if c.needs_toes and not model.robot_type.has_toes:
+                raise EnvConfigError(
+                    f"observation {c.name!r} needs the toes of robot type 4, "
+                    f"got robot_type={config.robot_type}"
+                )
+        # ---- joints
+        if config.controlled_joints is None:
+            ctrl = np.array(
+                [i for i, n in enumerate(model.effector_names) if not n.startswith("he")],
+                dtype=int,
+            )
+        else:
+            ctrl = resolve_joints(model, config.controlled_joints, "controlled_joints")
+            if len(ctrl) == 0:
+                raise EnvConfigError("controlled_joints must name at least one joint")
+        obs_joints = (
+            ctrl
+            if config.observed_joints is None
+            else resolve_joints(model, config.observed_joints, "observed_joints")
+        )
+        self._start_angles = resolve_angles(model, config.joint_start_deg, "joint_start_deg")
+        if isinstance(config.joint_start_noise_deg, Mapping):
+            self._start_noise = resolve_angles(
+                model, config.joint_start_noise_deg, "joint_start_noise_deg"
+            )
+        else:
+            self._start_noise = np.full(len(model.joints), float(config.joint_start_noise_deg))
+        if (self._start_noise < 0).any() or not np.isfinite(self._start_noise).all():
+            raise EnvConfigError("joint_start_noise_deg must be finite and >= 0")
+        self._ranges = model.ranges_deg.astype(float)
+
+        # ---- backend
+        needs_vision = any(c.needs_vision for c in comps)
+        if isinstance(backend, Backend):
+            self.backend = backend
+            if backend.robot_type != config.robot_type:
+                raise EnvConfigError(
+                    f"backend robot_type {backend.robot_type} != config robot_type "
+                    f"{config.robot_type}"
+                )
+        elif isinstance(backend, str):
+            self.backend = make_backend(
+                backend,
+                robot_type=config.robot_type,
+                vision=needs_vision,
+                **dict(config.backend_options),
+            )
+        else:
+            raise EnvConfigError(
+                f"backend must be a name or a Backend, got {type(backend).__name__}"
+            )
+        self._owns_backend = not isinstance(backend, Backend)
+        self.robot_model = self.backend.robot_model
+        needs_gt = [c.name for c in comps if c.needs_ground_truth]
+        if needs_gt and not self.backend.has_ground_truth:
+            raise EnvConfigError(
+                f"observation(s) {needs_gt} need ground truth, which the "
+                f"{self.backend.name!r} backend does not provide"
+            )
+
+        # ---- actions
+        self._actions = ActionMapper(model, ctrl, config.action_mode, config.target_gain)
+        n_act = self._actions.size
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
+        self.action_labels: list[str] = self._actions.labels()
+        self._zero_command = np.zeros(len(model.joints))
+
+        # ---- observations
+        ctx = ObservationContext(model, obs_joints, n_act, int(config.max_episode_steps))
+        self._obs_joints = obs_joints
+        writers = {
+            "joint_pos": self._w_joint_pos,
+            "joint_vel": self._w_joint_vel,
+            "ball_rel": self._w_ball_rel,
+            "ball_vel": self._w_ball_vel,
+            "ball_vision": self._w_ball_vision,
+            "foot_force": self._w_foot_force,
+            "toe_force": self._w_toe_force,
+            "accel": self._w_accel,
+            "gyro": self._w_gyro,
+            "torso_orientation": self._w_torso_orientation,
+            "torso_height": self._w_torso_height,
+            "time": self._w_time,
+            "kick_target": self._w_kick_target,
+            "last_action": self._w_last_action,
+        }
+        los, his, labels, sizes = [], [], [], []
+        for c in comps:
+            lo, hi = c.bounds(ctx)
+            los.append(lo)
+            his.append(hi)
+            labels += c.labels(ctx)
+            sizes.append(len(lo))
+        lo, hi = np.concatenate(los), np.concatenate(his)
+        self.frame_size = int(lo.size)
+        self._frame = np.zeros(self.frame_size)
+        self._writers = []
+        start = 0
+        for c, size in zip(comps, sizes, strict=True):
+            self._writers.append((writers[c.name], self._frame[start : start + size]))
+            start += size
+        self.component_slices: dict[str, slice] = {}
+        start = 0
+        for c, size in zip(comps, sizes, strict=True):
+            self.component_slices[c.name] = slice(start, start + size)
+            start += size
+        self.raw_bounds = (lo, hi)
+        """Analytic range of each raw frame value (what min–max normalisation maps)."""
+        norm = config.normalise
+        if norm is Normalisation.NONE:
+            self._scale, self._offset = None, None
+        else:
+            a, b = (-1.0, 1.0) if norm is Normalisation.MIN_MAX else (0.0, 1.0)
+            self._scale = (b - a) / (hi - lo)
+            self._offset = a - lo * self._scale
+        clip = config.obs_clip
+        self._clip = None if clip is None or clip == math.inf else float(clip)
+        k = int(config.frame_stack)
+        self._obs = np.zeros(k * self.frame_size)
+        bound = np.inf if self._clip is None else self._clip
+        self.observation_space = gym.spaces.Box(
+            -bound, bound, (k * self.frame_size,), dtype=np.float32
+        )
+        self.observation_labels: list[str] = (
+            labels if k == 1 else [f"{lab}@t-{k - 1 - i}" for i in range(k) for lab in labels]
+        )
+
+        # ---- per-episode state
+        self._wait_command = AgentCommand(self._zero_command)
+        self._obs_noise = float(config.observation_noise_std)
+        self._act_noise = float(config.action_noise_std)
+        self._last_action = np.zeros(n_act)
+        self._vision_ball = np.zeros(4)
+        self._needs_heading = "ball_rel" in config.observations or "ball_vel" in config.observations
+        self._heading = (1.0, 0.0)
+        self._started = False
+        self.perception: Perception | None = None
+        self.ground_truth: GroundTruth | None = None
+        self.has_completed = False
+        self.episode_step = 0
+        self.fallen = False
+        self.ball_spawn_pos = config.ball_start.copy()
+        self.kick_target = np.array(config.kick_target, dtype=float)
+        self.episode_start: EpisodeStart | None = None
+        self.diverged_episodes = 0
+        """Episodes ended early because the simulation diverged."""
+
+    def _coerce_config(self, config: EnvConfig | None, overrides: Mapping[str, Any]) -> EnvConfig:
+        cls = self.config_class
+        if config is None:
+            config = self.default_config()
+        elif not isinstance(config, EnvConfig):
+            raise EnvConfigError(
+                f"config must be an EnvConfig ({cls.__name__} for {type(self).__name__}), "
+                f"got {type(config).__name__}"
+            )
+        elif not isinstance(config, cls):
+            # a plain EnvConfig given to a task: keep its values, add the task's defaults
+            base = {f: getattr(config, f) for f in config.__dataclass_fields__}
+            config = cls(**base)
+        if overrides:
+            config = config.replace(**overrides)
+        return config
+
+    # ================================================================== gymnasium API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode (instantly: the robot and ball are teleported, no warm-up cycles).
+
+        Args:
+            seed: Seeds the environment's random generator (start noise, observation and action
+                noise) and the backend's (vision noise); a seeded reset is reproducible.
+            options: Per-episode overrides of the start state: ``robot_pos`` (x, y),
+                ``robot_heading_deg``, ``joint_angles_deg`` (by name or canonical array),
+                ``ball_pos`` (x, y[, z]), ``ball_vel`` (x, y, z), ``kick_target`` (m, deg).
+        """
+        super().reset(seed=seed)
+        options = dict(options or {})
+        bad = sorted(set(options) - _RESET_OPTIONS)
+        if bad:
+            raise ValueError(
+                f"unknown reset option(s) {bad}; valid: {', '.join(sorted(_RESET_OPTIONS))}"
+            )
+        start = self._initial_state(options)
+        backend_seed = int(self.np_random.integers(2**31 - 1)) if seed is not None else None
+        p = self.backend.reset_episode(
+            start.pose,
+            start.ball_pos,
+            start.ball_vel,
+            play_mode=self.config.play_mode,
+            seed=backend_seed,
+        )
+        self.episode_start = start
+        self.ball_spawn_pos = np.array(start.ball_pos, dtype=float)
+        self.kick_target = np.asarray(start.kick_target, dtype=float)
+        self.episode_step = 0
+        self.has_completed = False
+        self._started = True
+        self._last_action[:] = 0.0
+        self._vision_ball[:] = 0.0
+        self._q = np.asarray(p.joint_angles_deg, dtype=float)
+        self._qdot = np.zeros_like(self._q)
+        self._set_perception(p)
+        self._build_frame()
+        k = int(self.config.frame_stack)
+        self._obs[:] = np.tile(self._frame, k)
+        return self._obs.astype(np.float32), self._info()
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """One 20 ms agent cycle. On the last step of an episode the world first runs
+        ``wait_steps`` more cycles with zero joint velocities, then the final reward is computed
+        (the returned observation is the one from before the wait, as in the paper)."""
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
+        if self.has_completed:
+            raise RuntimeError("the episode is over (terminated or truncated); call reset()")
+        a = self._check_action(action)
+        if self._act_noise:
+            a = a + self.np_random.normal(0.0, self._act_noise, a.shape)
+        np.minimum(a, 1.0, out=a)  # clip to [-1, 1] (cheaper than np.clip on small arrays)
+        np.maximum(a, -1.0, out=a)
+        command = self._actions.command(a, self._q)
+        try:
+            p = self.backend.step(AgentCommand(command))
+        except BackendDivergedError as e:
+            return self._diverged(e)
+        self._last_action[:] = a
+        self.episode_step += 1
+        self._set_perception(p)
+        obs = self._build_frame_and_stack()
+        terminated = bool(self._is_terminated())
+        truncated = bool(self._is_truncated())
+        cycles = 1
+        if terminated or truncated:
+            self.has_completed = True
+            n = int(self.config.wait_steps)
+            if n > 0:
+                try:
+                    p = self.backend.advance(n, self._wait_command)
+                except BackendDivergedError as e:
+                    return self._diverged(e, terminated=terminated)
+                self._set_perception(p, cycles=n, episode_over=True)
+                cycles += n
+        reward = float(self._get_reward(a))
+        info = self._info()
+        info["cycles"] = cycles
+        return obs, reward, terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        """An RGB image ``(height, width, 3)`` when ``render_mode="rgb_array"``, else ``None``."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without render_mode; pass render_mode='rgb_array'")
+            return None
+        return self.backend.render(*self.render_size)
+
+    def close(self) -> None:
+        """Release the backend (if this environment created it)."""
+        backend = getattr(self, "backend", None)
+        if backend is not None and getattr(self, "_owns_backend", False):
+            backend.close()
+
+    # ================================================================== overridables
+    def _get_reward(self, action: np.ndarray) -> float:
+        """The reward of the step just taken; tasks override this.
+
+        Called once per step, after the episode-end bookkeeping: on the final step
+        :attr:`has_completed` is True and the world has already run ``wait_steps`` more cycles.
+
+        Args:
+            action: The action as applied (clipped to [-1, 1], noise included).
+        """
+        return 0.0
+
+    def _is_terminated(self) -> bool:
+        """True when the episode ends for a task reason (default: the robot has fallen and
+        ``terminate_on_fall``)."""
+        return self.config.terminate_on_fall and self.fallen
+
+    def _is_truncated(self) -> bool:
+        """True when the episode is cut off (default: ``max_episode_steps`` reached)."""
+        return self.episode_step >= self.config.max_episode_steps
+
+    def _initial_state(self, options: Mapping[str, Any]) -> EpisodeStart:
+        """The start state of the next episode: config values plus the configured noise (drawn
+        from :attr:`np_random`), then ``reset(options=...)`` overrides."""
+        cfg = self.config
+        rng = self.np_random
+        angles = self._start_angles.copy()
+        if self._start_noise.any():
+            angles += rng.normal(0.0, 1.0, angles.shape) * self._start_noise
+            np.clip(angles, self._ranges[:, 0], self._ranges[:, 1], out=angles)
+        ball = cfg.ball_start.copy()
+        if cfg.ball_spawn_noise > 0:
+            th = rng.uniform(0.0, 2.0 * math.pi)
+            ball[0] += cfg.ball_spawn_noise * math.cos(th)
+            ball[1] += cfg.ball_spawn_noise * math.sin(th)
+        target = np.array(cfg.kick_target, dtype=float)
+        if cfg.randomise_kick_target:
+            target = np.array(
+                [
+                    rng.uniform(*cfg.kick_target_distance_range),
+                    rng.uniform(*cfg.kick_target_angle_range),
+                ]
+            )
+        x, y = cfg.robot_start_pos
+        heading = cfg.robot_start_heading_deg
+        ball_vel = np.array(cfg.ball_start_vel, dtype=float)
+        if "robot_pos" in options:
+            x, y = (float(v) for v in options["robot_pos"])
+        if "robot_heading_deg" in options:
+            heading = float(options["robot_heading_deg"])
+        if "joint_angles_deg" in options:
+            given = options["joint_angles_deg"]
+            if isinstance(given, Mapping):
+                angles = resolve_angles(self.robot_model, given, "joint_angles_deg")
+            else:
+                angles = np.asarray(given, dtype=float)
+                if angles.shape != (len(self.robot_model.joints),):
+                    raise ValueError(
+                        f"joint_angles_deg must have shape ({len(self.robot_model.joints)},), "
+                        f"got {angles.shape}"
+                    )
+        if "ball_pos" in options:
+            b = np.asarray(options["ball_pos"], dtype=float)
+            if b.shape == (2,):
+                b = np.array([b[0], b[1], cfg.ball_start[2]])
+            if b.shape != (3,):
+                raise ValueError(f"ball_pos must be (x, y) or (x, y, z), got {b.shape}")
+            ball = b
+        if "ball_vel" in options:
+            ball_vel = np.asarray(options["ball_vel"], dtype=float).reshape(3)
+        if "kick_target" in options:
+            target = np.asarray(options["kick_target"], dtype=float).reshape(2)
+        return EpisodeStart(
+            pose=RobotPose(x=x, y=y, heading_deg=heading, joint_angles_deg=angles),
+            ball_pos=ball,
+            ball_vel=ball_vel,
+            kick_target=target,
+        )
+
+    # ================================================================== state for tasks
+    @property
+    def ball_pos(self) -> np.ndarray:
+        """Ball centre (m, world frame) now (ground truth)."""
+        return self._gt_or_raise().ball_pos
+
+    @property
+    def ball_vel(self) -> np.ndarray:
+        """Ball velocity (m/s, world frame) now (ground truth)."""
+        return self._gt_or_raise().ball_vel
+
+    @property
+    def torso_pos(self) -> np.ndarray:
+        """Torso centre (m, world frame) now (ground truth)."""
+        return self._gt_or_raise().torso_pos
+
+    @property
+    def ball_displacement(self) -> np.ndarray:
+        """Ball position minus its spawn position this episode, m."""
+        return self.ball_pos - self.ball_spawn_pos
+
+    @property
+    def joint_angles_deg(self) -> np.ndarray:
+        """Perceived joint angles now, degrees, canonical order."""
+        return self._q
+
+    @property
+    def joint_velocities(self) -> np.ndarray:
+        """Joint velocities over the last cycle, rad/s, canonical order."""
+        return self._qdot
+
+    def _gt_or_raise(self) -> GroundTruth:
+        gt = self.ground_truth
+        if gt is None:
+            if self.perception is None:
+                raise RuntimeError("no perception yet; call reset()")
+            raise RuntimeError(f"the {self.backend.name!r} backend provides no ground truth")
+        return gt
+
+    # ================================================================== internals
+    def _check_action(self, action: Any) -> np.ndarray:
+        try:
+            a = np.array(action, dtype=np.float64)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"action must be an array of numbers, got {action!r}") from e
+        shape = self.action_space.shape
+        if a.shape != shape:
+            raise ValueError(
+                f"action must have shape {shape} (action_mode={self.config.action_mode.value!r}, "
+                f"{self._actions.n_joints} controlled joints: "
+                f"{', '.join(self.action_labels)}); got shape {a.shape}"
+            )
+        if not np.isfinite(a).all():
+            i = int(np.argmax(~np.isfinite(a)))
+            raise ValueError(
+                f"action contains {a[i]} at index {i} ({self.action_labels[i]}); actions must be "
+                "finite numbers in [-1, 1]"
+            )
+        return a
+
+    def _set_perception(self, p: Perception, cycles: int = 1, episode_over: bool = False) -> None:
+        q = np.asarray(p.joint_angles_deg, dtype=float)
+        self._qdot = np.radians(q - self._q) * (1.0 / (CYCLE_S * cycles))
+        self._q = q
+        self.perception = p
+        gt = p.ground_truth
+        self.ground_truth = gt
+        if episode_over:
+            # after the wait steps: keep `fallen` as it was when the episode ended
+            pass
+        elif gt is not None:
+            _, x, y, _ = gt.torso_quat
+            up_z = 1.0 - 2.0 * (x * x + y * y)
+            cfg = self.config
+            self.fallen = bool(up_z < cfg.fall_up_z or gt.torso_pos[2] < cfg.fall_height)
+            if self._needs_heading:
+                self._heading = heading_frame(gt.torso_quat)
+        else:
+            self.fallen = _fallen_from_accel(p.accel)
+        if p.vision is not None:
+            ball = p.vision.ball
+            if ball is None:
+                self._vision_ball[3] = 0.0
+            else:
+                self._vision_ball[:3] = ball
+                self._vision_ball[3] = 1.0
+
+    def _build_frame(self) -> None:
+        for write, out in self._writers:
+            write(out)
+        f = self._frame
+        if self._scale is not None:
+            f *= self._scale
+            f += self._offset
+        if self._obs_noise:
+            f += self.np_random.normal(0.0, self._obs_noise, f.shape)
+        if self._clip is not None:
+            np.minimum(f, self._clip, out=f)
+            np.maximum(f, -self._clip, out=f)
+
+    def _build_frame_and_stack(self) -> np.ndarray:
+        self._build_frame()
+        n = self.frame_size
+        obs = self._obs
+        if len(obs) > n:
+            obs[:-n] = obs[n:]
+        obs[-n:] = self._frame
+        return obs.astype(np.float32)
+
+    def _diverged(
+        self, error: Exception, terminated: bool = False
+    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        self.has_completed = True
+        self.diverged_episodes += 1
+        if self.diverged_episodes == 1:
+            warnings.warn(
+                f"simulation diverged, episode truncated with reward 0 ({error}); further "
+                "divergences are reported only in info['diverged']",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+        info = self._info()
+        info["diverged"] = True
+        info["cycles"] = 0
+        return self._obs.astype(np.float32), 0.0, terminated, not terminated, info
+
+    def _info(self) -> dict[str, Any]:
+        gt = self.ground_truth
+        info: dict[str, Any] = {
+            "step": self.episode_step,
+            "fallen": self.fallen,
+            "diverged": False,
+        }
+        if gt is not None:
+            bp, bv = gt.ball_pos, gt.ball_vel
+            disp = bp - self.ball_spawn_pos
+            info["ball_pos"] = bp
+            info["ball_vel"] = bv
+            info["ball_displacement"] = disp
+            info["ball_distance"] = math.sqrt(disp[0] ** 2 + disp[1] ** 2 + disp[2] ** 2)
+            info["ball_speed"] = math.sqrt(bv[0] ** 2 + bv[1] ** 2 + bv[2] ** 2)
+            info["torso_pos"] = gt.torso_pos
+        return info
+
+    # ---- observation writers: each fills its slice of the raw frame
+    def _w_joint_pos(self, out: np.ndarray) -> None:
+        out[:] = self._q[self._obs_joints]
+
+    def _w_joint_vel(self, out: np.ndarray) -> None:
+        out[:] = self._qdot[self._obs_joints]
+
+    def _w_ball_rel(self, out: np.ndarray) -> None:
+        gt = self.ground_truth
+        c, s = self._heading
+        d = gt.ball_pos - gt.torso_pos
+        out[0] = c * d[0] + s * d[1]
+        out[1] = c * d[1] - s * d[0]
+        out[2] = d[2]
+
+    def _w_ball_vel(self, out: np.ndarray) -> None:
+        c, s = self._heading
+        v = self.ground_truth.ball_vel
+        out[0] = c * v[0] + s * v[1]
+        out[1] = c * v[1] - s * v[0]
+        out[2] = v[2]
+
+    def _w_ball_vision(self, out: np.ndarray) -> None:
+        out[:] = self._vision_ball
+
+    def _w_foot_force(self, out: np.ndarray) -> None:
+        fs = self.perception.force_sensors
+        for k, name in ((0, "lf"), (6, "rf")):
+            fr = fs.get(name)
+            if fr is None:
+                out[k : k + 6] = 0.0
+            else:
+                out[k : k + 3] = fr.point
+                out[k + 3 : k + 6] = fr.force
+
+    def _w_toe_force(self, out: np.ndarray) -> None:
+        fs = self.perception.force_sensors
+        for k, name in ((0, "lf1"), (6, "rf1")):
+            fr = fs.get(name)
+            if fr is None:
+                out[k : k + 6] = 0.0
+            else:
+                out[k : k + 3] = fr.point
+                out[k + 3 : k + 6] = fr.force
+
+    def _w_accel(self, out: np.ndarray) -> None:
+        out[:] = self.perception.accel
+
+    def _w_gyro(self, out: np.ndarray) -> None:
+        out[:] = self.perception.gyro
+
+    def _w_torso_orientation(self, out: np.ndarray) -> None:
+        out[:] = torso_axes(self.ground_truth.torso_quat)
+
+    def _w_torso_height(self, out: np.ndarray) -> None:
+        out[0] = self.ground_truth.torso_pos[2]
+
+    def _w_time(self, out: np.ndarray) -> None:
+        out[0] = self.episode_step
+
+    def _w_kick_target(self, out: np.ndarray) -> None:
+        out[:] = self.kick_target
+
+    def _w_last_action(self, out: np.ndarray) -> None:
+        out[:] = self._last_action
+
+    # ================================================================== misc
+    @property
+    def action_mode(self) -> ActionMode:
+        """The configured :class:`ActionMode`."""
+        return self.config.action_mode
+
+    @property
+    def controlled_joints(self) -> tuple[str, ...]:
+        """Effector names of the controlled joints, in action order."""
+        return tuple(self.robot_model.effector_names[i] for i in self._actions.joints)
+
+    @property
+    def observed_joints(self) -> tuple[str, ...]:
+        """Perceptor names of the joints in ``joint_pos``/``joint_vel``."""
+        return tuple(self.robot_model.perceptor_names[i] for i in self._obs_joints)
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(backend={self.backend.name!r}, "
+            f"robot_type={self.config.robot_type}, obs={self.observation_space.shape}, "
+            f"act={self.action_space.shape}, mode={self.config.action_mode.value!r})"
+        )

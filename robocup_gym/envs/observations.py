@@ -1,0 +1,252 @@
+"""Observation components: what each one contains, its units and its analytic range.
+
+An observation is the concatenation of the components named in
+:attr:`EnvConfig.observations` (then normalised, noised, clipped and frame-stacked). The analytic
+range ``[lo, hi]`` of each value is what ``normalise="min_max"`` maps onto [-1, 1]; values outside
+it are possible (e.g. a hard impact on the accelerometer) and are cut by ``obs_clip``.
+
+Frames used below:
+
+* **heading frame**: centred on the torso, x = the robot's forward direction projected on the
+  ground, y = to the robot's left, z = world up (for a robot facing +x it is the world frame
+  shifted to the torso);
+* **torso frame** (SimSpark's, for the sensors): x = robot's right, y = forward, z = up.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocup_gym.robot.nao import NaoModel
+
+__all__ = ["COMPONENTS", "Component", "ObservationContext", "component_names"]
+
+
+@dataclass(frozen=True)
+class ObservationContext:
+    """What the size and range of a component depend on."""
+
+    model: NaoModel
+    observed_joints: np.ndarray
+    """Canonical indices of the joints in ``joint_pos``/``joint_vel``."""
+    n_action: int
+    max_episode_steps: int
+
+
+@dataclass(frozen=True)
+class Component:
+    """One named observation component."""
+
+    name: str
+    description: str
+    units: str
+    range_doc: str
+    bounds: Callable[[ObservationContext], tuple[np.ndarray, np.ndarray]]
+    labels: Callable[[ObservationContext], list[str]]
+    needs_ground_truth: bool = False
+    needs_vision: bool = False
+    needs_toes: bool = False
+
+    def size(self, ctx: ObservationContext) -> int:
+        return len(self.labels(ctx))
+
+
+def _const(lo: list[float], hi: list[float]):
+    def f(ctx: ObservationContext) -> tuple[np.ndarray, np.ndarray]:
+        return np.array(lo, float), np.array(hi, float)
+
+    return f
+
+
+def _labels(prefix: str, names: list[str]):
+    return lambda ctx: [f"{prefix}/{n}" for n in names]
+
+
+def _joint_pos_bounds(ctx):
+    r = ctx.model.ranges_deg[ctx.observed_joints]
+    return r[:, 0].astype(float), r[:, 1].astype(float)
+
+
+def _joint_vel_bounds(ctx):
+    v = ctx.model.max_speeds[ctx.observed_joints]
+    return -v, v.copy()
+
+
+def _joint_labels(prefix):
+    return lambda ctx: [f"{prefix}/{ctx.model.perceptor_names[i]}" for i in ctx.observed_joints]
+
+
+_FRP = ["cx", "cy", "cz", "fx", "fy", "fz"]
+_FRP_LO = [-0.1, -0.1, -0.1, -100.0, -100.0, -100.0]
+_FRP_HI = [0.1, 0.1, 0.1, 100.0, 100.0, 100.0]
+
+COMPONENTS: dict[str, Component] = {
+    c.name: c
+    for c in [
+        Component(
+            "joint_pos",
+            "Joint angles (HJ) of the observed joints, in the order of `observed_joints`.",
+            "deg",
+            "each joint's range [min, max]",
+            _joint_pos_bounds,
+            _joint_labels("joint_pos"),
+        ),
+        Component(
+            "joint_vel",
+            "Joint angular velocities of the observed joints: change of the perceived angle over "
+            "the last cycle (0 on the first frame of an episode).",
+            "rad/s",
+            "± each joint's max speed (6.14 rad/s; type 2 ankles: 8.81 pitch, 3.47 roll)",
+            _joint_vel_bounds,
+            _joint_labels("joint_vel"),
+        ),
+        Component(
+            "ball_rel",
+            "Ball centre minus torso centre in the heading frame (x forward, y left, z up). "
+            "Exact (ground truth; the paper's ``ballpos`` extension).",
+            "m",
+            "[-2, 2] each",
+            _const([-2.0] * 3, [2.0] * 3),
+            _labels("ball_rel", ["x", "y", "z"]),
+            needs_ground_truth=True,
+        ),
+        Component(
+            "ball_vel",
+            "Ball linear velocity in the heading frame (x forward, y left, z up), ground truth.",
+            "m/s",
+            "[-10, 10] each",
+            _const([-10.0] * 3, [10.0] * 3),
+            _labels("ball_vel", ["x", "y", "z"]),
+            needs_ground_truth=True,
+        ),
+        Component(
+            "ball_vision",
+            "The ball as seen by the (noisy, restricted) See perceptor, relative to the head: "
+            "distance, horizontal angle (left positive), vertical angle (up positive), and a "
+            "flag that is 1 when the ball was in the most recent See (every 3rd cycle). Values "
+            "are held between See messages and are 0 before the ball was first seen.",
+            "m, deg, deg, 1",
+            "[0, 20], [-180, 180], [-90, 90], [0, 1]",
+            _const([0.0, -180.0, -90.0, 0.0], [20.0, 180.0, 90.0, 1.0]),
+            _labels("ball_vision", ["distance", "horizontal", "vertical", "visible"]),
+            needs_vision=True,
+        ),
+        Component(
+            "foot_force",
+            "Foot pressure sensors (FRP) of the left then right foot: centre of pressure c "
+            "(x, y, z) in the foot frame and total force f (x, y, z) in the foot frame; zeros "
+            "when the foot touches nothing. Standing: f_z ≈ 22.6 N per foot.",
+            "m, N",
+            "c: [-0.1, 0.1]; f: [-100, 100]",
+            _const(_FRP_LO * 2, _FRP_HI * 2),
+            _labels("foot_force", [f"lf_{n}" for n in _FRP] + [f"rf_{n}" for n in _FRP]),
+        ),
+        Component(
+            "toe_force",
+            "Toe pressure sensors (lf1 then rf1) of robot type 4, as foot_force.",
+            "m, N",
+            "c: [-0.1, 0.1]; f: [-100, 100]",
+            _const(_FRP_LO * 2, _FRP_HI * 2),
+            _labels("toe_force", [f"lf1_{n}" for n in _FRP] + [f"rf1_{n}" for n in _FRP]),
+            needs_toes=True,
+        ),
+        Component(
+            "accel",
+            "Accelerometer (ACC) in the torso frame (x right, y forward, z up); ≈ (0, 0, 9.81) "
+            "standing still.",
+            "m/s²",
+            "[-50, 50] each",
+            _const([-50.0] * 3, [50.0] * 3),
+            _labels("accel", ["x", "y", "z"]),
+        ),
+        Component(
+            "gyro",
+            "Gyroscope (GYR): torso angular velocity in the torso frame.",
+            "deg/s",
+            "[-500, 500] each",
+            _const([-500.0] * 3, [500.0] * 3),
+            _labels("gyro", ["x", "y", "z"]),
+        ),
+        Component(
+            "torso_orientation",
+            "Torso orientation as two unit vectors in the world frame: the robot's forward axis "
+            "(x, y, z) then its up axis (x, y, z). Upright facing +x: (1, 0, 0, 0, 0, 1). "
+            "Ground truth.",
+            "1",
+            "[-1, 1] each",
+            _const([-1.0] * 6, [1.0] * 6),
+            _labels("torso_orientation", ["fwd_x", "fwd_y", "fwd_z", "up_x", "up_y", "up_z"]),
+            needs_ground_truth=True,
+        ),
+        Component(
+            "torso_height",
+            "Height of the torso centre above the ground (≈0.38 m standing upright). Ground truth.",
+            "m",
+            "[0, 0.6]",
+            _const([0.0], [0.6]),
+            _labels("torso_height", ["z"]),
+            needs_ground_truth=True,
+        ),
+        Component(
+            "time",
+            "Steps taken in this episode (0 on the first observation).",
+            "steps",
+            "[0, max_episode_steps]",
+            lambda ctx: (np.array([0.0]), np.array([float(ctx.max_episode_steps)])),
+            _labels("time", ["step"]),
+        ),
+        Component(
+            "kick_target",
+            "Desired kick distance and direction (relative to the robot's start heading, CCW "
+            "positive): `kick_target`, or drawn per episode with `randomise_kick_target`.",
+            "m, deg",
+            "[0, 20], [-90, 90]",
+            _const([0.0, -90.0], [20.0, 90.0]),
+            _labels("kick_target", ["distance", "angle"]),
+        ),
+        Component(
+            "last_action",
+            "The previous action as given to step() (after clipping to [-1, 1]); zeros on the "
+            "first frame.",
+            "1",
+            "[-1, 1] each",
+            lambda ctx: (-np.ones(ctx.n_action), np.ones(ctx.n_action)),
+            lambda ctx: [f"last_action/{i}" for i in range(ctx.n_action)],
+        ),
+    ]
+}
+"""Every observation component by name."""
+
+
+def component_names() -> tuple[str, ...]:
+    """Names of all observation components."""
+    return tuple(COMPONENTS)
+
+
+def heading_frame(quat: np.ndarray) -> tuple[float, float]:
+    """(cos ψ, sin ψ) of the heading ψ of a torso with orientation ``quat`` (w, x, y, z): the
+    direction of its forward (+y) axis projected on the ground (+x if it points straight up)."""
+    w, x, y, z = quat
+    fx = 2.0 * (x * y - w * z)
+    fy = 1.0 - 2.0 * (x * x + z * z)
+    n = math.hypot(fx, fy)
+    if n < 1e-9:
+        return 1.0, 0.0
+    return fx / n, fy / n
+
+
+def torso_axes(quat: np.ndarray) -> tuple[float, float, float, float, float, float]:
+    """Forward (+y) and up (+z) axes of the torso in world coordinates from its quaternion."""
+    w, x, y, z = quat
+    return (
+        2.0 * (x * y - w * z),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z + w * x),
+        2.0 * (x * z + w * y),
+        2.0 * (y * z - w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    )

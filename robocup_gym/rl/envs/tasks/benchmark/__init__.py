@@ -1,0 +1,1 @@
+"""Compatibility aliases of the paper's benchmark tasks."""

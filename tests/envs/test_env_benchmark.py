@@ -1,0 +1,39 @@
+"""benchmarks/throughput.py --quick runs and reports its JSON (no timing assertions)."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+KEYS = (
+    "world_cycles_per_s",
+    "raw_cycles_per_s",
+    "env_steps_per_s",
+    "reset_ms",
+    "env_steps_per_s_2_workers",
+    "world_vs_raw",
+    "env_vs_world",
+)
+
+
+def test_throughput_quick_prints_json_last():
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "throughput.py"), "--quick"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    last = proc.stdout.strip().splitlines()[-1]
+    result = json.loads(last)
+    assert result["quick"] is True
+    for key in KEYS:
+        assert isinstance(result[key], float) and math.isfinite(result[key]) and result[key] > 0
+    assert result["world_vs_raw"] == result["world_cycles_per_s"] / result["raw_cycles_per_s"]
+    assert result["env_vs_world"] == result["env_steps_per_s"] / result["world_cycles_per_s"]

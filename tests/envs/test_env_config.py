@@ -1,0 +1,120 @@
+"""The configuration: defaults, keyword overrides, and clear errors for bad values."""
+
+from __future__ import annotations
+
+import json
+
+import gymnasium as gym
+import pytest
+
+from robocup_gym.envs import (
+    PAPER_STANDING_POSE_DEG,
+    ActionMode,
+    BaseEnv,
+    EnvConfig,
+    EnvConfigError,
+    Normalisation,
+    SimpleKick,
+    SimpleKickConfig,
+    VelocityKick,
+    VelocityKickConfig,
+)
+
+
+def test_defaults_need_no_arguments(make_env):
+    cfg = EnvConfig()
+    assert cfg.action_mode is ActionMode.VELOCITY
+    assert cfg.normalise is Normalisation.MIN_MAX
+    assert cfg.obs_clip == 1.0 and cfg.frame_stack == 1
+    assert cfg.max_episode_steps == 40
+    assert cfg.robot_start_pos == (-1.0, 0.0)
+    assert cfg.ball_start_pos == pytest.approx((-0.8, -0.055, 0.041))
+    assert isinstance(SimpleKick.default_config(), SimpleKickConfig)
+    assert isinstance(VelocityKick.default_config(), VelocityKickConfig)
+    env = make_env()
+    obs, _ = env.reset()
+    assert env.observation_space.contains(obs)
+    json.dumps(VelocityKick.default_config().to_dict())  # JSON-able for logging
+
+
+def test_keyword_overrides_reach_the_config(make_env):
+    env = make_env(VelocityKick, wait_steps=7, speed_weight=0.5, action_mode="target_angle")
+    assert env.config.wait_steps == 7 and env.config.speed_weight == 0.5
+    assert env.action_mode is ActionMode.TARGET_ANGLE
+    base = EnvConfig(max_episode_steps=9)
+    env = make_env(VelocityKick, config=base)  # a plain config given to a task
+    assert isinstance(env.config, VelocityKickConfig) and env.config.max_episode_steps == 9
+    env = gym.make("RobocupGym/SimpleKick-v0", robot_type=3, frame_stack=2)
+    assert env.unwrapped.config.robot_type == 3 and env.unwrapped.config.frame_stack == 2
+    env.close()
+
+
+def test_paper_names_are_accepted():
+    assert EnvConfig(action_mode="VELOCITIES").action_mode is ActionMode.VELOCITY
+    assert EnvConfig(action_mode="DESIRED_ANGLES").action_mode is ActionMode.TARGET_ANGLE
+    assert EnvConfig(normalise="MIN_MAX_ANALYTIC").normalise is Normalisation.MIN_MAX_01
+
+
+def test_joint_names_in_any_naming(make_env):
+    env = make_env(controlled_joints=("rle3", "rlj4", "RAnklePitch"))
+    assert env.controlled_joints == ("rle3", "rle4", "rle5")
+    assert env.observed_joints == ("rlj3", "rlj4", "rlj5")
+    env = make_env(joint_start_deg=PAPER_STANDING_POSE_DEG)
+    env.reset(seed=0)
+    names = env.robot_model.perceptor_names
+    assert env.joint_angles_deg[names.index("rlj4")] == pytest.approx(-59.42)
+    assert env.joint_angles_deg[names.index("hj2")] == pytest.approx(-45.0)
+
+
+@pytest.mark.parametrize(
+    "options, match",
+    [
+        (
+            {"observations": ("joint_pos", "ball_position")},
+            r"unknown observation.*'ball_position'.*"
+            r"valid: joint_pos",
+        ),
+        (
+            {"controlled_joints": ("rle3", "rknee")},
+            r"unknown joint 'rknee' in controlled_joints.*"
+            r"valid effector names: he1",
+        ),
+        ({"observed_joints": ("xx",)}, r"unknown joint 'xx' in observed_joints"),
+        ({"controlled_joints": ("rle3", "rlj3")}, r"names a joint twice"),
+        ({"controlled_joints": "rle3"}, r"sequence of joint names"),
+        ({"controlled_joints": ()}, r"at least one joint"),
+        ({"joint_start_deg": {"knee": 3.0}}, r"unknown joint 'knee' in joint_start_deg"),
+        ({"action_mode": "torque"}, r"unknown action mode 'torque'.*'velocity'"),
+        ({"normalise": "zscore"}, r"unknown normalisation 'zscore'"),
+        ({"frame_stack": 0}, r"frame_stack must be an integer >= 1"),
+        ({"max_episode_steps": 0}, r"max_episode_steps"),
+        ({"wait_steps": -1}, r"wait_steps must be an integer >= 0"),
+        ({"robot_type": 5}, r"robot_type must be one of 0, 1, 2, 3, 4"),
+        ({"obs_clip": -1.0}, r"obs_clip"),
+        ({"observation_noise_std": -0.1}, r"observation_noise_std"),
+        ({"ball_start_pos": (1.0,)}, r"ball_start_pos"),
+        ({"ball_start_pos": (1.0, float("nan"))}, r"ball_start_pos"),
+        ({"target_gain": 0.0}, r"target_gain"),
+        ({"observations": ("time", "time")}, r"twice"),
+        ({"observations": ("toe_force",)}, r"type 4"),
+        ({"render_mode": "human"}, r"render_mode"),
+        ({"wait_step": 3}, r"unknown option\(s\) 'wait_step'.*valid options:.*wait_steps"),
+    ],
+)
+def test_bad_config_is_a_clear_error(options, match):
+    with pytest.raises(EnvConfigError, match=match):
+        BaseEnv(**options)
+
+
+def test_task_options_are_validated():
+    with pytest.raises(EnvConfigError, match="lateral_reference"):
+        VelocityKick(lateral_reference="world")
+    with pytest.raises(EnvConfigError, match="unknown option"):
+        BaseEnv(speed_weight=1.0)  # a VelocityKick option on the base environment
+    with pytest.raises(EnvConfigError, match="must be an EnvConfig"):
+        BaseEnv(config={"wait_steps": 3})
+
+
+def test_normalise_none_with_clip_warns():
+    with pytest.warns(UserWarning, match="obs_clip=None"):
+        EnvConfig(normalise="none")
