@@ -4,6 +4,6 @@ Importing the package registers the environments (``RobocupGym/SimpleKick-v0``,
 ``RobocupGym/VelocityKick-v0``) with Gymnasium.
 """
 
-from robocup_gym import envs as envs  # noqa: F401  (registers the Gymnasium ids)
+from robocup_gym import envs as envs  # registers the Gymnasium ids
 
 __version__ = "0.1.0"
