@@ -34,15 +34,11 @@ __all__ = [
 
 _REGISTRY: dict[str, str | Callable[..., Backend]] = {
     "mujoco": "robocup_gym.backends.mujoco_backend:MujocoBackend",
+    "rcssserver3d": "robocup_gym.backends.rcssserver3d_backend:Rcssserver3dBackend",
 }
 """Implemented backends: name -> ``"module:Class"`` (imported lazily) or a factory."""
 
-_PLANNED: dict[str, str] = {
-    "rcssserver3d": (
-        "drives a real rcssserver3d (SimSpark) server over TCP in sync mode; it arrives with the "
-        "protocol issue (robocup_gym.backends.rcssserver3d_backend)"
-    ),
-}
+_PLANNED: dict[str, str] = {}
 """Backends that are designed but not implemented yet: name -> what it will be."""
 
 

@@ -64,10 +64,13 @@ class PhysicsConfig:
     """
 
     timestep: float = 0.005
+    solver: str = "PGS"
+    """Projected Gauss-Seidel: exact for the force-bounded motor rows. Newton diverged on them
+    as soon as two robots (or one robot and a free ball in one island) were solved together."""
     iterations: int = 50
     tolerance: float = 1e-10
-    """Newton solver tolerance: the stiff motor rows need a converged solve (MuJoCo's default
-    1e-8 stops after one iteration here and lets the robot creep)."""
+    """Solver tolerance: the stiff motor rows need a converged solve (with MuJoCo's default the
+    solver stops early and the robot creeps and falls)."""
     ls_iterations: int = 50
     robot_friction: float = 2.0
     ball_friction: float = 1.0

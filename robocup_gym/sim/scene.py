@@ -85,7 +85,7 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
     return f"""<mujoco model="robocup_gym">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{ph.timestep}" gravity="0 0 -9.81" integrator="Euler"
-          solver="Newton" iterations="{ph.iterations}" ls_iterations="{ph.ls_iterations}"
+          solver="{ph.solver}" iterations="{ph.iterations}" ls_iterations="{ph.ls_iterations}"
           tolerance="{ph.tolerance}"
           cone="pyramidal"/>
   <size memory="8M"/>

@@ -1,0 +1,1030 @@
+"""The real rcssserver3d (SimSpark) server as a backend, driven over TCP in agent sync mode.
+
+Two ways to get a server:
+
+* **launch mode** (default): the backend starts its own ``rcssserver3d`` per environment — found
+  through the ``RCSSSERVER3D`` environment variable or ``rcssserver3d`` on ``PATH`` — in sync
+  mode with real-time mode off, with a configuration generated in a temporary folder and on
+  ports the OS reports free (:mod:`robocup_gym.backends.process`), and stops it on
+  :meth:`~Rcssserver3dBackend.close`, on garbage collection, at interpreter exit and when the
+  Python process dies;
+* **connect mode**: ``host``/``agent_port``/``monitor_port`` name a server that is already
+  running (a real rcssserver3d in sync mode, or ``robocup-gym serve --sync``).
+
+The backend is one agent (``scene`` → ``init``, then one ``(…)(syn)`` message per cycle) plus one
+monitor connection. The monitor connection sends the trainer commands of an episode reset and
+reads the monitor stream, which is where the **ground truth** comes from (ball and torso poses of
+the scene graph; see ``docs/rcssserver3d.md`` for its rate and precision).
+
+Episode reset (:meth:`~Rcssserver3dBackend.reset_episode`): the real server cannot set joint
+angles, so the robot is held in the air (trainer ``move`` to the start x/y/heading,
+``hover_height`` above its standing height) while every joint is driven to its start angle at the
+fastest speed the server allows (a dead-beat velocity controller that accounts for the one-cycle
+command delay, clipped to each joint's maximum speed); then one trainer frame puts the robot down
+at its standing height, places the ball, sets the play mode and game time 0, and the backend
+steps until the monitor and the percept show the new state. Cycles and milliseconds of every
+reset are in :attr:`~Rcssserver3dBackend.last_reset`.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import logging
+import math
+import re
+import select
+import socket
+import time
+import weakref
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.backends.base import Backend, BackendDivergedError, BackendError, RobotPose
+from robocup_gym.backends.process import ServerProcess, ServerStartError, wait_for_port
+from robocup_gym.protocol import trainer as tc
+from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT, PLAY_MODES
+from robocup_gym.protocol.effectors import format_command, format_init, format_scene
+from robocup_gym.protocol.errors import ProtocolError
+from robocup_gym.protocol.framing import FrameDecoder, encode_frame
+from robocup_gym.protocol.monitor import MonitorState
+from robocup_gym.protocol.perceptors import parse_perception
+from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.types import AgentCommand, GroundTruth, Perception
+
+__all__ = ["GroundTruthSnapshot", "Rcssserver3dBackend", "ResetStats"]
+
+log = logging.getLogger("robocup_gym.backends.rcssserver3d")
+
+CYCLE_S = 0.02
+"""One server cycle, s."""
+FROZEN_CLOCK_MODES = frozenset({"BeforeKickOff", "GameOver"})
+"""Play modes in which the game clock stands still (ground truth then cannot be matched by time)."""
+_TIME_TOL = 0.006
+"""Tolerance when matching a monitor frame's game time to a percept's (2–3 decimals on the wire)."""
+
+
+# ------------------------------------------------------------------------------------------
+# one framed TCP connection
+# ------------------------------------------------------------------------------------------
+
+
+class _Link:
+    """A blocking-send, poll-receive framed connection (4-byte length prefix, spec §1.2)."""
+
+    def __init__(self, sock: socket.socket, what: str) -> None:
+        self.sock = sock
+        self.what = what
+        self.decoder = FrameDecoder()
+        self.closed = False
+        sock.setblocking(True)
+
+    def send(self, text: str, timeout: float) -> None:
+        self.sock.settimeout(timeout)
+        try:
+            self.sock.sendall(encode_frame(text))
+        except (TimeoutError, OSError) as exc:
+            raise ConnectionError(f"sending on the {self.what} connection failed: {exc}") from exc
+
+    def recv(self, timeout: float) -> bytes:
+        """The next frame; waits up to ``timeout`` s.
+
+        Raises:
+            TimeoutError: none complete in time.
+            ConnectionError: the peer closed the connection.
+        """
+        frame = self.decoder.pop_frame()
+        if frame is not None:
+            return frame
+        deadline = time.monotonic() + timeout
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0 or not self._fill(remaining):
+                raise TimeoutError(
+                    f"no message on the {self.what} connection within {timeout:.1f} s"
+                )
+            frame = self.decoder.pop_frame()
+            if frame is not None:
+                return frame
+
+    def available(self, timeout: float = 0.0) -> list[bytes]:
+        """Every complete frame that arrives within ``timeout`` s (returns at the first data
+        when ``timeout`` > 0, at once when 0)."""
+        frames: list[bytes] = []
+        got = self._fill(timeout)
+        while got:
+            frame = self.decoder.pop_frame()
+            while frame is not None:
+                frames.append(frame)
+                frame = self.decoder.pop_frame()
+            got = self._fill(0.0)
+        return frames
+
+    def _fill(self, timeout: float) -> bool:
+        """Read what is there (waiting up to ``timeout`` s for something); False if nothing."""
+        try:
+            ready, _, _ = select.select([self.sock], [], [], max(0.0, timeout))
+        except (OSError, ValueError) as exc:
+            raise ConnectionError(f"the {self.what} connection is closed") from exc
+        if not ready:
+            return False
+        self.sock.settimeout(0.0)
+        try:
+            data = self.sock.recv(1 << 20)
+        except BlockingIOError:
+            return False
+        except OSError as exc:
+            raise ConnectionError(f"the {self.what} connection failed: {exc}") from exc
+        finally:
+            self.sock.settimeout(None)
+        if not data:
+            raise ConnectionError(f"the server closed the {self.what} connection")
+        self.decoder.append(data)
+        return True
+
+    def close(self) -> None:
+        if not self.closed:
+            self.closed = True
+            with contextlib.suppress(OSError):
+                self.sock.close()
+
+
+# ------------------------------------------------------------------------------------------
+# ground truth from the monitor stream
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass
+class GroundTruthSnapshot:
+    """What one monitor frame says about the ball and the learning robot's torso."""
+
+    game_time: float
+    """The frame's ``(time …)`` (game time, s)."""
+    ball_pos: np.ndarray
+    torso: np.ndarray | None
+    """Torso world transform (4×4; columns: torso x = right, y = forward, z = up, position)."""
+    ball_vel: np.ndarray
+    torso_vel: np.ndarray
+
+
+class _VelocityTrack:
+    """Finite-difference velocity of a body whose pose only comes when it moved (monitor deltas
+    resend a transform after a change of more than 0.005, spec §7.4).
+
+    ``v = (p_last_change - p_change_before) / (t_now - t_change_before)``: the exact mean velocity
+    between the last two updates when the body was just resent, falling off while no update comes.
+    """
+
+    def __init__(self) -> None:
+        self.restart(None, None, np.zeros(3))
+
+    def restart(self, t: float | None, p: np.ndarray | None, v: np.ndarray) -> None:
+        self.t_last = t
+        self.p_last = None if p is None else p.copy()
+        self.t_prev: float | None = None
+        self.p_prev: np.ndarray | None = None
+        self.t_now = t
+        self.vel = np.asarray(v, dtype=float).copy()
+
+    def update(self, t: float, p: np.ndarray) -> np.ndarray:
+        if self.t_now is not None and t < self.t_now - 1e-9:  # the game clock was set back
+            self.restart(t, p, np.zeros(3))
+            return self.vel
+        self.t_now = t
+        if self.p_last is None:
+            self.t_last, self.p_last = t, p.copy()
+            return self.vel
+        if np.any(p != self.p_last):
+            if t > (self.t_last or 0.0) + 1e-9 or self.p_prev is None:
+                self.t_prev, self.p_prev = self.t_last, self.p_last
+            self.t_last, self.p_last = t, p.copy()
+        if self.p_prev is not None and self.t_prev is not None and t > self.t_prev + 1e-9:
+            self.vel = (self.p_last - self.p_prev) / (t - self.t_prev)
+        return self.vel
+
+
+_ND = re.compile(r"\(nd\b")
+"""A scene node's opening: nodes are numbered by the order of these (depth-first pre-order)."""
+_SLT_AT = re.compile(r"\s*\(SLT ([^()]*)\)")
+_TIME = re.compile(r"\(time ([^()\s]+)\)")
+
+
+class _MonitorTracker:
+    """Follows the monitor stream: the ball's and the learning robot's torso transforms, with a
+    short history of snapshots.
+
+    Full frames (``RSG``) go through the general parser (:class:`MonitorState`), which also
+    locates the ball and the torso in the scene graph. Delta frames (``RDS``, every cycle) are
+    only scanned: a delta mirrors the last full scene node for node (spec §7.4), so only the
+    ``SLT`` of the nodes on the ball's and the torso's paths are read, found by their position
+    in the depth-first order. A delta whose node count differs from the full scene means a full
+    frame was missed (:attr:`need_full`).
+    """
+
+    def __init__(self) -> None:
+        self.state = MonitorState()
+        self.snapshots: collections.deque[GroundTruthSnapshot] = collections.deque(maxlen=16)
+        self.agent: tuple[str, int] | None = None
+        """(side, unum) of the learning robot once known."""
+        self.frames = 0
+        self.errors = 0
+        self.need_full = False
+        self.full_requested = False
+        self.time = 0.0
+        self._has_scene = False
+        self._n_nodes = 0
+        self._ball_path: tuple[int, ...] | None = None
+        self._torso_path: tuple[int, ...] | None = None
+        self._slt: dict[tuple[int, ...], np.ndarray | None] = {}
+        self._ordinals: list[tuple[int, tuple[int, ...]]] = []
+        self._ball = _VelocityTrack()
+        self._torso = _VelocityTrack()
+
+    @property
+    def has_agent(self) -> bool:
+        return self._torso_path is not None
+
+    def set_agent(self, side: str, unum: int) -> None:
+        """Follow robot ``(side, unum)`` (looked up again in the last full scene)."""
+        self.agent = (side, unum)
+        if self._has_scene:
+            self._locate()
+
+    def newest(self) -> GroundTruthSnapshot | None:
+        return self.snapshots[-1] if self.snapshots else None
+
+    def feed(self, payload: bytes | str) -> None:
+        """Apply one monitor frame; one that does not fit (a missed full frame) sets
+        :attr:`need_full` (the caller then sends ``(reqfullstate)``)."""
+        text = payload if isinstance(payload, str) else payload.decode("latin-1")
+        k = text.find("(RDS ")
+        try:
+            if k >= 0:
+                if not self._has_scene or self.need_full:
+                    return  # nothing to apply it to (as RoboViz: deltas before a full frame)
+                self._delta(text, k)
+            else:
+                self._full(text)
+        except (ProtocolError, ValueError, IndexError) as exc:
+            self.errors += 1
+            if not self.need_full:
+                log.warning("monitor stream out of step (%s); requesting a full frame", exc)
+            self.need_full = True
+            return
+        self.frames += 1
+        self._snapshot()
+
+    def _full(self, text: str) -> None:
+        state = MonitorState()
+        frame = state.update(text)
+        if not frame.full:  # pragma: no cover - guarded by the caller
+            raise ProtocolError("expected a full frame")
+        self.state = state
+        self.time = state.info.time if state.info.time is not None else self.time
+        self._has_scene = True
+        self.need_full = self.full_requested = False
+        self._locate()
+
+    def _delta(self, text: str, header: int) -> None:
+        m = _TIME.search(text, 0, header)
+        if m is not None:
+            self.time = float(m.group(1))
+        # A delta has exactly the nodes of the last full scene in the same order (spec §7.4), so
+        # the k-th "(nd" of the delta is the k-th node of the scene's depth-first walk. A
+        # transform that moved carries "(nd (SLT …)" right after its opening.
+        starts = [nd.start() for nd in _ND.finditer(text, header)]
+        if len(starts) != self._n_nodes:
+            raise ProtocolError(
+                f"delta has {len(starts)} scene nodes, the last full scene {self._n_nodes} "
+                "(missed a full frame?)"
+            )
+        for ordinal, key in self._ordinals:
+            got = _SLT_AT.match(text, starts[ordinal] + 3)
+            if got is not None:
+                values = np.array(got.group(1).split(), dtype=float)
+                if values.size != 16:
+                    raise ProtocolError(f"SLT needs 16 numbers, got {values.size}")
+                self._slt[key] = values.reshape(4, 4).T
+
+    def _locate(self) -> None:
+        """Find the ball and the learning robot's torso in a new full scene."""
+        scene = self.state.scene
+        self._n_nodes = sum(1 for _ in scene.walk())
+        balls = scene.find_meshes("soccerball.obj")
+        self._ball_path = balls[0][0][:-1] if balls else None
+        self._torso_path = None
+        if self.agent is not None:
+            top = scene.agents().get(self.agent)
+            for path, node, _ in scene.walk() if top is not None else ():
+                if path[0] != top or not node.is_mesh:
+                    continue
+                name = (node.model or "").rsplit("/", 1)[-1]
+                if name.startswith("naobody") and name.endswith(".obj"):
+                    # torso body transform > mesh wrapper transform > mesh (spec §7.5)
+                    self._torso_path = path[:-2] if len(path) >= 3 else path[:-1]
+                    break
+        self._slt = {}
+        for p in (self._ball_path, self._torso_path):
+            for k in range(1, len(p) + 1) if p is not None else ():
+                self._slt[p[:k]] = scene.node(p[:k]).slt
+        order = {path: i for i, (path, _, _) in enumerate(scene.walk())}
+        self._ordinals = [(order[key], key) for key in self._slt]
+
+    def _matrix(self, path: tuple[int, ...]) -> np.ndarray:
+        m = np.eye(4)
+        for k in range(1, len(path) + 1):
+            local = self._slt.get(path[:k])
+            if local is not None:
+                m = m @ local
+        return m
+
+    def _snapshot(self) -> None:
+        if self._ball_path is None:
+            return
+        t = self.time
+        ball = self._matrix(self._ball_path)[:3, 3].copy()
+        torso = None if self._torso_path is None else self._matrix(self._torso_path)
+        ball_vel = self._ball.update(t, ball).copy()
+        if torso is not None:
+            torso_vel = self._torso.update(t, torso[:3, 3].copy()).copy()
+        else:
+            torso_vel = np.zeros(3)
+        self.snapshots.append(GroundTruthSnapshot(t, ball, torso, ball_vel, torso_vel))
+
+    def restart_velocities(self, ball_vel: Sequence[float]) -> None:
+        """After a reset: forget the motion history; the ball moves at ``ball_vel``."""
+        s = self.newest()
+        if s is None:
+            return
+        s.ball_vel = np.asarray(ball_vel, dtype=float).copy()
+        s.torso_vel = np.zeros(3)
+        self._ball.restart(s.game_time, s.ball_pos, s.ball_vel)
+        self._torso.restart(s.game_time, None if s.torso is None else s.torso[:3, 3], np.zeros(3))
+
+    def select(self, game_time: float, clock_running: bool) -> GroundTruthSnapshot | None:
+        """The snapshot describing the same cycle as a percept with ``game_time``: the newest
+        whose time is not later (frames may run one cycle ahead of percepts, spec §2); the
+        newest of all when the clock stands still or every frame is later (clock set back)."""
+        if not self.snapshots:
+            return None
+        if clock_running:
+            for s in reversed(self.snapshots):
+                if s.game_time <= game_time + _TIME_TOL:
+                    return s
+        return self.snapshots[-1]
+
+
+def _quat_from_matrix(r: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method; the result is
+    normalised, which absorbs the 6-significant-digit rounding of monitor numbers)."""
+    tr = r[0, 0] + r[1, 1] + r[2, 2]
+    if tr > 0:
+        s = math.sqrt(tr + 1.0) * 2
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
+        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+    elif r[1, 1] > r[2, 2]:
+        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
+        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+    else:
+        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
+        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+    q = np.array(q)
+    if q[0] < 0:
+        q = -q
+    return q / np.linalg.norm(q)
+
+
+# ------------------------------------------------------------------------------------------
+# the backend
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass
+class ResetStats:
+    """How one :meth:`Rcssserver3dBackend.reset_episode` went."""
+
+    cycles: int
+    """Server cycles the reset took in all."""
+    joint_cycles: int
+    """Cycles spent driving the joints to the start pose (robot held in the air)."""
+    settle_cycles: int
+    """Cycles after the final trainer frame until the new state was visible."""
+    ms: float
+    """Wall-clock duration, ms."""
+    max_joint_error_deg: float
+    """Largest |start angle − perceived angle| in the returned perception, degrees."""
+    converged: bool
+    """All joints reached the tolerance within ``reset_max_cycles``."""
+
+
+def _release(links: list[_Link], server: ServerProcess | None) -> None:
+    """Close the connections and stop the server (used by close() and the finalizer)."""
+    for link in links:
+        link.close()
+    if server is not None:
+        server.stop()
+
+
+class Rcssserver3dBackend(Backend):
+    """One learning robot in a real rcssserver3d (or any server speaking its protocol).
+
+    Args:
+        robot_type: Nao type 0–4 (``(scene rsg/agent/nao/nao_hetero.rsg <type>)``).
+        seed: Accepted for the interface; the real server's randomness (vision noise) cannot be
+            seeded from a client.
+        vision: Accepted for the interface; the server sends ``See`` every third cycle anyway
+            and it is passed on in :attr:`Perception.vision`.
+        host: Server address. Giving ``host`` or a port selects **connect mode** (defaults
+            3100/3200 for ports not given); otherwise the backend launches its own server.
+        agent_port, monitor_port: Ports of a running server (connect mode).
+        binary: rcssserver3d executable for launch mode (default: ``$RCSSSERVER3D``, then
+            ``rcssserver3d`` on ``PATH``).
+        script_template: ``rcssserver3d.rb`` to generate the launch configuration from (default:
+            the one installed next to the binary).
+        server_args: Extra command-line arguments of a launched server.
+        monitor_interval: Cycles between monitor frames (ground-truth update interval). Default
+            1 in launch mode (the backend configures ``$monitorStep = 0.02``), 2 in connect mode
+            (rcssserver3d's default 0.04 s); set 1 for a server sending every cycle.
+        team: Team name of the learning robot.
+        unum: Uniform number to ask for (0 = the server assigns one).
+        timeout: Seconds to wait for any single message before giving up.
+        startup_timeout: Seconds for a launched server to accept connections and for the first
+            percept to arrive.
+        reset_tolerance_deg: A joint counts as at its start angle within this, degrees.
+        reset_max_cycles: Most cycles spent driving the joints in one reset.
+        reset_gain: Fraction of the remaining joint error corrected per cycle (1 = dead-beat).
+        hover_height: How high above its standing height the robot is held while the joints
+            move, m (keeps the legs off the ground and the ball).
+        monitor_wait: Seconds a step waits for the monitor frame that belongs to its percept.
+        syn_interval: Seconds between the ``(syn)`` sent while waiting for the first percept.
+    """
+
+    name = "rcssserver3d"
+
+    def __init__(
+        self,
+        *,
+        robot_type: int = 0,
+        seed: int | None = None,
+        vision: bool = False,
+        host: str | None = None,
+        agent_port: int | None = None,
+        monitor_port: int | None = None,
+        binary: str | None = None,
+        script_template: str | None = None,
+        server_args: Sequence[str] = (),
+        monitor_interval: int | None = None,
+        team: str = "RobocupGym",
+        unum: int = 0,
+        timeout: float = 10.0,
+        startup_timeout: float = 30.0,
+        reset_tolerance_deg: float = 0.5,
+        reset_max_cycles: int = 200,
+        reset_gain: float = 1.0,
+        hover_height: float = 0.3,
+        monitor_wait: float = 0.05,
+        syn_interval: float = 0.01,
+    ) -> None:
+        super().__init__(robot_type=robot_type, seed=seed, vision=vision)
+        self._model = nao_model(self.robot_type)  # validates the type
+        n = len(self._model.joints)
+        self._n = n
+        self._vmax = self._model.max_speeds.astype(float)
+        self._ranges = self._model.ranges_deg.astype(float)
+        self.team = str(team)
+        self.requested_unum = int(unum)
+        format_init(self.requested_unum, self.team)  # validates both
+        self.timeout = float(timeout)
+        self.startup_timeout = float(startup_timeout)
+        self.reset_tolerance_deg = float(reset_tolerance_deg)
+        self.reset_max_cycles = int(reset_max_cycles)
+        self.reset_gain = float(reset_gain)
+        self.hover_height = float(hover_height)
+        self.monitor_wait = float(monitor_wait)
+        self.syn_interval = float(syn_interval)
+        if not 0 < self.reset_gain <= 1.0:
+            raise ValueError(f"reset_gain must be in (0, 1], got {reset_gain}")
+        self.connect_mode = host is not None or agent_port is not None or monitor_port is not None
+        if monitor_interval is None:
+            monitor_interval = 2 if self.connect_mode else 1
+        if int(monitor_interval) < 1:
+            raise ValueError(f"monitor_interval must be >= 1, got {monitor_interval}")
+        self.monitor_interval = int(monitor_interval)
+
+        self.unum: int | None = None
+        """Uniform number the server assigned (from the one-time ``GS (unum …)``)."""
+        self.side: str | None = None
+        """``"left"`` or ``"right"``."""
+        self.server: ServerProcess | None = None
+        self.host = host or "127.0.0.1"
+        self.agent_port = int(agent_port) if agent_port is not None else DEFAULT_AGENT_PORT
+        self.monitor_port = int(monitor_port) if monitor_port is not None else DEFAULT_MONITOR_PORT
+        self.last_reset: ResetStats | None = None
+        """Statistics of the latest :meth:`reset_episode`."""
+        self.resets = 0
+        self._targets = np.zeros(n)
+        """Motor velocity targets in force (rad/s, sticky as on the server)."""
+        self._tracker = _MonitorTracker()
+        self._agent: _Link | None = None
+        self._monitor: _Link | None = None
+        self._links: list[_Link] = []
+        self._last: Perception | None = None
+        self._closed = False
+        self._warned_async = False
+        self._stand_cache: dict[tuple[float, ...], float] = {}
+        self._kinematics: Any = None
+        self._finalizer = weakref.finalize(self, _release, self._links, None)
+        try:
+            self._open(binary, script_template, server_args)
+        except BaseException:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------------ connection
+    def _open(
+        self, binary: str | None, script_template: str | None, server_args: Sequence[str]
+    ) -> None:
+        if self.connect_mode:
+            self._connect(None, timeout=min(self.startup_timeout, 5.0))
+        else:
+            attempts = 3
+            for attempt in range(1, attempts + 1):
+                server = ServerProcess(
+                    binary,
+                    host=self.host,
+                    sync=True,
+                    real_time=False,
+                    monitor_step=CYCLE_S * self.monitor_interval,
+                    extra_args=server_args,
+                    script_template=script_template,
+                )
+                self.server = server
+                self._finalizer.detach()
+                self._finalizer = weakref.finalize(self, _release, self._links, server)
+                self.agent_port, self.monitor_port = server.start()
+                try:
+                    self._connect(server, timeout=self.startup_timeout)
+                    break
+                except ServerStartError as exc:
+                    # e.g. another process took an OS-chosen port before the server bound it
+                    self._close_links()
+                    server.stop()
+                    if attempt == attempts:
+                        raise
+                    log.warning("rcssserver3d did not start (%s); retrying on new ports", exc)
+        self._handshake()
+
+    def _connect(self, server: ServerProcess | None, timeout: float) -> None:
+        # The monitor port doubles as the readiness probe (a throw-away agent connection would
+        # stall a real server in sync mode); it is the connection we keep.
+        self._monitor = _Link(
+            wait_for_port(self.host, self.monitor_port, timeout, server), "monitor"
+        )
+        self._links.append(self._monitor)
+        self._agent = _Link(wait_for_port(self.host, self.agent_port, timeout, server), "agent")
+        self._links.append(self._agent)
+
+    def _close_links(self) -> None:
+        for link in self._links:
+            link.close()
+        self._links.clear()
+        self._agent = self._monitor = None
+
+    def _handshake(self) -> None:
+        agent = self._agent
+        assert agent is not None
+        # scene -> first percept. The real server stalls ~2 s here unless the client keeps
+        # sending (syn) (fixture README); (syn) before the robot exists is ignored.
+        agent.send(format_scene(self.robot_type), self.timeout)
+        deadline = time.monotonic() + self.startup_timeout
+        while True:
+            frames = agent.available(self.syn_interval)
+            if frames:
+                p = self._parse_many(frames)
+                break
+            if time.monotonic() > deadline:
+                self._fail(f"no percept within {self.startup_timeout:.1f} s after scene")
+            self._check_server()
+            agent.send("(syn)", self.timeout)
+        # init -> percepts until the one-time GS (unum …)(team …) arrives
+        agent.send(format_init(self.requested_unum, self.team) + "(syn)", self.timeout)
+        p = self._recv_percept()
+        for _ in range(20):
+            if self.unum is not None:
+                break
+            agent.send("(syn)", self.timeout)
+            p = self._recv_percept()
+        # the (syn) sent while waiting may have run a cycle more than we received: drain
+        extra = agent.available(0.05)
+        if extra:
+            p = self._parse_many(extra)
+        if self.unum is None or self.side is None:
+            self._fail(
+                f"the server did not give team {self.team!r} a side and uniform number (third "
+                f"team, number {self.requested_unum} taken, team full or robot-type limits?)"
+            )
+        self._tracker.set_agent(self.side, self.unum)
+        for k in range(50):
+            self._pump_monitor(0.0)
+            if self._tracker.has_agent and self._tracker.newest() is not None:
+                break
+            if k == 5:  # the full frame after init did not show the robot: ask again
+                assert self._monitor is not None
+                self._monitor.send(tc.reqfullstate(), self.timeout)
+            p = self._exchange("(syn)", wait=False)
+        else:
+            self._fail("the monitor stream never showed the robot (is the monitor port right?)")
+        p.ground_truth = self._ground_truth(p)
+        self._last = p
+        log.info(
+            "connected to %s:%d/%d as %s #%d (robot type %d)",
+            self.host,
+            self.agent_port,
+            self.monitor_port,
+            self.side,
+            self.unum,
+            self.robot_type,
+        )
+
+    # ------------------------------------------------------------------ messages
+    def _note(self, p: Perception) -> None:
+        if p.game.unum is not None and p.game.team_side is not None:
+            self.unum = int(p.game.unum)
+            self.side = p.game.team_side.lower()
+
+    def _parse(self, frame: bytes) -> Perception:
+        try:
+            p = parse_perception(frame, self.robot_type)
+        except ProtocolError as exc:
+            raise BackendError(f"malformed percept from the server: {exc}") from exc
+        self._note(p)
+        return p
+
+    def _parse_many(self, frames: list[bytes]) -> Perception:
+        p = None
+        for f in frames:
+            p = self._parse(f)
+        assert p is not None
+        return p
+
+    def _recv_percept(self) -> Perception:
+        assert self._agent is not None
+        try:
+            frame = self._agent.recv(self.timeout)
+        except TimeoutError:
+            self._check_server()
+            self._fail(
+                f"no percept within {self.timeout:.1f} s (is the server in sync mode and not "
+                "waiting for another agent?)"
+            )
+        except ConnectionError as exc:
+            self._check_server()
+            self._fail(str(exc))
+        return self._parse(frame)
+
+    def _check_server(self) -> None:
+        if self.server is not None:
+            try:
+                self.server.check_alive()
+            except ServerStartError as exc:
+                raise BackendError(str(exc)) from None
+
+    def _fail(self, what: str) -> None:
+        where = f"rcssserver3d at {self.host}:{self.agent_port}/{self.monitor_port}"
+        tail = ""
+        if self.server is not None:
+            out = self.server.log_tail(1500).strip()
+            if out:
+                tail = f"\nServer output ends with:\n{out}"
+        raise BackendError(f"{where}: {what}{tail}")
+
+    def _pump_monitor(self, timeout: float) -> int:
+        """Apply every monitor frame that arrives within ``timeout`` s; returns how many."""
+        mon = self._monitor
+        if mon is None:
+            return 0
+        try:
+            frames = mon.available(timeout)
+        except ConnectionError as exc:
+            self._check_server()
+            self._fail(str(exc))
+        tracker = self._tracker
+        for f in frames:
+            tracker.feed(f)
+        if tracker.need_full and not tracker.full_requested:
+            # out of step (a full frame was missed): ask for one, once until it comes
+            tracker.full_requested = True
+            mon.send(tc.reqfullstate(), self.timeout)
+        return len(frames)
+
+    def _sync_monitor(self, p: Perception) -> None:
+        """Read the monitor until the frame for ``p``'s cycle is there (or briefly, if none)."""
+        self._pump_monitor(0.0)
+        pm = p.game.play_mode
+        if pm in FROZEN_CLOCK_MODES or self.monitor_wait <= 0:
+            return
+        need = p.game.game_time - (self.monitor_interval - 1) * CYCLE_S - _TIME_TOL
+        deadline = time.monotonic() + self.monitor_wait
+        while True:
+            newest = self._tracker.newest()
+            if newest is not None and newest.game_time >= need:
+                return
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return
+            self._pump_monitor(remaining)
+
+    def _ground_truth(self, p: Perception) -> GroundTruth | None:
+        s = self._tracker.select(p.game.game_time, p.game.play_mode not in FROZEN_CLOCK_MODES)
+        if s is None or s.torso is None:
+            return None
+        rot = s.torso[:3, :3]
+        return GroundTruth(
+            ball_pos=s.ball_pos.copy(),
+            ball_vel=s.ball_vel.copy(),
+            torso_pos=s.torso[:3, 3].copy(),
+            torso_quat=_quat_from_matrix(rot),
+            torso_vel=s.torso_vel.copy(),
+            torso_ang_vel=rot @ np.radians(np.asarray(p.gyro, dtype=float)),
+        )
+
+    def _exchange(
+        self, message: str, trainer: str | None = None, *, wait: bool = True
+    ) -> Perception:
+        """One cycle: [trainer frame,] agent message (must end with (syn)) → percept."""
+        if self._closed:
+            raise BackendError("the backend is closed")
+        assert self._agent is not None and self._monitor is not None
+        try:
+            if trainer:
+                self._monitor.send(trainer, self.timeout)
+            self._agent.send(message, self.timeout)
+        except ConnectionError as exc:
+            self._check_server()
+            self._fail(str(exc))
+        p = self._recv_percept()
+        if wait:
+            self._sync_monitor(p)
+        else:
+            self._pump_monitor(0.0)
+        return p
+
+    def _command_text(self, command: AgentCommand) -> str:
+        vel = command.joint_velocities
+        names = self._model.effector_names
+        if isinstance(vel, Mapping):
+            for name, v in vel.items():
+                try:
+                    i = names.index(name)
+                except ValueError:
+                    i = None
+                if i is not None and math.isfinite(float(v)):
+                    self._targets[i] = float(np.clip(float(v), -self._vmax[i], self._vmax[i]))
+        else:
+            arr = np.asarray(vel, dtype=float)
+            if arr.shape == (self._n,):
+                ok = np.isfinite(arr)
+                self._targets[ok] = np.clip(arr[ok], -self._vmax[ok], self._vmax[ok])
+        return format_command(command, self.robot_type, sync=True, decimals=4)
+
+    def _velocity_text(self, v: np.ndarray) -> str:
+        self._targets[:] = v
+        return (
+            "".join(
+                f"({name} {value:.4f})"
+                for name, value in zip(self._model.effector_names, v.tolist(), strict=True)
+            )
+            + "(syn)"
+        )
+
+    # ------------------------------------------------------------------ Backend API
+    @property
+    def robot_model(self) -> NaoModel:
+        return self._model
+
+    @property
+    def last_perception(self) -> Perception | None:
+        """The latest perception (with ground truth)."""
+        return self._last
+
+    def step(self, command: AgentCommand) -> Perception:
+        p = self._exchange(self._command_text(command))
+        last = self._last
+        if not self._warned_async and last is not None and p.time - last.time > 1.5 * CYCLE_S:
+            self._warned_async = True
+            log.warning(
+                "percepts are %.2f s apart (expected 0.02): the server does not seem to run in "
+                "sync mode, so observations lag behind commands",
+                p.time - last.time,
+            )
+        p.ground_truth = self._ground_truth(p)
+        self._last = p
+        if not (
+            np.isfinite(p.joint_angles_deg).all()
+            and np.isfinite(p.gyro).all()
+            and np.isfinite(p.accel).all()
+        ):
+            raise BackendDivergedError(
+                f"rcssserver3d sent non-finite sensor values at t = {p.time:.2f} s "
+                "(its physics blew up)"
+            )
+        return p
+
+    def reset_episode(
+        self,
+        pose: RobotPose,
+        ball_pos: Sequence[float],
+        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
+        *,
+        play_mode: str = "PlayOn",
+        seed: int | None = None,
+    ) -> Perception:
+        """Start an episode through trainer commands (see the module docstring).
+
+        Unlike the embedded world this runs server cycles: the joints are driven to their start
+        angles as fast as the joint speed limits allow (robot held in the air), then the robot and
+        ball are placed and the play mode and game time set. :attr:`last_reset` has the cycles
+        and milliseconds. ``seed`` is ignored (the server cannot be seeded).
+        """
+        if play_mode not in PLAY_MODES:
+            raise ValueError(f"unknown play mode {play_mode!r}; valid: {', '.join(PLAY_MODES)}")
+        if self._closed:
+            raise BackendError("the backend is closed")
+        t0 = time.perf_counter()
+        target = self._start_angles(pose.joint_angles_deg)
+        z = float(pose.z) if pose.z is not None else self._standing_z(target)
+        hover_z = z + self.hover_height
+        yaw = float(pose.heading_deg) - 90.0  # the trainer's move takes the model's raw yaw
+        team = "Left" if self.side == "left" else "Right"
+        assert self.unum is not None
+        hover = tc.agent_move(self.unum, team, (pose.x, pose.y, hover_z), yaw)
+        first = tc.play_mode(play_mode) + hover
+        bpos = [float(v) for v in ball_pos]
+        bvel = [float(v) for v in ball_vel]
+        if len(bpos) != 3 or len(bvel) != 3:
+            raise ValueError("ball_pos and ball_vel need 3 numbers (x, y, z)")
+
+        # 1. hold the robot in the air, drive the joints to the start angles
+        p = self._last
+        assert p is not None
+        tol = self.reset_tolerance_deg
+        gain = self.reset_gain
+        hovered = False
+        joint_cycles = 0
+        while True:
+            q = np.asarray(p.joint_angles_deg, dtype=float)
+            q = np.where(np.isfinite(q), q, target)  # never command from a NaN reading
+            # the command sent last acts in the server's next physics step, before ours does
+            predicted = q + np.degrees(self._targets * CYCLE_S)
+            err = target - predicted
+            done = bool(np.abs(err).max() <= tol)
+            if (done and hovered) or joint_cycles >= self.reset_max_cycles:
+                break
+            v = np.clip(gain * np.radians(err) / CYCLE_S, -self._vmax, self._vmax)
+            if done:
+                v[:] = 0.0
+            p = self._exchange(
+                self._velocity_text(v), first if joint_cycles == 0 else hover, wait=False
+            )
+            joint_cycles += 1
+            s = self._tracker.newest()
+            if (
+                s is not None
+                and s.torso is not None
+                and s.torso[2, 3] > z + 0.5 * self.hover_height
+            ):
+                hovered = True
+        converged = bool(np.abs(target - (q + np.degrees(self._targets * CYCLE_S))).max() <= tol)
+        if not converged:
+            log.warning(
+                "reset: joints not at their start angles after %d cycles (largest error %.1f deg)",
+                joint_cycles,
+                float(np.abs(err).max()),
+            )
+
+        # 2. put robot and ball in place, clock and play mode; stop the joints
+        final = (
+            tc.play_mode(play_mode)
+            + tc.agent_move(self.unum, team, (pose.x, pose.y, z), yaw)
+            + tc.ball(bpos, bvel)
+            + tc.set_time(0.0)
+        )
+        zero = self._velocity_text(np.zeros(self._n))
+        p = self._exchange(zero, final, wait=False)
+        settle = 1
+        limit = 4 * self.monitor_interval + 8
+        while not self._reset_visible(p, pose, z):
+            if settle >= limit:
+                self._fail(
+                    f"the reset did not show within {settle} cycles after the trainer commands "
+                    "(is the monitor port that of the same server?)"
+                )
+            p = self._exchange(zero, wait=False)
+            settle += 1
+        self._tracker.restart_velocities(bvel)
+        p.ground_truth = self._ground_truth(p)
+        self._last = p
+        ms = (time.perf_counter() - t0) * 1e3
+        err_now = float(np.abs(target - np.asarray(p.joint_angles_deg, dtype=float)).max())
+        self.last_reset = ResetStats(
+            cycles=joint_cycles + settle,
+            joint_cycles=joint_cycles,
+            settle_cycles=settle,
+            ms=ms,
+            max_joint_error_deg=err_now,
+            converged=converged,
+        )
+        self.resets += 1
+        log.debug("reset %d: %s", self.resets, self.last_reset)
+        return p
+
+    def _reset_visible(self, p: Perception, pose: RobotPose, z: float) -> bool:
+        """Has the final trainer frame taken effect in the cycle ``p`` describes?"""
+        running = p.game.play_mode not in FROZEN_CLOCK_MODES
+        s = self._tracker.select(p.game.game_time, running)
+        if s is None or s.torso is None:
+            return False
+        if (
+            running
+            and abs(s.game_time - p.game.game_time)
+            > (self.monitor_interval - 1) * CYCLE_S + _TIME_TOL
+        ):
+            return False  # the frame is not the percept's cycle
+        tx, ty, tz = s.torso[:3, 3]
+        return bool(tz < z + 0.5 * self.hover_height and math.hypot(tx - pose.x, ty - pose.y) < 0.1)
+
+    def _start_angles(self, given: np.ndarray | Mapping[str, float] | None) -> np.ndarray:
+        out = np.zeros(self._n)
+        if given is None:
+            pass
+        elif isinstance(given, Mapping):
+            index = {}
+            for i, j in enumerate(self._model.joints):
+                for alias in (j.effector, j.perceptor, j.nao_name, j.manual_name):
+                    index[alias] = i
+            for name, v in given.items():
+                if name not in index:
+                    raise KeyError(
+                        f"unknown joint {name!r} for robot type {self.robot_type}; valid effector "
+                        f"names: {', '.join(self._model.effector_names)}"
+                    )
+                out[index[name]] = float(v)
+        else:
+            arr = np.asarray(given, dtype=float)
+            if arr.shape != (self._n,):
+                raise ValueError(f"joint_angles_deg must have shape ({self._n},), got {arr.shape}")
+            out[:] = arr
+        if not np.isfinite(out).all():
+            raise ValueError("joint_angles_deg must be finite")
+        # keep targets strictly inside the stops: the server ignores commands at a stop
+        margin = 0.05
+        return np.clip(out, self._ranges[:, 0] + margin, self._ranges[:, 1] - margin)
+
+    def _standing_z(self, angles_deg: np.ndarray) -> float:
+        """Torso-centre height at which the lowest point of the robot in this pose touches the
+        ground (computed with the embedded world's kinematics of the same model)."""
+        key = tuple(np.round(angles_deg, 2).tolist())
+        z = self._stand_cache.get(key)
+        if z is None:
+            if self._kinematics is None:
+                from robocup_gym.sim.world import World  # only for the kinematics
+
+                self._kinematics = World([self.robot_type])
+            w = self._kinematics
+            w.place_robot(
+                0, 0.0, 0.0, heading_deg=0.0, z=None, joint_angles_deg=np.asarray(angles_deg)
+            )
+            z = float(w.torso_position(0)[2])
+            if len(self._stand_cache) > 256:
+                self._stand_cache.clear()
+            self._stand_cache[key] = z
+        return z
+
+    def close(self) -> None:
+        """Close both connections and stop a launched server (SIGINT). Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        self._finalizer()  # closes links, stops the server; runs once
+        self._agent = self._monitor = None
+
+    def describe(self) -> dict[str, Any]:
+        d = super().describe()
+        d.update(
+            mode="connect" if self.connect_mode else "launch",
+            host=self.host,
+            agent_port=self.agent_port,
+            monitor_port=self.monitor_port,
+            monitor_interval=self.monitor_interval,
+            team=self.team,
+            side=self.side,
+            unum=self.unum,
+            server=None if self.server is None else self.server.describe(),
+            last_reset=None if self.last_reset is None else asdict(self.last_reset),
+        )
+        return d

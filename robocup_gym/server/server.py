@@ -1,0 +1,862 @@
+"""The server loop: the embedded world behind the rcssserver3d 0.7.3 protocol.
+
+One thread, one ``selectors`` loop, non-blocking sockets. Every cycle follows rcssserver3d's order
+(protocol spec §2):
+
+1. **read** – accept connections, read every socket, realise every complete frame: hinge targets,
+   ``say`` and ``syn`` at once, ``scene``/``init``/``beam``/``pass`` are kept for step 3; in sync
+   mode repeat until every agent that is waited for has sent ``(syn)``; on monitor cycles (every
+   2nd) apply trainer commands;
+2. **send** the percept computed at the end of the previous cycle to every agent (one frame, one
+   ``send``);
+3. **physics** – robots added/removed (World rebuild), ``init``, ``beam``, ``pass``, joint
+   velocities, one 20 ms World step (``dead_time_cycles=0``: SimSpark's one-cycle dead time comes
+   from this order), the referee;
+4. **end** – close dead connections, compute each agent's percept, send a monitor frame on monitor
+   cycles.
+
+In real-time mode each cycle lasts at least 20 ms of wall time (the server skips lost time instead
+of catching up); meanwhile arriving bytes are buffered. With real time off cycles run back to back.
+
+Differences from the real server that make it more robust: a connection without robot is never
+waited for in sync mode (the real server freezes), the sync grace period counts percepts instead of
+cycles, an optional sync time-out drops silent agents, oversized frames close the connection,
+monitors and agents that do not read lose frames instead of stalling anything.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import logging
+import math
+import selectors
+import signal
+import socket
+import threading
+import time
+from collections.abc import Callable
+from typing import ClassVar
+
+from robocup_gym.protocol import effectors as fx
+from robocup_gym.protocol import trainer as tc
+from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT
+from robocup_gym.protocol.framing import encode_frame
+from robocup_gym.protocol.perceptor_format import format_perception
+from robocup_gym.robot.nao import nao_model
+from robocup_gym.server.agent import AgentState
+from robocup_gym.server.monitor import MonitorStream, RobotView
+from robocup_gym.server.referee import BEAM_MODES, InitError, Player, Referee
+from robocup_gym.server.wire import (
+    Connection,
+    agent_actions,
+    fast_joint_message,
+    trainer_commands,
+)
+from robocup_gym.server.worldhost import WorldHost
+from robocup_gym.sim.vision import VisionConfig
+from robocup_gym.sim.world import SimulationDivergedError
+
+log = logging.getLogger("robocup_gym.server")
+
+CYCLE_S = 0.02
+SCENE_PATHS = ("rsg/agent/nao/nao_hetero.rsg", "rsg/agent/nao/nao.rsg")
+_POLL_S = 0.25
+"""Longest single wait in select (so a stop request or a sync time-out is noticed quickly)."""
+
+
+class PortInUseError(OSError):
+    """The agent or monitor port cannot be bound (the message names the port)."""
+
+
+class MonitorState:
+    """One monitor connection."""
+
+    def __init__(self, conn: Connection) -> None:
+        self.conn = conn
+        self.needs_full = True
+
+
+class SimServer:
+    """rcssserver3d-compatible server around the embedded MuJoCo world.
+
+    Args:
+        agent_port: TCP port for agents (0 = any free port; see :attr:`agent_port` after binding).
+        monitor_port: TCP port for monitors/trainers (0 = any free port).
+        host: address to bind (``"0.0.0.0"`` = all interfaces, as rcssserver3d).
+        sync: sync mode: each cycle waits for ``(syn)`` from every agent (spec §6).
+        real_time: make each cycle last at least 20 ms of wall time.
+        ground_truth: add ``mypos``/``myorien``/``ballpos`` to ``See`` (FC Portugal's "cheats",
+            needed by RobocupGym).
+        vision_noise: vision noise, calibration offset and beam noise (rcssserver3d: on).
+        view_cone_deg: vision opening (120; 360 = "full vision").
+        rules: automatic referee on (``False`` = play modes only by trainer command).
+        monitor_interval: cycles per monitor frame (2 = 25 Hz as rcssserver3d; 1 = 50 Hz).
+        sync_timeout: seconds a sync-mode cycle waits for a silent agent before closing its
+            connection (``None`` = wait forever, as rcssserver3d).
+        seed: random seed (noise, coin toss) for reproducible runs.
+        physics: :class:`~robocup_gym.sim.physics.PhysicsConfig` of the world.
+    """
+
+    def __init__(
+        self,
+        agent_port: int = DEFAULT_AGENT_PORT,
+        monitor_port: int = DEFAULT_MONITOR_PORT,
+        host: str = "0.0.0.0",
+        sync: bool = False,
+        real_time: bool = True,
+        *,
+        ground_truth: bool = False,
+        vision_noise: bool = True,
+        view_cone_deg: float = 120.0,
+        rules: bool = True,
+        monitor_interval: int = 2,
+        sync_timeout: float | None = None,
+        seed: int | None = None,
+        physics: object | None = None,
+    ) -> None:
+        if monitor_interval < 1:
+            raise ValueError(f"monitor_interval must be >= 1, got {monitor_interval}")
+        self.host_address = host
+        self.requested_ports = (int(agent_port), int(monitor_port))
+        self.sync = bool(sync)
+        self.real_time = bool(real_time)
+        self.monitor_interval = int(monitor_interval)
+        self.sync_timeout = sync_timeout
+        vision = VisionConfig(
+            noise=vision_noise, view_cone_deg=float(view_cone_deg), ground_truth=ground_truth
+        )
+        self.world_host = WorldHost(vision, physics, seed)
+        self.referee = Referee(self.world_host, rules=rules, rng=self.world_host.rng)
+        self.stream = MonitorStream()
+        self.agents: list[AgentState] = []
+        self.monitors: list[MonitorState] = []
+        self.cycle = 0
+        self.selected: tuple[str, int] | None = None
+        self._full_requested = False
+        self._next_cid = 1
+        self._sel: selectors.BaseSelector | None = None
+        self._agent_listener: socket.socket | None = None
+        self._monitor_listener: socket.socket | None = None
+        self._wake_r: socket.socket | None = None
+        self._wake_w: socket.socket | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._running = threading.Event()
+        self._done = threading.Event()
+        self.agent_port = 0
+        self.monitor_port = 0
+        self.on_cycle: Callable[[SimServer], None] | None = None
+        """Optional hook called at the end of every cycle (tests, tools)."""
+
+    # ------------------------------------------------------------------ lifecycle
+    @property
+    def world(self):
+        """The current :class:`~robocup_gym.sim.world.World` (replaced when robots change)."""
+        return self.world_host.world
+
+    def bind(self) -> tuple[int, int]:
+        """Open both listening sockets; returns the bound (agent port, monitor port).
+
+        Raises:
+            PortInUseError: naming the port that is taken.
+            OSError: other bind problems (address not available, permission, …).
+        """
+        if self._sel is not None:
+            return self.agent_port, self.monitor_port
+        agent_port, monitor_port = self.requested_ports
+        agent = self._listen(agent_port, "agent")
+        try:
+            monitor = self._listen(monitor_port, "monitor")
+        except BaseException:
+            agent.close()
+            raise
+        self._agent_listener, self._monitor_listener = agent, monitor
+        self.agent_port = agent.getsockname()[1]
+        self.monitor_port = monitor.getsockname()[1]
+        self._wake_r, self._wake_w = socket.socketpair()
+        self._wake_r.setblocking(False)
+        self._wake_w.setblocking(False)
+        sel = selectors.DefaultSelector()
+        sel.register(agent, selectors.EVENT_READ, ("listen", "agent"))
+        sel.register(monitor, selectors.EVENT_READ, ("listen", "monitor"))
+        sel.register(self._wake_r, selectors.EVENT_READ, ("wake", None))
+        self._sel = sel
+        log.info(
+            "listening on %s: agents port %d, monitors port %d",
+            self.host_address,
+            self.agent_port,
+            self.monitor_port,
+        )
+        return self.agent_port, self.monitor_port
+
+    def _listen(self, port: int, what: str) -> socket.socket:
+        family = socket.AF_INET6 if ":" in self.host_address else socket.AF_INET
+        s = socket.socket(family, socket.SOCK_STREAM)
+        try:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            s.bind((self.host_address, port))
+            s.listen(socket.SOMAXCONN)
+            s.setblocking(False)
+        except OSError as exc:
+            s.close()
+            if exc.errno == errno.EADDRINUSE:
+                raise PortInUseError(
+                    exc.errno,
+                    f"{what} port {port} is already in use (is another rcssserver3d or "
+                    f"robocup-gym serve running?); choose another with --{what}-port",
+                ) from None
+            raise OSError(
+                exc.errno, f"cannot listen on {self.host_address}:{port} ({what} port): {exc}"
+            ) from None
+        return s
+
+    def run(self) -> None:
+        """Serve until :meth:`stop` / :meth:`request_stop` / ``(killsim)``; closes everything."""
+        self.bind()
+        self._running.set()
+        next_t = time.monotonic()
+        try:
+            while not self._stop.is_set():
+                self._cycle()
+                if (self.real_time or self._idle()) and not self._stop.is_set():
+                    next_t += CYCLE_S
+                    now = time.monotonic()
+                    if next_t <= now:
+                        next_t = now  # behind: skip the lost time, never catch up
+                    else:
+                        self._wait_until(next_t)
+        finally:
+            self._shutdown()
+
+    def _idle(self) -> bool:
+        """No robot in the world: cycles are paced at real time even with real time off (the
+        real server spins at full CPU then; nothing is gained by it)."""
+        return not any(a.has_robot and not a.killed for a in self.agents)
+
+    def start_in_thread(self) -> tuple[int, int]:
+        """Bind and run in a daemon thread; returns the bound (agent port, monitor port)."""
+        ports = self.bind()
+        self._thread = threading.Thread(
+            target=self._thread_main, name="robocup-gym-serve", daemon=True
+        )
+        self._thread.start()
+        self._running.wait(5.0)
+        return ports
+
+    def _thread_main(self) -> None:
+        try:
+            self.run()
+        except Exception:  # pragma: no cover - logged for the test that started us
+            log.exception("server thread crashed")
+
+    def request_stop(self) -> None:
+        """Ask the loop to stop (thread- and signal-safe)."""
+        self._stop.set()
+        w = self._wake_w
+        if w is not None:
+            with contextlib.suppress(OSError):
+                w.send(b"x")
+
+    def stop(self, timeout: float = 10.0) -> None:
+        """Stop the server and wait for its thread; closes all sockets."""
+        self.request_stop()
+        if self._thread is not None:
+            self._thread.join(timeout)
+            if self._thread.is_alive():  # pragma: no cover
+                log.error("server thread did not stop within %.1f s", timeout)
+            self._thread = None
+        elif not self._running.is_set():
+            self._shutdown()
+
+    @property
+    def stopped(self) -> bool:
+        return self._done.is_set()
+
+    def __enter__(self) -> SimServer:
+        self.start_in_thread()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _shutdown(self) -> None:
+        if self._done.is_set():
+            return
+        for a in self.agents:
+            a.conn.close()
+        for m in self.monitors:
+            m.conn.close()
+        for s in (self._agent_listener, self._monitor_listener, self._wake_r, self._wake_w):
+            if s is not None:
+                with contextlib.suppress(OSError):
+                    s.close()
+        if self._sel is not None:
+            self._sel.close()
+        self.agents.clear()
+        self.monitors.clear()
+        self._done.set()
+        log.info("server stopped after %d cycles", self.cycle)
+
+    # ------------------------------------------------------------------ I/O
+    def _poll(self, timeout: float) -> None:
+        sel = self._sel
+        assert sel is not None
+        for key, _ in sel.select(timeout):
+            kind, obj = key.data
+            if kind == "conn":
+                conn: Connection = obj
+                conn.receive()
+                if not conn.alive:
+                    self._unregister(conn)
+            elif kind == "listen":
+                self._accept(key.fileobj, obj)  # type: ignore[arg-type]
+            else:  # wake-up
+                try:
+                    while self._wake_r.recv(4096):  # type: ignore[union-attr]
+                        pass
+                except OSError:
+                    pass
+
+    def _unregister(self, conn: Connection) -> None:
+        if self._sel is None:
+            return
+        with contextlib.suppress(KeyError, ValueError):
+            self._sel.unregister(conn.sock)  # type: ignore[union-attr]
+
+    def _accept(self, listener: socket.socket, what: str) -> None:
+        for _ in range(64):
+            try:
+                sock, addr = listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # e.g. EMFILE: leave the rest in the backlog
+                log.warning("accept on the %s port failed: %s", what, exc)
+                return
+            conn = Connection(sock, self._next_cid, addr, what)
+            self._next_cid += 1
+            self._sel.register(sock, selectors.EVENT_READ, ("conn", conn))  # type: ignore[union-attr]
+            if what == "agent":
+                self.agents.append(AgentState(conn))
+            else:
+                self.monitors.append(MonitorState(conn))
+            log.info("%r connected", conn)
+
+    def _wait_until(self, deadline: float) -> None:
+        while not self._stop.is_set():
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return
+            self._poll(min(remaining, _POLL_S))
+
+    # ------------------------------------------------------------------ the cycle
+    def _cycle(self) -> None:
+        monitor_cycle = self.cycle % self.monitor_interval == 0
+        self._read_phase(monitor_cycle)
+        if self._stop.is_set():
+            return
+        self._send_percepts()
+        self._physics()
+        self._end_cycle(monitor_cycle)
+        self.cycle += 1
+        if self.on_cycle is not None:
+            self.on_cycle(self)
+
+    def _read_phase(self, monitor_cycle: bool) -> None:
+        self._poll(0)
+        self._process_agents()
+        if self.sync:
+            started = time.monotonic()
+            while not self._stop.is_set() and not self._all_synced():
+                if self.sync_timeout is not None and time.monotonic() - started > self.sync_timeout:
+                    for a in self.agents:
+                        if a.waited_for and not a.synced:
+                            log.warning(
+                                "%r sent no (syn) for %.1f s: closing the connection",
+                                a.conn,
+                                self.sync_timeout,
+                            )
+                            a.conn.alive = False
+                            self._unregister(a.conn)
+                    break
+                self._poll(_POLL_S)
+                self._process_agents()
+        if monitor_cycle:
+            self._process_monitors()
+
+    def _all_synced(self) -> bool:
+        return all(a.synced for a in self.agents if a.waited_for)
+
+    def _process_agents(self) -> None:
+        for a in self.agents:
+            if not a.conn.inbox:
+                continue
+            frames, a.conn.inbox = a.conn.inbox, []
+            for frame in frames:
+                try:
+                    self._agent_frame(a, frame)
+                except Exception:
+                    log.exception("%r: error while handling %r", a.conn, frame[:200])
+
+    def _agent_frame(self, a: AgentState, frame: bytes) -> None:
+        if a.has_robot and not a.killed:
+            fast = fast_joint_message(frame)
+            if fast is not None:
+                items, syn = fast
+                effectors = self._effectors(a)
+                joints = a.joints
+                for name, value in items:
+                    if name in effectors:
+                        v = float(value)
+                        if math.isfinite(v):  # "1e999" reads as inf
+                            joints[name] = v
+                        else:
+                            a.conn.warn("ignored non-finite velocity for %s", name)
+                    else:
+                        a.conn.warn(
+                            "ignored %s: not an effector of a type %s robot", name, a.robot_type
+                        )
+                if syn:
+                    a.synced = a.ever_synced = True
+                elif not a.ever_synced:
+                    a.synced = True
+                return
+        actions, ok = agent_actions(frame)
+        if not ok:
+            a.conn.warn(
+                "malformed message (unbalanced parentheses), complete parts used: %r", frame[:120]
+            )
+        conn = a.conn
+        for act in actions:
+            if type(act) is fx.Hinge:
+                if a.has_robot and not a.killed:
+                    if act.effector in self._effectors(a):
+                        v = act.velocity
+                        if math.isfinite(v):
+                            a.joints[act.effector] = v
+                        else:
+                            conn.warn("ignored non-finite velocity for %s", act.effector)
+                    else:
+                        conn.warn(
+                            "ignored %s: no such joint on a type %s robot",
+                            act.effector,
+                            a.robot_type,
+                        )
+                continue
+            if type(act) is fx.Syn:
+                if a.has_robot:
+                    a.synced = a.ever_synced = True
+                continue
+            if not a.has_robot:
+                if type(act) is fx.Scene and a.robot_type is None:
+                    self._scene(a, act)
+                elif type(act) is fx.Scene:
+                    conn.warn("second scene ignored")
+                else:
+                    conn.warn("%s ignored: no robot yet (send scene first)", _name(act))
+                continue
+            if a.killed:
+                continue
+            if type(act) is fx.Beam:
+                a.beam = (act.x, act.y, act.rot)
+            elif type(act) is fx.Say:
+                i = self.world_host.index(a.key)
+                if i is not None:
+                    self.world.say(i, act.text)
+            elif type(act) is fx.Init:
+                if a.side is not None:
+                    conn.warn("second init ignored (already #%s of %s)", a.unum, a.team_name)
+                else:
+                    a.init = (act.unum, act.teamname)
+            elif type(act) is fx.Pass:
+                a.want_pass = True
+            elif type(act) is fx.Scene:
+                conn.warn("second scene ignored")
+            else:
+                conn.warn("unknown command %r ignored", _name(act))
+        if a.has_robot and not a.ever_synced:
+            a.synced = True  # handshake: every message counts as (syn), see AgentState
+
+    _eff_cache: ClassVar[dict[int, frozenset[str]]] = {}
+
+    def _effectors(self, a: AgentState) -> frozenset[str]:
+        t = a.robot_type or 0
+        names = self._eff_cache.get(t)
+        if names is None:
+            names = self._eff_cache[t] = frozenset(nao_model(t).effector_names)
+        return names
+
+    def _scene(self, a: AgentState, act: fx.Scene) -> None:
+        path = act.path.lstrip("/")
+        if not any(path == p or path.endswith("/" + p) for p in SCENE_PATHS):
+            a.conn.warn("scene %r not available (only %s)", act.path, " and ".join(SCENE_PATHS))
+            return
+        t = act.robot_type
+        if t is None or not 0 <= t <= 4:
+            a.conn.warn("scene %r: robot type %r not in 0..4", act.path, act.args[:1])
+            return
+        a.robot_type = int(t)
+        a.scene_type = int(t)
+
+    # ------------------------------------------------------------------ monitors / trainer
+    def _process_monitors(self) -> None:
+        for m in self.monitors:
+            if not m.conn.inbox:
+                continue
+            frames, m.conn.inbox = m.conn.inbox, []
+            for frame in frames:
+                try:
+                    cmds, ok = trainer_commands(frame)
+                    if not ok:
+                        m.conn.warn("malformed message, complete parts used: %r", frame[:120])
+                    for cmd in cmds:
+                        self._trainer(m.conn, cmd)
+                except Exception:
+                    log.exception("%r: error while handling %r", m.conn, frame[:200])
+
+    def _find(self, side: str | None, unum: int | None) -> AgentState | None:
+        if side is None or unum is None:
+            return None
+        side = side.lower()
+        for a in self.agents:
+            if a.side == side and a.unum == unum and a.has_robot and not a.killed:
+                return a
+        return None
+
+    def _trainer(self, conn: Connection, cmd: tc.TrainerCommand) -> None:
+        host, ref = self.world_host, self.referee
+        kind = type(cmd)
+        if kind is tc.BallCmd:
+            host.set_ball(cmd.pos, cmd.vel)
+        elif kind is tc.AgentCmd:
+            if cmd.unum is None or cmd.team is None:
+                self.selected = None
+                return
+            a = self._find(cmd.team, cmd.unum)
+            i = None if a is None else host.index(a.key)
+            if i is None:
+                conn.warn("agent command for unknown player %s %s", cmd.team, cmd.unum)
+                return
+            if cmd.pos is not None:
+                host.teleport(i, cmd.pos)
+            if cmd.move is not None:
+                x, y, z, yaw = cmd.move
+                if all(math.isfinite(v) for v in cmd.move):
+                    host.teleport(i, (x, y, z), heading_deg=yaw + 90.0)
+        elif kind is tc.PlayModeCmd:
+            ref.set_play_mode(cmd.mode)
+        elif kind is tc.KickOffCmd:
+            ref.kick_off(cmd.team)
+        elif kind is tc.DropBallCmd:
+            ref.drop_ball()
+        elif kind is tc.TimeCmd:
+            if cmd.time >= 0 and math.isfinite(cmd.time):
+                self.world.set_game(game_time=cmd.time)
+        elif kind is tc.ScoreCmd:
+            self.world.set_game(score_left=cmd.left, score_right=cmd.right)
+        elif kind is tc.SelectCmd:
+            self._select(cmd)
+        elif kind is tc.KillCmd:
+            a = self._target(cmd.unum, cmd.team)
+            if a is not None:
+                log.info("trainer kills %s #%s", a.side, a.unum)
+                self._release(a)
+                a.killed = True
+        elif kind is tc.ReposCmd:
+            a = self._target(cmd.unum, cmd.team)
+            i = None if a is None else host.index(a.key)
+            if a is not None and i is not None:
+                ref.players = self._players()
+                ref.repos(Player(a.key, i, a.side, a.unum))  # type: ignore[arg-type]
+        elif kind is tc.ReqFullStateCmd:
+            self._full_requested = True
+        elif kind is tc.KillSimCmd:
+            log.info("(killsim) from %r: shutting down", conn)
+            self.request_stop()
+        elif kind is tc.InvalidCmd:
+            conn.warn("malformed %s command ignored: %s", cmd.name, cmd.reason)
+        elif kind is tc.UnknownCmd:
+            log.debug("%r: unknown trainer command %r ignored", conn, cmd.name)
+
+    def _target(self, unum: int | None, team: str | None) -> AgentState | None:
+        if unum is None or team is None:
+            if self.selected is None:
+                return None
+            return self._find(*self.selected)
+        return self._find(team, unum)
+
+    def _select(self, cmd: tc.SelectCmd) -> None:
+        if cmd.unum == -1:
+            self.selected = None
+        elif cmd.unum is not None and cmd.team is not None:
+            if self._find(cmd.team, cmd.unum) is not None:
+                self.selected = (cmd.team.lower(), cmd.unum)
+        else:
+            players = sorted(
+                (a.side, a.unum) for a in self.agents if a.side and a.has_robot and not a.killed
+            )
+            if not players:
+                self.selected = None
+                return
+            if self.selected in players:
+                self.selected = players[(players.index(self.selected) + 1) % len(players)]
+            else:
+                self.selected = players[0]  # type: ignore[assignment]
+
+    def _release(self, a: AgentState) -> None:
+        if a.side is not None and a.unum is not None and not a.killed:
+            self.referee.teams.release(a.side, a.unum)
+
+    # ------------------------------------------------------------------ send / physics / end
+    def _send_percepts(self) -> None:
+        for a in self.agents:
+            frame = a.percept
+            if frame is not None:
+                a.percept = None
+                if a.conn.alive:
+                    a.conn.send(frame)
+                    a.percepts_sent += 1
+
+    def _players(self) -> list[Player]:
+        out = []
+        host = self.world_host
+        for a in self.agents:
+            if a.side is None or not a.has_robot or a.killed:
+                continue
+            i = host.index(a.key)
+            if i is not None:
+                out.append(Player(a.key, i, a.side, a.unum))  # type: ignore[arg-type]
+        return out
+
+    def _physics(self) -> None:
+        host = self.world_host
+        # 1. robots created (scene) and removed (disconnect, kill)
+        remove = []
+        for a in self.agents:
+            if a.has_robot and (not a.conn.alive or a.killed):
+                remove.append(a.key)
+        add = [
+            (a.key, a.scene_type) for a in self.agents if a.scene_type is not None and a.conn.alive
+        ]
+        if add or remove:
+            for a in self.agents:
+                if a.key in remove:
+                    self._release(a)
+                    a.has_robot = False
+            try:
+                added = set(host.change_robots(add, remove))
+            except Exception:
+                log.exception("could not rebuild the world; robots unchanged")
+                added = set()
+            for a in self.agents:
+                if a.scene_type is not None:
+                    if a.key in added:
+                        a.has_robot = True
+                        a.percepts_sent = 0
+                        a.ever_synced = False
+                        log.info("%r: robot of type %d created", a.conn, a.scene_type)
+                    else:
+                        a.robot_type = None
+        world = self.world
+        # 2. init, beam, pass
+        for a in self.agents:
+            if a.init is not None and a.has_robot and not a.killed:
+                self._init(a, *a.init)
+        play_mode = world.game.play_mode
+        players = None
+        for a in self.agents:
+            if a.beam is not None and a.side is not None and play_mode in BEAM_MODES:
+                i = host.index(a.key)
+                if i is not None:
+                    x, y, rot = a.beam
+                    try:
+                        world.beam(i, x, y, rot)
+                    except (ValueError, OverflowError) as exc:
+                        a.conn.warn("beam %r ignored: %s", a.beam, exc)
+            if a.want_pass and a.side is not None:
+                players = players or self._players()
+                self.referee.players = players
+                i = host.index(a.key)
+                if i is not None:
+                    self.referee.request_pass(
+                        Player(a.key, i, a.side, a.unum),  # type: ignore[arg-type]
+                        host.ball_touchers(),
+                    )
+        # 3. joint velocities
+        for a in self.agents:
+            if a.joints and a.has_robot and not a.killed:
+                i = host.index(a.key)
+                if i is not None:
+                    try:
+                        world.command(i, a.joints)
+                    except (KeyError, ValueError) as exc:
+                        a.conn.warn("joint command ignored: %s", exc)
+            a.clear_actions()
+        # 4. one 20 ms step and the referee
+        try:
+            world.step()
+            if not host.sane():
+                raise SimulationDivergedError(
+                    f"simulation diverged at cycle {world.cycle} (t = {world.time:.2f} s): "
+                    "positions out of bounds"
+                )
+        except SimulationDivergedError as exc:
+            n = host.divergences + 1
+            if n <= 5 or n % 100 == 0:
+                log.error("%s -- world reset, the game goes on (divergence #%d)", exc, n)
+            host.recover()
+        except Exception:
+            log.exception("physics step failed -- world reset, the game goes on")
+            host.recover()
+        try:
+            self.referee.update(self._players())
+        except Exception:
+            log.exception("referee failed this cycle")
+
+    def _init(self, a: AgentState, unum: int, team: str) -> None:
+        host = self.world_host
+        i = host.index(a.key)
+        if i is None:
+            return
+        try:
+            side, unum = self.referee.teams.register(team, unum, a.robot_type or 0)
+        except InitError as exc:
+            # The real server teleports the robot to (0, 0, 10) here; we leave it where it is
+            # (a 10 m drop can destabilise the whole simulation).
+            a.conn.warn("init rejected: %s", exc)
+            return
+        world = self.world
+        world.set_team(i, side, team, unum)
+        x, y, z, heading = self.referee.teams.next_slot(side)
+        world.place_robot(i, x, y, z=z, heading_deg=heading)
+        slot = host.slot(a.key)
+        if slot is not None:
+            slot.team = side
+            slot.home = (x, y, z, heading)
+        a.side, a.unum, a.team_name = side, unum, team
+        log.info("%r is #%d of %s (%s)", a.conn, unum, team, side)
+
+    def _end_cycle(self, monitor_cycle: bool) -> None:
+        # close dead connections (a robot is removed at the next physics step)
+        for a in self.agents:
+            if not a.conn.alive and not a.conn.closed:
+                self._unregister(a.conn)
+                a.conn.close()
+        self.agents = [a for a in self.agents if a.conn.alive or a.has_robot]
+        for m in self.monitors:
+            if not m.conn.alive and not m.conn.closed:
+                self._unregister(m.conn)
+                m.conn.close()
+        self.monitors = [m for m in self.monitors if m.conn.alive]
+        # percepts for the next cycle
+        world = self.world
+        host = self.world_host
+        for a in self.agents:
+            a.synced = False
+            if not a.has_robot or a.killed or not a.conn.alive:
+                continue
+            i = host.index(a.key)
+            if i is None:
+                continue
+            try:
+                text = format_perception(world.perceive(i))
+            except Exception:
+                log.exception("%r: percept could not be built", a.conn)
+                continue
+            if text:
+                a.percept = encode_frame(text)
+        if monitor_cycle and self.monitors:
+            self._send_monitor_frames()
+
+    def _robot_views(self) -> list[RobotView]:
+        host = self.world_host
+        views = []
+        for a in self.agents:
+            if not a.conn.alive and not a.has_robot:
+                continue
+            i = host.index(a.key) if a.has_robot and not a.killed else None
+            views.append(
+                RobotView(
+                    key=a.key,
+                    robot_index=i,
+                    robot_type=a.robot_type or 0,
+                    side=a.side if i is not None else None,
+                    unum=a.unum if i is not None else None,
+                    selected=self.selected is not None and self.selected == (a.side, a.unum),
+                )
+            )
+        return views
+
+    def _send_monitor_frames(self) -> None:
+        views = self._robot_views()
+        world = self.world
+        half = self.referee.half
+        teams = self.referee.teams.names
+        stream = self.stream
+        if self._full_requested or stream.needs_full(views):
+            self._full_requested = False
+            frame = encode_frame(stream.full_frame(world, views, half, teams))
+            for m in self.monitors:
+                m.conn.send(frame)
+                m.needs_full = False
+            return
+        old = [m for m in self.monitors if not m.needs_full]
+        new = [m for m in self.monitors if m.needs_full]
+        if old:
+            frame = encode_frame(stream.delta_frame(world, views, half, teams))
+            for m in old:
+                m.conn.send(frame)
+        if new:
+            frame = encode_frame(stream.full_frame(world, views, half, teams))
+            for m in new:
+                if m.conn.send(frame):
+                    m.needs_full = False
+
+
+def _name(act: object) -> str:
+    if isinstance(act, fx.Unknown):
+        return act.name
+    return type(act).__name__.lower()
+
+
+def serve(
+    agent_port: int = DEFAULT_AGENT_PORT,
+    monitor_port: int = DEFAULT_MONITOR_PORT,
+    host: str = "0.0.0.0",
+    sync: bool = False,
+    real_time: bool = True,
+    **options: object,
+) -> None:
+    """Run the server in the foreground until Ctrl-C, SIGTERM or ``(killsim)``.
+
+    Prints where it listens. Extra keyword options are those of :class:`SimServer`
+    (``ground_truth``, ``vision_noise``, ``view_cone_deg``, ``rules``, ``monitor_interval``,
+    ``sync_timeout``, ``seed``).
+
+    Raises:
+        PortInUseError: if a port is taken (the message names it).
+    """
+    server = SimServer(agent_port, monitor_port, host, sync, real_time, **options)  # type: ignore[arg-type]
+    a_port, m_port = server.bind()
+    mode = ", ".join(
+        [
+            "sync mode" if server.sync else "real-time agents (no sync)",
+            "real time" if server.real_time else "as fast as possible",
+        ]
+    )
+    print(
+        f"robocup-gym serve: agents on {host}:{a_port}, monitors on {host}:{m_port} ({mode}); "
+        "Ctrl-C to stop",
+        flush=True,
+    )
+    installed: list[tuple[int, object]] = []
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            installed.append((sig, signal.getsignal(sig)))
+            signal.signal(sig, lambda *_: server.request_stop())
+    try:
+        server.run()
+    finally:
+        for sig, old in installed:
+            signal.signal(sig, old)  # type: ignore[arg-type]
+    print(f"robocup-gym serve: stopped after {server.cycle} cycles", flush=True)

@@ -1,0 +1,202 @@
+"""End to end over the network: the rcssserver3d backend's client against the project's own
+protocol server (``robocup-gym serve``, in-process, OS-chosen ports), in connect mode and in
+launch mode (through a stand-in executable), and under a Gymnasium environment."""
+
+from __future__ import annotations
+
+import gc
+import json
+import math
+
+import gymnasium
+import numpy as np
+import pytest
+
+import robocup_gym.envs  # noqa: F401  (registers the environments)
+from robocup_gym.backends import RobotPose, make_backend
+from robocup_gym.backends.rcssserver3d_backend import Rcssserver3dBackend
+from robocup_gym.envs import VelocityKickConfig
+from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, resolve_angles
+from robocup_gym.robot.nao import nao_model
+from robocup_gym.types import AgentCommand
+
+from .conftest import HOST, pid_alive, wait_until
+
+MODEL = nao_model(0)
+START = resolve_angles(MODEL, PAPER_STANDING_POSE_DEG, "pose")
+
+
+def _heading_deg(quat: np.ndarray) -> float:
+    w, x, y, z = quat
+    fx, fy = 2 * (x * y - w * z), 1 - 2 * (x * x + z * z)  # torso +y (forward) in the world
+    return math.degrees(math.atan2(fy, fx))
+
+
+def _record_truth(server) -> dict[float, object]:
+    """Exact world state at the end of every server cycle, by simulation time."""
+    rec: dict[float, object] = {}
+
+    def hook(s) -> None:
+        if s.agents and s.agents[0].has_robot:
+            i = s.world_host.index(s.agents[0].key)
+            if i is not None:
+                rec[round(s.world.time, 3)] = s.world.ground_truth(i)
+
+    server.on_cycle = hook
+    return rec
+
+
+def _connect(server, backends, **kw) -> Rcssserver3dBackend:
+    return backends.add(
+        make_backend(
+            "rcssserver3d",
+            host=HOST,
+            agent_port=server.agent_port,
+            monitor_port=server.monitor_port,
+            **kw,
+        )
+    )
+
+
+@pytest.mark.parametrize("monitor_interval", [1, 2])
+def test_reset_and_step_over_the_network(make_server, backends, monitor_interval):
+    server = make_server(monitor_interval=monitor_interval)
+    truth = _record_truth(server)
+    b = _connect(server, backends, monitor_interval=monitor_interval)
+    assert isinstance(b, Rcssserver3dBackend) and b.has_ground_truth
+    assert (b.side, b.unum) == ("left", 1)
+
+    pose = RobotPose(-1.0, 0.5, heading_deg=30.0, joint_angles_deg=START)
+    p = b.reset_episode(pose, ball_pos=(-0.75, 0.6, 0.041))
+    stats = b.last_reset
+    assert stats.converged and stats.cycles < 60 and stats.ms > 0, stats
+    assert stats.cycles == stats.joint_cycles + stats.settle_cycles
+    # the start state: joints, placement, ball, clock, play mode
+    assert p.joint_names == MODEL.perceptor_names and p.joint_angles_deg.shape == (22,)
+    np.testing.assert_allclose(p.joint_angles_deg, START, atol=1.0)
+    gt = p.ground_truth
+    np.testing.assert_allclose(gt.torso_pos[:2], (-1.0, 0.5), atol=0.02)
+    assert gt.torso_pos[2] == pytest.approx(b._standing_z(b._start_angles(START)), abs=0.02)
+    assert _heading_deg(gt.torso_quat) == pytest.approx(30.0, abs=3.0)
+    np.testing.assert_allclose(gt.ball_pos, (-0.75, 0.6, 0.041), atol=0.01)
+    np.testing.assert_allclose(gt.ball_vel, 0.0, atol=1e-9)
+    assert p.game.play_mode == "PlayOn" and p.game.game_time < 0.2
+
+    # steps: 20 ms apart, a commanded joint moves, ground truth every cycle and right
+    times, laj1 = [p.time], [p.joint("laj1")]
+    tol = 0.006 if monitor_interval == 1 else 0.03
+    for k in range(12):
+        p = b.step(AgentCommand({"lae1": 2.0 if k < 5 else 0.0}))
+        times.append(p.time)
+        laj1.append(p.joint("laj1"))
+        assert p.ground_truth is not None
+        exact = truth[round(p.time, 3)]
+        np.testing.assert_allclose(p.ground_truth.torso_pos, exact.torso_pos, atol=tol)
+        np.testing.assert_allclose(p.ground_truth.ball_pos, exact.ball_pos, atol=tol)
+        angle = 2 * math.degrees(
+            math.acos(min(1.0, abs(np.dot(p.ground_truth.torso_quat, exact.torso_quat))))
+        )
+        assert angle < (0.5 if monitor_interval == 1 else 5.0)
+    assert np.allclose(np.diff(times), 0.02)
+    assert laj1[-1] - laj1[0] == pytest.approx(math.degrees(2.0 * 0.02 * 5), abs=1.5)
+    d = json.loads(json.dumps(b.describe()))
+    assert d["mode"] == "connect" and d["last_reset"]["cycles"] == stats.cycles
+
+
+def test_repeated_resets_recover_a_fallen_robot(make_server, backends):
+    server = make_server(monitor_interval=1)
+    truth = _record_truth(server)
+    b = _connect(server, backends, monitor_interval=1)
+    pose = RobotPose(0.0, 0.0, heading_deg=0.0, joint_angles_deg=START)
+    b.reset_episode(pose, ball_pos=(0.2, -0.055, 0.041), ball_vel=(1.0, 0.0, 0.0))
+    rng = np.random.default_rng(0)
+    for _ in range(40):  # flail until it falls over
+        p = b.step(AgentCommand(rng.uniform(-6, 6, 22)))
+    assert p.ground_truth.torso_pos[2] < 0.3, "expected the robot to fall"
+    for heading in (0.0, 90.0, -135.0):
+        p = b.reset_episode(
+            RobotPose(1.0, -2.0, heading_deg=heading, joint_angles_deg=START),
+            ball_pos=(1.3, -2.0, 0.041),
+            ball_vel=(0.5, 0.0, 0.0),
+        )
+        assert b.last_reset.converged, b.last_reset
+        gt = p.ground_truth
+        np.testing.assert_allclose(gt.torso_pos[:2], (1.0, -2.0), atol=0.02)
+        _, x, y, _ = gt.torso_quat
+        assert 1 - 2 * (x * x + y * y) > 0.99  # upright
+        assert (_heading_deg(gt.torso_quat) - heading + 180) % 360 - 180 == pytest.approx(0, abs=3)
+        np.testing.assert_allclose(p.joint_angles_deg, START, atol=1.0)
+        np.testing.assert_allclose(gt.ball_vel, (0.5, 0.0, 0.0))
+        # the ball rolls (sliding, then rolling at ~5/7 of the speed); the velocity estimate
+        # from the monitor stream follows the exact one
+        for _ in range(5):
+            p = b.step(AgentCommand())
+            exact = truth[round(p.time, 3)].ball_vel
+            np.testing.assert_allclose(p.ground_truth.ball_vel, exact, atol=0.05)
+        assert 0.25 < p.ground_truth.ball_vel[0] < 0.5
+        assert p.ground_truth.torso_pos[2] > 0.3  # still standing
+
+
+def test_gymnasium_make_with_the_rcssserver3d_backend(make_server):
+    server = make_server(monitor_interval=2)
+    env = gymnasium.make(
+        "RobocupGym/VelocityKick-v0",
+        backend="rcssserver3d",
+        backend_options={
+            "host": HOST,
+            "agent_port": server.agent_port,
+            "monitor_port": server.monitor_port,
+        },
+        # (gymnasium.make takes max_episode_steps itself, for a TimeLimit wrapper; the
+        # environment's own episode length goes in its config)
+        config=VelocityKickConfig(max_episode_steps=8, wait_steps=4),
+    )
+    try:
+        backend = env.unwrapped.backend
+        assert backend.name == "rcssserver3d" and backend.connect_mode
+        for episode in range(2):
+            obs, info = env.reset(seed=episode)
+            assert env.observation_space.contains(obs)
+            assert backend.last_reset.converged
+            done, steps = False, 0
+            while not done:
+                obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+                done = terminated or truncated
+                steps += 1
+            assert steps == 8 and math.isfinite(reward)
+            assert "ball_pos" in info and info["cycles"] == 1 + 4
+    finally:
+        env.close()
+    assert backend._closed
+
+
+def test_launch_mode_starts_and_stops_its_own_server(fake_server, backends):
+    fake_server.use("serve")
+    b = backends.add(Rcssserver3dBackend(startup_timeout=30))
+    assert not b.connect_mode and b.monitor_interval == 1
+    start = fake_server.wait_event("start")
+    assert {b.agent_port, b.monitor_port}.isdisjoint({3100, 3200})
+    assert start["home"] == str(b.server.home)
+    p = b.reset_episode(
+        RobotPose(-1.0, 0.0, joint_angles_deg=START), ball_pos=(-0.8, -0.055, 0.041)
+    )
+    assert b.last_reset.converged
+    t0 = p.time
+    p = b.advance(5, AgentCommand({"he1": 1.0}))
+    assert p.time == pytest.approx(t0 + 0.1)
+    assert p.ground_truth is not None
+    pid, folder = b.server.pid, b.server.home
+    b.close()
+    fake_server.wait_event("sigint")
+    wait_until(lambda: not pid_alive(pid), what="server exit")
+    assert not folder.exists()
+
+
+def test_launch_mode_backend_garbage_collected(fake_server):
+    fake_server.use("serve")
+    b = Rcssserver3dBackend(startup_timeout=30)
+    pid = b.server.pid
+    del b
+    gc.collect()
+    fake_server.wait_event("sigint")
+    wait_until(lambda: not pid_alive(pid), what="server exit")

@@ -1,0 +1,65 @@
+"""``python -m robocup_gym.server``: ports, clean stop on SIGTERM/SIGINT, port in use, benchmark."""
+
+from __future__ import annotations
+
+import signal
+import socket
+import subprocess
+import sys
+
+import pytest
+
+from robocup_gym.protocol.perceptors import parse_perception
+from robocup_gym.server.bench import measure_sync_cycles_per_s, start_server_process
+from robocup_gym.server.client import AgentClient
+
+from .conftest import HOST
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_cli_serves_and_stops_cleanly(sig):
+    proc, agent_port, _ = start_server_process("--sync")
+    try:
+        with AgentClient(HOST, agent_port) as agent:
+            for msg in agent.handshake("Cli", 1):
+                parse_perception(msg)
+        proc.send_signal(sig)
+        out, _ = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0, out
+    assert "stopped after" in out
+
+
+def test_cli_port_in_use_is_a_clear_error():
+    blocker = socket.socket()
+    blocker.bind((HOST, 0))
+    blocker.listen()
+    port = blocker.getsockname()[1]
+    try:
+        res = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "robocup_gym.server",
+                "--host",
+                HOST,
+                "--agent-port",
+                "0",
+                "--monitor-port",
+                str(port),
+            ],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    finally:
+        blocker.close()
+    assert res.returncode == 2
+    assert f"monitor port {port} is already in use" in res.stderr
+
+
+def test_benchmark_runs():
+    assert measure_sync_cycles_per_s(0.5) > 20
