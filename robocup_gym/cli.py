@@ -1,0 +1,424 @@
+"""``robocup-gym``: train, evaluate, export and serve (see ``docs/training.md``).
+
+Heavy libraries (torch, Stable-Baselines3, MuJoCo) are imported inside the commands, so
+``robocup-gym --help`` answers at once and ``robocup-gym train`` prints where it is going before
+the learner starts.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+try:
+    import typer
+except ImportError:  # pragma: no cover - the CLI needs the train extra
+    typer = None
+
+_MISSING_EXTRA = (
+    "robocup-gym's command line needs the training extra: pip install -e '.[train]' "
+    "(typer, rich, torch, stable-baselines3, …)"
+)
+
+
+def _require_typer() -> None:
+    if typer is None:  # pragma: no cover
+        sys.stderr.write(_MISSING_EXTRA + "\n")
+        raise SystemExit(1)
+
+
+def _console():
+    from rich.console import Console
+
+    return Console(soft_wrap=True)
+
+
+def _fail(message: str, code: int = 1):
+    from rich.console import Console
+
+    Console(stderr=True).print(f"[bold red]error:[/bold red] {message}")
+    raise typer.Exit(code)
+
+
+def _single_thread_torch() -> None:
+    """Inference of small MLPs is fastest (and immune to busy cores) on one thread."""
+    import torch
+
+    torch.set_num_threads(1)
+
+
+def _parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
+    """``["a=1", "b=[1, 2]"]`` → ``{"a": 1, "b": [1, 2]}`` (values read as YAML)."""
+    import yaml
+
+    out: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            _fail(f"{what} expects KEY=VALUE, got {item!r}")
+        out[key.strip()] = yaml.safe_load(value)
+    return out
+
+
+if typer is not None:
+    app = typer.Typer(
+        name="robocup-gym",
+        help="Train RoboCup 3D Nao skills on the embedded SimSpark world (MuJoCo): train, eval, "
+        "export to ONNX, reproduce the paper, serve the rcssserver3d protocol.",
+        no_args_is_help=True,
+        add_completion=False,
+        pretty_exceptions_enable=False,
+    )
+    experiments_app = typer.Typer(
+        help="Reproduce the paper's experiments.", no_args_is_help=True, add_completion=False
+    )
+    app.add_typer(experiments_app, name="experiments")
+
+    # ------------------------------------------------------------------------------ train
+    @app.command()
+    def train(
+        task: Annotated[
+            str | None,
+            typer.Argument(help="Task: velocity-kick, simple-kick (see `robocup-gym tasks`)."),
+        ] = None,
+        algo: Annotated[str | None, typer.Option(help="ppo or sac.")] = None,
+        n_envs: Annotated[
+            int | None, typer.Option("--n-envs", help="Parallel environments (paper: 16).")
+        ] = None,
+        timesteps: Annotated[
+            int | None, typer.Option(help="Total environment steps (default 1,000,000).")
+        ] = None,
+        seed: Annotated[int | None, typer.Option(help="Random seed (default 0).")] = None,
+        out: Annotated[Path, typer.Option(help="Parent folder of run folders.")] = Path("runs"),
+        backend: Annotated[
+            str | None, typer.Option(help="Simulator: mujoco (embedded) or rcssserver3d.")
+        ] = None,
+        config: Annotated[
+            Path | None,
+            typer.Option(
+                help="YAML file with any TrainConfig fields (CLI flags win).",
+                exists=True,
+                dir_okay=False,
+            ),
+        ] = None,
+        resume: Annotated[
+            Path | None,
+            typer.Option(
+                help="Continue this run folder from its newest checkpoint.",
+                exists=True,
+                file_okay=False,
+            ),
+        ] = None,
+        env: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--env", help="Environment option KEY=VALUE (repeatable), e.g. --env wait_steps=20."
+            ),
+        ] = None,
+        hp: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--hp",
+                help="Algorithm hyperparameter KEY=VALUE (repeatable), e.g. "
+                "--hp learning_rate=3e-4.",
+            ),
+        ] = None,
+        n_workers: Annotated[
+            int | None,
+            typer.Option("--n-workers", help="Worker processes (default: one per CPU core)."),
+        ] = None,
+        checkpoint_freq: Annotated[
+            int | None, typer.Option(help="Steps between checkpoints (0 = none).")
+        ] = None,
+        eval_freq: Annotated[
+            int | None, typer.Option(help="Steps between evaluations (0 = none).")
+        ] = None,
+        progress: Annotated[bool, typer.Option(help="Show the progress bar.")] = True,
+    ) -> None:
+        """Train a policy with Stable-Baselines3 (defaults: the paper's PPO setup).
+
+        Writes runs/<task>-<algo>-<time>/ with config.yaml, model.zip, checkpoints/, tb/
+        (TensorBoard), progress.csv (learning curve) and evaluations.jsonl.
+        """
+        from robocup_gym.train.config import TrainConfig
+        from robocup_gym.train.trainer import train as run_training
+
+        console = _console()
+        try:
+            if resume is not None:
+                if task is not None or config is not None:
+                    _fail("--resume continues a run with its own config; give no TASK/--config")
+                result = run_training(
+                    resume=resume, extra_timesteps=timesteps, console=console, progress=progress
+                )
+            else:
+                cfg = TrainConfig.load(config) if config is not None else TrainConfig()
+                env_kw = {**cfg.env_kwargs, **_parse_assignments(env, "--env")}
+                algo_kw = dict(cfg.algo_kwargs)
+                if algo is not None and algo.lower() != cfg.algo:
+                    algo_kw = {}  # hyperparameters of another algorithm do not carry over
+                algo_kw.update(_parse_assignments(hp, "--hp"))
+                cfg = cfg.merged(
+                    task=task,
+                    algo=algo,
+                    n_envs=n_envs,
+                    timesteps=timesteps,
+                    seed=seed,
+                    backend=backend,
+                    n_workers=n_workers,
+                    checkpoint_freq=checkpoint_freq,
+                    eval_freq=eval_freq,
+                    env_kwargs=env_kw,
+                    algo_kwargs=algo_kw,
+                )
+                result = run_training(cfg, out=out, console=console, progress=progress)
+        except (ValueError, FileNotFoundError) as exc:
+            _fail(str(exc))
+        if result.interrupted:
+            raise typer.Exit(130)
+
+    # ------------------------------------------------------------------------------ eval
+    @app.command("eval")
+    def eval_(
+        run: Annotated[Path, typer.Argument(help="Run folder.", exists=True, file_okay=False)],
+        episodes: Annotated[int, typer.Option(help="Episodes to run.")] = 10,
+        video: Annotated[
+            Path | None,
+            typer.Option(help="Record episodes to this .mp4 (or .gif); headless: MUJOCO_GL=egl."),
+        ] = None,
+        video_episodes: Annotated[int, typer.Option(help="Episodes in the video.")] = 1,
+        seed: Annotated[int, typer.Option(help="Seed of the first episode.")] = 100_000,
+        checkpoint: Annotated[
+            Path | None, typer.Option(help="Evaluate this checkpoint instead of model.zip.")
+        ] = None,
+        deterministic: Annotated[
+            bool, typer.Option(help="Deterministic actions (the policy's mean).")
+        ] = True,
+    ) -> None:
+        """Evaluate a run deterministically; the last line of output is one JSON object."""
+        from rich.table import Table
+
+        from robocup_gym.train.evaluate import ensure_gl_backend, evaluate_run
+
+        if video is not None:
+            ensure_gl_backend()
+        _single_thread_torch()
+        console = _console()
+        try:
+            with console.status(f"evaluating {run} ({episodes} episodes)…"):
+                summary = evaluate_run(
+                    run,
+                    episodes=episodes,
+                    seed=seed,
+                    deterministic=deterministic,
+                    video=video,
+                    video_episodes=video_episodes,
+                    checkpoint=checkpoint,
+                )
+        except (ValueError, FileNotFoundError, RuntimeError) as exc:
+            _fail(str(exc))
+        table = Table(
+            title=f"{summary['task']} · {summary['algo'].upper()} · "
+            f"{summary['timesteps_trained']:,} steps · {summary['episodes']} episodes"
+        )
+        table.add_column("metric")
+        table.add_column("mean", justify="right")
+        table.add_column("std", justify="right")
+
+        def fmt(x):
+            return "–" if x is None else f"{x:.3f}"
+
+        table.add_row(
+            "ball x-displacement (m)", fmt(summary["ball_dx_mean"]), fmt(summary["ball_dx_std"])
+        )
+        table.add_row(
+            "ball distance (m)",
+            fmt(summary["ball_distance_mean"]),
+            fmt(summary["ball_distance_std"]),
+        )
+        table.add_row("episode return", fmt(summary["return_mean"]), fmt(summary["return_std"]))
+        table.add_row("fall rate", fmt(summary["fall_rate"]), "")
+        table.add_row("episode length (steps)", fmt(summary["length_mean"]), "")
+        console.print(table)
+        if summary.get("video"):
+            console.print(f"video: {summary['video']}")
+        console.print(f"written: {Path(run) / 'eval.json'}")
+        print(json.dumps(summary), flush=True)
+
+    # ------------------------------------------------------------------------------ export
+    @app.command()
+    def export(
+        run: Annotated[Path, typer.Argument(help="Run folder.", exists=True, file_okay=False)],
+        onnx: Annotated[Path, typer.Option("--onnx", help="Output .onnx file.")],
+        checkpoint: Annotated[
+            Path | None, typer.Option(help="Export this checkpoint instead of model.zip.")
+        ] = None,
+        atol: Annotated[float, typer.Option(help="Verification tolerance.")] = 1e-5,
+    ) -> None:
+        """Export the policy to ONNX (verified against the SB3 policy) + a JSON description."""
+        from robocup_gym.train.export import ExportError, export_onnx
+
+        _single_thread_torch()
+        console = _console()
+        try:
+            with console.status("exporting and verifying…"):
+                meta = export_onnx(run, onnx, checkpoint=checkpoint, atol=atol)
+        except (ExportError, ValueError, FileNotFoundError) as exc:
+            _fail(str(exc))
+        v = meta["verification"]
+        console.print(
+            f"[bold green]exported[/bold green] {onnx} (+ {onnx.with_suffix('.json')}): "
+            f"obs {meta['input']['shape'][1]} → action {meta['output']['shape'][1]}; matches the "
+            f"SB3 policy to {v['max_abs_diff']:.2e} on {v['samples']} observations"
+        )
+        console.print(f"run it on a server: robocup-gym agent {onnx} --port 3100")
+        print(
+            json.dumps(
+                {
+                    "onnx": str(onnx),
+                    "verification": v,
+                    "env_id": meta["env_id"],
+                    "obs_size": meta["input"]["shape"][1],
+                    "action_size": meta["output"]["shape"][1],
+                }
+            ),
+            flush=True,
+        )
+
+    # ------------------------------------------------------------------------------ agent
+    @app.command()
+    def agent(
+        onnx: Annotated[Path, typer.Argument(help="Exported policy (.onnx).", exists=True)],
+        host: Annotated[str, typer.Option(help="Server address.")] = "127.0.0.1",
+        port: Annotated[int, typer.Option(help="Agent port.")] = 3100,
+        monitor_port: Annotated[
+            int | None,
+            typer.Option(help="Monitor/trainer port to reset episodes (e.g. 3200)."),
+        ] = None,
+        episodes: Annotated[int, typer.Option(help="Episodes to run.")] = 1,
+        team: Annotated[str, typer.Option(help="Team name.")] = "RoboCupGym",
+        unum: Annotated[int, typer.Option(help="Uniform number (0 = server's choice).")] = 0,
+        sync: Annotated[bool, typer.Option(help="Send (syn) every cycle.")] = True,
+    ) -> None:
+        """Drive a robot with an exported policy over the rcssserver3d protocol."""
+        from robocup_gym.train.agent import run_onnx_agent
+
+        console = _console()
+
+        def report(rep) -> None:
+            d = rep.ball_displacement
+            console.print(
+                f"episode: {rep.steps} steps, fallen={rep.fallen}, ball displacement "
+                + ("–" if d is None else f"({d[0]:+.2f}, {d[1]:+.2f}) m")
+            )
+
+        try:
+            run_onnx_agent(
+                str(onnx),
+                host=host,
+                port=port,
+                monitor_port=monitor_port,
+                episodes=episodes,
+                team=team,
+                unum=unum,
+                sync=sync,
+                on_episode=report,
+            )
+        except (OSError, RuntimeError, ValueError) as exc:
+            _fail(str(exc))
+
+    # ------------------------------------------------------------------------------ serve
+    @app.command()
+    def serve(
+        agent_port: Annotated[int, typer.Option("--agent-port", help="Agent port.")] = 3100,
+        monitor_port: Annotated[
+            int, typer.Option("--monitor-port", help="Monitor/trainer port.")
+        ] = 3200,
+        host: Annotated[str, typer.Option(help="Address to listen on.")] = "0.0.0.0",
+        sync: Annotated[
+            bool, typer.Option("--sync/--no-sync", help="Sync mode: wait for (syn).")
+        ] = False,
+        real_time: Annotated[
+            bool,
+            typer.Option("--real-time/--no-real-time", help="20 ms cycles on the wall clock."),
+        ] = True,
+        ground_truth: Annotated[
+            bool,
+            typer.Option(
+                "--ground-truth/--no-ground-truth",
+                help="Send mypos/myorien/ballpos in See (needed by `agent`).",
+            ),
+        ] = False,
+    ) -> None:
+        """Serve the embedded world over the rcssserver3d protocol (agents, RoboViz)."""
+        try:
+            from robocup_gym.server import serve as run_server
+        except ImportError as exc:
+            _fail(f"the server is not available in this installation (robocup_gym.server: {exc})")
+        kwargs: dict[str, Any] = {}
+        if ground_truth:
+            kwargs["ground_truth"] = True
+        try:
+            run_server(
+                agent_port=agent_port,
+                monitor_port=monitor_port,
+                host=host,
+                sync=sync,
+                real_time=real_time,
+                **kwargs,
+            )
+        except OSError as exc:
+            _fail(str(exc))
+
+    # ------------------------------------------------------------------------------ tasks
+    @app.command()
+    def tasks() -> None:
+        """List the registered tasks."""
+        from robocup_gym.train.tasks import registered_tasks
+
+        for name, env_id in registered_tasks().items():
+            print(f"{name:20s} {env_id}")
+
+    # ------------------------------------------------------------------------------ experiments
+    @experiments_app.command("paper")
+    def experiments_paper(
+        scale: Annotated[
+            str, typer.Option(help="quick (~30 min on 2 cores) or full (5M steps).")
+        ] = "quick",
+        out: Annotated[Path, typer.Option(help="Output folder.")] = Path("runs/paper"),
+        only: Annotated[
+            list[str] | None,
+            typer.Option(help="Run only these figures: algos, tasks, workers (repeatable)."),
+        ] = None,
+        seeds: Annotated[
+            int | None, typer.Option(help="Seeds per curve (default by scale).")
+        ] = None,
+        timesteps: Annotated[
+            int | None, typer.Option(help="Override the steps per run of the scale.")
+        ] = None,
+    ) -> None:
+        """Reproduce the paper's three figures as CSV + PNG (PPO vs SAC, SimpleKick vs
+        VelocityKick, wall-clock vs workers)."""
+        from robocup_gym.train.experiments import SCALES, run_paper
+
+        if scale not in SCALES:
+            _fail(f"--scale must be one of {', '.join(SCALES)}")
+        try:
+            summary = run_paper(
+                scale, out, only=only, seeds=seeds, timesteps=timesteps, console=_console()
+            )
+        except (ValueError, FileNotFoundError) as exc:
+            _fail(str(exc))
+        print(json.dumps(summary), flush=True)
+
+
+def main() -> None:
+    """Entry point of the ``robocup-gym`` script."""
+    _require_typer()
+    app()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,368 @@
+"""Drive a robot on an rcssserver3d-protocol server with an exported ONNX policy.
+
+This is the path from training to a team's agent: the agent connects like any other
+(``scene``/``init`` on the agent port), and every cycle reads the percept, builds the observation
+exactly as the training environment does, asks the ONNX policy for an action and sends the joint
+velocities back. It works against ``robocup-gym serve`` and a real rcssserver3d alike.
+
+How it reuses the environment: the task environment is built (from the metadata stored in the
+ONNX file) around :class:`AgentConnectionBackend`, a :class:`~robocup_gym.backends.Backend` whose
+``step`` sends one command over the socket and returns the parsed percept. Observation layout,
+normalisation, clipping, frame stacking and action scaling are therefore the environment's own.
+
+Ground truth. The kick tasks observe the ball relative to the robot from the simulator's ground
+truth (the paper used the server's ``mypos``/``myorien``/``ballpos`` "cheat" extension). Over the
+wire this backend rebuilds it from those ``See`` extensions: torso position = head position minus
+the upright head offset, orientation = the head's heading (upright), ball velocity from successive
+``See`` messages. Start the server with ground truth on (``robocup-gym serve --ground-truth``, or
+FC Portugal's patched rcssserver3d). Without it only policies whose observations need no ground
+truth can run.
+
+Episodes. With a monitor port (trainer commands) every episode starts like in training: the robot
+is moved to the start position, the joints are driven to the start pose, and the ball is put at
+its start position with play mode ``PlayOn``. Without one the robot only beams (honoured before
+kick-off) and drives its joints to the start pose, and the ball stays where it is.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import socket
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.backends.base import Backend, RobotPose
+from robocup_gym.protocol import trainer as trainer_cmds
+from robocup_gym.protocol.effectors import format_command, format_init, format_scene
+from robocup_gym.protocol.framing import FrameDecoder, decode_payload, recv_frame, send_frame
+from robocup_gym.protocol.perceptors import parse_perception
+from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.types import AgentCommand, GroundTruth, Perception
+
+CYCLE_S = 0.02
+
+
+def _yaw_quat(heading_deg: float) -> np.ndarray:
+    """Torso quaternion (w, x, y, z) of an upright robot facing ``heading_deg`` (0 = +x): the
+    torso's forward axis is its +y, so the body is turned by ``heading − 90°`` about z."""
+    half = math.radians(heading_deg - 90.0) / 2.0
+    return np.array([math.cos(half), 0.0, 0.0, math.sin(half)])
+
+
+class _Geometry:
+    """Heights of an upright robot, from the embedded model (computed once per pose)."""
+
+    def __init__(self, robot_type: int) -> None:
+        from robocup_gym.sim.world import World
+
+        self.world = World(robot_types=[robot_type])
+        self._cache: dict[tuple[float, ...], tuple[float, float]] = {}
+
+    def heights(self, angles_deg: np.ndarray) -> tuple[float, float]:
+        """(head centre above torso centre, torso centre above ground) in the given pose, m."""
+        key = tuple(np.round(np.asarray(angles_deg, dtype=float), 3))
+        if key not in self._cache:
+            import mujoco
+
+            w = self.world
+            r = w.robot(0)
+            w.place_robot(0, x=0.0, y=0.0, joint_angles_deg=np.asarray(angles_deg, dtype=float))
+            mujoco.mj_forward(w.model, w.data)
+            torso_z = float(w.data.xpos[r.torso_body][2])
+            self._cache[key] = (float(w.data.xpos[r.head_body][2]) - torso_z, torso_z)
+        return self._cache[key]
+
+
+class GroundTruthUnavailableError(RuntimeError):
+    """The server sends no ``mypos``/``ballpos`` extension, which the policy's observation needs."""
+
+
+class AgentConnectionBackend(Backend):
+    """One robot connected to an rcssserver3d-protocol server as an ordinary agent.
+
+    Args:
+        host, port: The server's agent port.
+        robot_type: Nao type 0–4 to load (``scene``).
+        team, unum: ``init`` team name and uniform number (0 = server's choice).
+        monitor_port: The server's monitor/trainer port for resetting episodes (``None`` = no
+            trainer commands).
+        sync: Append ``(syn)`` to every message (needed by servers in sync mode, harmless else).
+        timeout: Seconds to wait for a percept.
+        settle_cycles: Most cycles spent driving the joints to an episode's start pose.
+    """
+
+    name = "agent-connection"
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = 3100,
+        *,
+        robot_type: int = 0,
+        team: str = "RoboCupGym",
+        unum: int = 0,
+        monitor_port: int | None = None,
+        sync: bool = True,
+        timeout: float = 10.0,
+        settle_cycles: int = 60,
+        reset_cycles: int = 4,
+        seed: int | None = None,
+        vision: bool = False,
+        **_: Any,
+    ) -> None:
+        super().__init__(robot_type=robot_type, seed=seed, vision=vision)
+        self.host, self.port = host, int(port)
+        self.team = team
+        self.sync = sync
+        self.timeout = timeout
+        self.settle_cycles = int(settle_cycles)
+        self.reset_cycles = int(reset_cycles)
+        self._model = nao_model(self.robot_type)
+        self._geometry = _Geometry(self.robot_type)
+        self._head_dz = self._geometry.heights(np.zeros(len(self._model.joints)))[0]
+        self._gt: GroundTruth | None = None
+        self._last_seen: tuple[float, np.ndarray] | None = None
+        self.side: str | None = None
+        self.unum = unum
+        self.cycles = 0
+        self.sock = self._connect(host, self.port)
+        self.decoder = FrameDecoder()
+        self.monitor: socket.socket | None = None
+        if monitor_port is not None:
+            self.monitor = self._connect(host, int(monitor_port))
+        self._send(format_scene(self.robot_type))
+        self._recv()
+        self._send(format_init(unum, team))
+        self._recv()
+        if self.unum == 0:  # the server announces the number it chose in a GS soon after
+            for _ in range(5):
+                self._send(format_command(AgentCommand(), self.robot_type, sync=False))
+                self._recv()
+                if self.unum:
+                    break
+
+    # ------------------------------------------------------------------ wire
+    @staticmethod
+    def _connect(host: str, port: int, retries_s: float = 5.0) -> socket.socket:
+        deadline = time.monotonic() + retries_s
+        while True:
+            try:
+                s = socket.create_connection((host, port), timeout=10.0)
+                s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                return s
+            except ConnectionRefusedError:
+                if time.monotonic() > deadline:
+                    raise ConnectionRefusedError(
+                        f"no server at {host}:{port} (start one with `robocup-gym serve`)"
+                    ) from None
+                time.sleep(0.05)
+
+    def _send(self, text: str) -> None:
+        if self.sync and not text.endswith("(syn)"):
+            text += "(syn)"
+        send_frame(self.sock, text, self.timeout)
+
+    def _recv(self) -> Perception:
+        text = decode_payload(recv_frame(self.sock, self.decoder, self.timeout))
+        p = parse_perception(text, robot_type=self.robot_type)
+        if p.game.team_side is not None:
+            self.side = p.game.team_side
+        if p.game.unum is not None:
+            self.unum = p.game.unum
+        self.cycles += 1
+        self._update_ground_truth(p)
+        gt = self._gt
+        if gt is not None:  # fresh arrays every cycle (callers may keep them)
+            gt = GroundTruth(
+                gt.ball_pos.copy(), gt.ball_vel.copy(), gt.torso_pos.copy(), gt.torso_quat.copy()
+            )
+        p.ground_truth = gt
+        self.last = p
+        return p
+
+    def _torso_height(self, angles_deg: np.ndarray) -> float:
+        return self._geometry.heights(angles_deg)[1] + 0.005
+
+    def _trainer(self, *commands: str) -> None:
+        if self.monitor is not None:
+            send_frame(self.monitor, "".join(commands), self.timeout)
+
+    # ------------------------------------------------------------------ ground truth
+    def _update_ground_truth(self, p: Perception) -> None:
+        v = p.vision
+        if v is None or v.my_pos is None or v.ball_pos is None:
+            return
+        ball = np.asarray(v.ball_pos, dtype=float)
+        head = np.asarray(v.my_pos, dtype=float)
+        heading = float(v.my_orientation_deg or 0.0)
+        ball_vel = np.zeros(3)
+        if self._last_seen is not None and p.time > self._last_seen[0]:
+            ball_vel = (ball - self._last_seen[1]) / (p.time - self._last_seen[0])
+        self._last_seen = (p.time, ball)
+        self._gt = GroundTruth(
+            ball_pos=ball,
+            ball_vel=ball_vel,
+            torso_pos=head - np.array([0.0, 0.0, self._head_dz]),
+            torso_quat=_yaw_quat(heading),
+        )
+
+    def _need_ground_truth(self, cycles: int = 12) -> None:
+        for _ in range(cycles):
+            if self._gt is not None:
+                return
+            self._send(format_command(AgentCommand(), self.robot_type, sync=False))
+            self._recv()
+        raise GroundTruthUnavailableError(
+            "the server sends no mypos/ballpos in See, which this policy's observation needs; "
+            "start it with ground truth on (robocup-gym serve --ground-truth)"
+        )
+
+    # ------------------------------------------------------------------ Backend API
+    @property
+    def robot_model(self) -> NaoModel:
+        return self._model
+
+    @property
+    def has_ground_truth(self) -> bool:
+        return True
+
+    def _world_xy(self, x: float, y: float) -> tuple[float, float]:
+        """Team frame → world frame (the right team plays mirrored)."""
+        return (-x, -y) if self.side == "right" else (x, y)
+
+    def reset_episode(
+        self,
+        pose: RobotPose,
+        ball_pos: Sequence[float],
+        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
+        *,
+        play_mode: str = "PlayOn",
+        seed: int | None = None,
+    ) -> Perception:
+        team = "Left" if self.side != "right" else "Right"
+        # 1. drive the joints to the start pose, wherever the robot is
+        target = np.zeros(len(self._model.joints))
+        if pose.joint_angles_deg is not None and not isinstance(pose.joint_angles_deg, dict):
+            target = np.asarray(pose.joint_angles_deg, dtype=float)
+        speeds = np.asarray(self._model.max_speeds, dtype=float)
+        p = self.last
+        for _ in range(self.settle_cycles):
+            err = np.radians(target - np.asarray(p.joint_angles_deg, dtype=float))
+            if np.max(np.abs(err)) < math.radians(1.0):
+                break
+            vel = np.clip(12.5 * err, -speeds, speeds)
+            self._send(format_command(AgentCommand(vel), self.robot_type, sync=False))
+            p = self._recv()
+        stop = AgentCommand(np.zeros_like(target))
+        # 2. put the robot (upright) and the ball at their start positions
+        wx, wy = self._world_xy(pose.x, pose.y)
+        world_heading = pose.heading_deg + (180.0 if self.side == "right" else 0.0)
+        if self.monitor is not None:
+            bx, by = self._world_xy(float(ball_pos[0]), float(ball_pos[1]))
+            bvx, bvy = self._world_xy(float(ball_vel[0]), float(ball_vel[1]))
+            bz = float(ball_pos[2]) if len(ball_pos) > 2 else 0.042
+            z = float(pose.z) if pose.z is not None else self._torso_height(target)
+            self._trainer(
+                trainer_cmds.agent_move(self.unum, team, (wx, wy, z), world_heading - 90.0),
+                trainer_cmds.ball((bx, by, bz), (bvx, bvy, float(ball_vel[2]))),
+                trainer_cmds.play_mode(play_mode),
+            )
+        else:
+            stop = AgentCommand(np.zeros_like(target), beam=(pose.x, pose.y, pose.heading_deg))
+        # 3. let the commands take effect and wait for a fresh See with ground truth
+        self._send(format_command(stop, self.robot_type, sync=False))
+        self._recv()
+        for _ in range(self.reset_cycles):
+            self._send(format_command(AgentCommand(), self.robot_type, sync=False))
+            self._recv()
+        self._gt = None
+        self._last_seen = None
+        self._need_ground_truth()
+        return self.last
+
+    def step(self, command: AgentCommand) -> Perception:
+        self._send(format_command(command, self.robot_type, sync=False))
+        return self._recv()
+
+    def close(self) -> None:
+        for s in (self.sock, self.monitor):
+            if s is not None:
+                with contextlib.suppress(OSError):
+                    s.close()
+        self.monitor = None
+
+    def describe(self) -> dict[str, Any]:
+        return {**super().describe(), "host": self.host, "port": self.port}
+
+
+@dataclass
+class EpisodeReport:
+    steps: int
+    ball_displacement: list[float] | None
+    fallen: bool
+
+
+def run_onnx_agent(
+    onnx_path: str,
+    *,
+    host: str = "127.0.0.1",
+    port: int = 3100,
+    monitor_port: int | None = None,
+    episodes: int = 1,
+    team: str = "RoboCupGym",
+    unum: int = 0,
+    sync: bool = True,
+    on_episode=None,
+) -> list[EpisodeReport]:
+    """Connect to a server and run ``episodes`` episodes of the exported policy.
+
+    The task, its configuration and the robot type come from the ONNX file's metadata.
+    """
+    from robocup_gym.train.export import OnnxPolicy
+    from robocup_gym.train.tasks import make_env
+
+    policy = OnnxPolicy(onnx_path)
+    meta = policy.metadata
+    env_kwargs = dict(meta.get("env_kwargs") or {})
+    robot_type = int(
+        env_kwargs.get("robot_type", (meta.get("env_config") or {}).get("robot_type", 0))
+    )
+    backend = AgentConnectionBackend(
+        host,
+        port,
+        robot_type=robot_type,
+        team=team,
+        unum=unum,
+        monitor_port=monitor_port,
+        sync=sync,
+    )
+    reports = []
+    try:
+        env = make_env(meta["env_id"], backend=backend, env_kwargs=env_kwargs)
+        try:
+            for _ in range(episodes):
+                obs, _ = env.reset()
+                done, steps, info = False, 0, {}
+                while not done:
+                    obs, _, terminated, truncated, info = env.step(policy(obs))
+                    steps += 1
+                    done = terminated or truncated
+                disp = info.get("ball_displacement")
+                rep = EpisodeReport(
+                    steps=steps,
+                    ball_displacement=None if disp is None else [float(x) for x in disp],
+                    fallen=bool(info.get("fallen", False)),
+                )
+                reports.append(rep)
+                if on_episode is not None:
+                    on_episode(rep)
+        finally:
+            env.close()
+    finally:
+        backend.close()
+    return reports

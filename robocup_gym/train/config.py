@@ -1,0 +1,174 @@
+"""Training configuration: one typed dataclass, written verbatim to every run folder.
+
+The defaults are the paper's hyperparameters (Beukman et al., *RobocupGym*, 2024, and its public
+training script): PPO with gamma 0.99, GAE lambda 0.95, ``n_steps`` 64 per environment, 10 epochs,
+clip 0.2, Adam with learning rate 1e-4, no entropy bonus, minibatch 128, a 2×256 MLP, gSDE
+exploration and a value-function clip of 1.0; SAC with Stable-Baselines3's defaults. Observation
+clipping (1.0) happens inside the environment, as in the paper, so no ``VecNormalize`` is used
+unless ``normalize_obs`` is switched on (it is then folded into the exported ONNX graph).
+
+A config file (YAML) holds any subset of the fields; nested ``algo_kwargs`` / ``env_kwargs`` are
+merged over the defaults::
+
+    algo: ppo
+    n_envs: 4
+    timesteps: 200000
+    algo_kwargs: {learning_rate: 3.0e-4}
+    env_kwargs: {episode_steps: 40}
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+ALGOS = ("ppo", "sac")
+BACKENDS = ("mujoco", "rcssserver3d")
+
+PPO_PAPER_DEFAULTS: dict[str, Any] = {
+    "learning_rate": 1e-4,
+    "n_steps": 64,
+    "batch_size": 128,
+    "n_epochs": 10,
+    "gamma": 0.99,
+    "gae_lambda": 0.95,
+    "clip_range": 0.2,
+    "clip_range_vf": 1.0,
+    "ent_coef": 0.0,
+    "use_sde": True,
+    "policy_kwargs": {"net_arch": [256, 256]},
+}
+"""PPO as in the paper (its public ``v0001_ppo`` script)."""
+
+SAC_PAPER_DEFAULTS: dict[str, Any] = {}
+"""SAC: Stable-Baselines3's defaults, as in the paper."""
+
+DEFAULT_N_ENVS = 16
+"""The paper's number of worker environments."""
+
+
+def algo_defaults(algo: str) -> dict[str, Any]:
+    """A fresh copy of the paper's hyperparameters for ``algo`` (``ppo`` or ``sac``)."""
+    algo = algo.lower()
+    if algo == "ppo":
+        return copy.deepcopy(PPO_PAPER_DEFAULTS)
+    if algo == "sac":
+        return copy.deepcopy(SAC_PAPER_DEFAULTS)
+    raise ValueError(f"unknown algorithm {algo!r}; choose one of {', '.join(ALGOS)}")
+
+
+def default_n_envs() -> int:
+    """The paper's 16 workers (the vectorised env spreads them over the machine's cores)."""
+    return DEFAULT_N_ENVS
+
+
+@dataclass
+class TrainConfig:
+    """Everything that defines a training run (saved as ``config.yaml`` in the run folder)."""
+
+    task: str = "velocity-kick"
+    """Task name (``velocity-kick``, ``simple-kick``, …) or any registered Gymnasium id."""
+    env_id: str = ""
+    """The Gymnasium id the task resolved to (filled in by the trainer)."""
+    algo: str = "ppo"
+    n_envs: int = DEFAULT_N_ENVS
+    timesteps: int = 1_000_000
+    seed: int = 0
+    backend: str = "mujoco"
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Keyword arguments for ``gymnasium.make`` (the task's config fields)."""
+    algo_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Hyperparameters passed to the SB3 algorithm (merged over the paper's defaults)."""
+    normalize_obs: bool = False
+    """Wrap in ``VecNormalize`` (observations only); off in the paper."""
+    checkpoint_freq: int = 100_000
+    """Save a checkpoint every this many environment steps (0 = never)."""
+    eval_freq: int = 100_000
+    """Evaluate deterministically every this many environment steps (0 = never)."""
+    eval_episodes: int = 5
+    device: str = "cpu"
+    """Torch device; small MLPs train fastest on the CPU."""
+    torch_threads: int = 1
+    """Torch intra-op threads. 1 is fastest for these small MLPs: with more, every tiny matrix
+    product pays a thread barrier, which costs milliseconds when the environment workers (or
+    anything else) keep the other cores busy. 0 = torch's default."""
+    vec_env: str = "auto"
+    """``auto`` (subprocesses when n_envs > 1), ``subproc`` or ``dummy``."""
+    n_workers: int = 0
+    """Worker processes for the environments (0 = one per CPU core, at most n_envs); each worker
+    steps a block of n_envs / n_workers environments."""
+    start_method: str = ""
+    """multiprocessing start method for subprocess envs ('' = forkserver where available)."""
+
+    def __post_init__(self) -> None:
+        self.algo = self.algo.lower()
+        if self.algo not in ALGOS:
+            raise ValueError(f"unknown algorithm {self.algo!r}; choose one of {', '.join(ALGOS)}")
+        if self.backend not in BACKENDS:
+            raise ValueError(
+                f"unknown backend {self.backend!r}; choose one of {', '.join(BACKENDS)}"
+            )
+        if self.n_envs < 1:
+            raise ValueError(f"n_envs must be >= 1, got {self.n_envs}")
+        if self.timesteps < 1:
+            raise ValueError(f"timesteps must be >= 1, got {self.timesteps}")
+        if self.vec_env not in ("auto", "subproc", "dummy"):
+            raise ValueError(f"vec_env must be auto, subproc or dummy, got {self.vec_env!r}")
+
+    # ------------------------------------------------------------------ derived
+    def resolved_algo_kwargs(self) -> dict[str, Any]:
+        """The paper's defaults for :attr:`algo` with :attr:`algo_kwargs` merged over them."""
+        merged = algo_defaults(self.algo)
+        for key, value in copy.deepcopy(self.algo_kwargs).items():
+            if key == "policy_kwargs" and isinstance(value, dict):
+                merged.setdefault("policy_kwargs", {}).update(value)
+            else:
+                merged[key] = value
+        return merged
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: str | os.PathLike) -> None:
+        """Write as YAML (the exact config of a run, with the resolved hyperparameters)."""
+        import yaml
+
+        data = self.to_dict()
+        data["algo_kwargs"] = self.resolved_algo_kwargs()
+        Path(path).write_text(yaml.safe_dump(data, sort_keys=False))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(
+                f"unknown config key(s) {', '.join(unknown)}; "
+                f"valid keys: {', '.join(sorted(known))}"
+            )
+        return cls(**copy.deepcopy(data))
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> TrainConfig:
+        """Read a YAML config file (any subset of the fields)."""
+        import yaml
+
+        text = Path(path).read_text()
+        data = yaml.safe_load(text) or {}
+        if not isinstance(data, dict):
+            raise ValueError(
+                f"{path}: a config file must hold a mapping, got {type(data).__name__}"
+            )
+        return cls.from_dict(data)
+
+    def merged(self, **overrides: Any) -> TrainConfig:
+        """A copy with the given fields replaced (``None`` values are ignored)."""
+        data = self.to_dict()
+        for key, value in overrides.items():
+            if value is not None:
+                data[key] = value
+        return TrainConfig.from_dict(data)

@@ -1,0 +1,269 @@
+"""Deterministic evaluation of a trained run, with an optional video.
+
+Video frames come from MuJoCo's offscreen renderer. On a machine without a display set
+``MUJOCO_GL=egl`` (GPU or Mesa's software EGL) or ``MUJOCO_GL=osmesa`` before starting Python;
+``robocup-gym eval --video`` picks ``egl`` itself when no display is set. MP4 files need the
+``imageio-ffmpeg`` package; a ``.gif`` file name writes a GIF with Pillow instead.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.train.metrics import episode_record, summarize
+from robocup_gym.train.run import RunInfo, load_model, load_run
+
+
+def run_episodes(
+    model,
+    env,
+    episodes: int,
+    *,
+    seed: int | None = 0,
+    deterministic: bool = True,
+    obs_normalizer: Callable[[np.ndarray], np.ndarray] | None = None,
+    on_step: Callable[[Any], None] | None = None,
+) -> list[dict[str, float]]:
+    """Run ``episodes`` episodes of ``model`` on a single (non-vectorised) Gymnasium ``env``.
+
+    Episode ``k`` is reset with ``seed + k``. ``on_step(env)`` is called after every reset and
+    step (for video frames). Returns one metrics record per episode (see
+    :func:`robocup_gym.train.metrics.episode_record`).
+    """
+    records = []
+    for k in range(episodes):
+        obs, info = env.reset(seed=None if seed is None else seed + k)
+        if on_step is not None:
+            on_step(env)
+        ret, length, done = 0.0, 0, False
+        while not done:
+            o = obs_normalizer(obs) if obs_normalizer is not None else obs
+            action, _ = model.predict(o, deterministic=deterministic)
+            obs, reward, terminated, truncated, info = env.step(action)
+            if on_step is not None:
+                on_step(env)
+            ret += float(reward)
+            length += 1
+            done = terminated or truncated
+        records.append(episode_record(info, ret, length))
+    return records
+
+
+# ---------------------------------------------------------------------------------- video
+def ensure_gl_backend() -> str:
+    """Choose a headless OpenGL backend for MuJoCo when none is configured.
+
+    Returns the ``MUJOCO_GL`` value in force. Must run before ``mujoco`` creates a context.
+    """
+    if not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
+        os.environ["MUJOCO_GL"] = "egl"
+        os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    return os.environ.get("MUJOCO_GL", "glfw")
+
+
+class FrameRecorder:
+    """Collects RGB frames of an environment for a kick video.
+
+    With the embedded world behind the environment, a free camera frames both the robot and the
+    ball (it pulls back as the ball rolls away); otherwise ``env.render()`` is used (an
+    environment made with ``render_mode="rgb_array"``).
+    """
+
+    def __init__(self, width: int = 480, height: int = 360, every: int = 1) -> None:
+        self.width, self.height, self.every = width, height, max(1, every)
+        self.frames: list[np.ndarray] = []
+        self._renderer = None
+        self._camera = None
+        self._count = 0
+
+    def __call__(self, env) -> None:
+        self._count += 1
+        if (self._count - 1) % self.every:
+            return
+        world = _find_world(env)
+        if world is not None:
+            frame = self._render_world(world)
+        elif getattr(env, "render_mode", None) == "rgb_array":
+            frame = env.render()
+        else:
+            raise RuntimeError(
+                "this environment cannot be rendered: it has no render_mode='rgb_array' and no "
+                "embedded MuJoCo world (video needs the mujoco backend)"
+            )
+        self.frames.append(np.asarray(frame, dtype=np.uint8))
+
+    def _render_world(self, world) -> np.ndarray:
+        import mujoco
+
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(world.model, self.height, self.width)
+            cam = mujoco.MjvCamera()
+            cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+            cam.azimuth, cam.elevation = 125.0, -20.0
+            self._camera = cam
+        torso = world.data.xpos[world.robot(0).torso_body]
+        ball = world.ball_position()
+        gap = float(np.linalg.norm((ball - torso)[:2]))
+        self._camera.lookat[:] = 0.5 * (torso + ball)
+        self._camera.lookat[2] = 0.2
+        self._camera.distance = max(2.0, 1.2 * gap + 1.0)
+        self._renderer.update_scene(world.data, camera=self._camera)
+        return self._renderer.render().copy()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def save(self, path: str | os.PathLike, fps: float) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not self.frames:
+            raise RuntimeError("no frames were recorded")
+        if path.suffix.lower() == ".gif":
+            from PIL import Image
+
+            imgs = [Image.fromarray(f) for f in self.frames]
+            imgs[0].save(
+                path, save_all=True, append_images=imgs[1:], duration=int(1000 / fps), loop=0
+            )
+            return path
+        try:
+            import imageio_ffmpeg  # noqa: F401
+        except ImportError:
+            raise RuntimeError(
+                "writing MP4 needs the imageio-ffmpeg package (pip install imageio-ffmpeg); "
+                "or give a .gif file name"
+            ) from None
+        import imageio.v2 as imageio
+
+        with imageio.get_writer(path, fps=fps, codec="libx264", macro_block_size=8) as w:
+            for f in self.frames:
+                w.append_data(f)
+        return path
+
+
+def _find_world(env):
+    """The embedded :class:`robocup_gym.sim.world.World` behind ``env``, if any."""
+    e = env
+    for _ in range(16):
+        for attr in ("world", "_world", "sim"):
+            w = getattr(e, attr, None)
+            if w is not None and hasattr(w, "model") and hasattr(w, "data"):
+                return w
+        backend = getattr(e, "backend", None)
+        if backend is not None and not isinstance(backend, str):
+            w = getattr(backend, "world", None)
+            if w is not None and hasattr(w, "model"):
+                return w
+        if not hasattr(e, "env"):
+            break
+        e = e.env
+    return None
+
+
+# ---------------------------------------------------------------------------------- runs
+def evaluate_run(
+    run: str | os.PathLike,
+    *,
+    episodes: int = 10,
+    seed: int = 100_000,
+    deterministic: bool = True,
+    video: str | os.PathLike | None = None,
+    video_episodes: int = 1,
+    checkpoint: str | os.PathLike | None = None,
+    write: bool = True,
+) -> dict[str, Any]:
+    """Evaluate a run folder's policy; returns (and writes to ``eval.json``) the summary."""
+    from robocup_gym.train.tasks import make_env
+
+    info: RunInfo = load_run(run)
+    cfg = info.config
+    model = load_model(info, checkpoint=checkpoint)
+    normalizer = info.obs_normalizer()
+    env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs)
+    try:
+        records = run_episodes(
+            model, env, episodes, seed=seed, deterministic=deterministic, obs_normalizer=normalizer
+        )
+    finally:
+        env.close()
+    summary: dict[str, Any] = {
+        "run": str(info.path),
+        "task": cfg.task,
+        "env_id": cfg.env_id,
+        "algo": cfg.algo,
+        "model": str(info.model_path if checkpoint is None else checkpoint),
+        "timesteps_trained": int(model.num_timesteps),
+        "deterministic": deterministic,
+        **summarize(records),
+    }
+    if video is not None:
+        summary["video"] = str(record_video(info, model, video, episodes=video_episodes, seed=seed))
+    if write:
+        (info.path / "eval.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary
+
+
+def record_video(
+    info: RunInfo,
+    model,
+    path: str | os.PathLike,
+    *,
+    episodes: int = 1,
+    seed: int = 100_000,
+    roll_s: float = 2.0,
+) -> Path:
+    """Record ``episodes`` deterministic episodes to ``path`` (MP4 or GIF).
+
+    The kick tasks let the ball roll for ``wait_steps`` cycles inside their last step; to show
+    that roll, the video environment is made with ``wait_steps=0`` and the world is then run on
+    here with the joints stopped (exactly as the environment's wait) for at least ``roll_s``
+    seconds, and drawn.
+    """
+    from robocup_gym.train.tasks import make_env
+
+    ensure_gl_backend()
+    cfg = info.config
+    env_kwargs = dict(cfg.env_kwargs)
+    wait = 0
+    probe = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=env_kwargs)
+    base_cfg = getattr(probe.unwrapped, "config", None)
+    if base_cfg is not None and getattr(probe.unwrapped, "backend", None) is not None:
+        wait = int(getattr(base_cfg, "wait_steps", 0) or 0)
+    probe.close()
+    if wait:
+        env_kwargs["wait_steps"] = 0
+    try:
+        env = make_env(
+            cfg.env_id, backend=cfg.backend, env_kwargs=env_kwargs, render_mode="rgb_array"
+        )
+    except TypeError:
+        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=env_kwargs)
+    fps = float(env.metadata.get("render_fps") or 50)
+    every = max(1, round(fps / 25))
+    recorder = FrameRecorder(every=every)
+    normalizer = info.obs_normalizer()
+    try:
+        for k in range(episodes):
+            run_episodes(model, env, 1, seed=seed + k, obs_normalizer=normalizer, on_step=recorder)
+            if wait:
+                from robocup_gym.types import AgentCommand
+
+                base = env.unwrapped
+                stop = AgentCommand(np.zeros(len(base.robot_model.joints)))
+                base.backend.step(stop)
+                recorder(env)
+                for _ in range(max(wait, round(roll_s / 0.02)) - 1):
+                    base.backend.step(AgentCommand())
+                    recorder(env)
+        return recorder.save(path, fps=fps / every)
+    finally:
+        recorder.close()
+        env.close()

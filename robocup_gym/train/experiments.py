@@ -1,0 +1,381 @@
+"""The paper's three experiments, reproduced on the embedded simulator.
+
+1. ``algos``: PPO vs SAC on VelocityKick, each with fewer and more parallel workers;
+2. ``tasks``: SimpleKick vs VelocityKick (PPO);
+3. ``workers``: wall-clock time of a fixed PPO training budget against the number of workers.
+
+Each figure is a CSV (long format, one row per curve point) and a PNG. Runs are ordinary run
+folders under ``<out>/runs/`` (TensorBoard logs and models included), so ``robocup-gym eval`` works
+on every one of them; a run that already finished is reused, so an interrupted reproduction
+continues where it stopped.
+
+Scales: ``quick`` keeps the whole reproduction under ~30 minutes on a 2-core machine (short runs,
+one seed: shapes of the curves, not the paper's final numbers); ``full`` is the paper's budget
+(5M steps per run, 3 seeds) and needs a large machine or a lot of patience.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.train.config import TrainConfig
+from robocup_gym.train.run import load_run
+
+
+@dataclass(frozen=True)
+class Scale:
+    timesteps: int
+    """Steps per run of the ``algos`` figure."""
+    task_timesteps: int
+    """Steps per run of the ``tasks`` figure (SimpleKick waits 200 cycles per episode)."""
+    algo_envs: tuple[int, ...]
+    """Numbers of parallel environments compared in the ``algos`` figure."""
+    task_envs: int
+    worker_counts: tuple[int, ...]
+    worker_timesteps: int
+    seeds: int
+    eval_episodes: int = 5
+    checkpoints: int = 4
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+SCALES: dict[str, Scale] = {
+    "quick": Scale(
+        timesteps=60_000,
+        task_timesteps=40_000,
+        algo_envs=(4, 16),
+        task_envs=16,
+        worker_counts=(1, 2, 4, 8),
+        worker_timesteps=12_000,
+        seeds=1,
+    ),
+    "full": Scale(
+        timesteps=5_000_000,
+        task_timesteps=5_000_000,
+        algo_envs=(16, 32),
+        task_envs=16,
+        worker_counts=(1, 2, 4, 8, 16, 32),
+        worker_timesteps=200_000,
+        seeds=3,
+        eval_episodes=10,
+        checkpoints=10,
+    ),
+}
+
+FIGURES = ("algos", "tasks", "workers")
+CURVE_COLUMNS = (
+    "figure",
+    "label",
+    "seed",
+    "steps",
+    "wall_s",
+    "ball_dx_mean",
+    "return_mean",
+    "fall_rate",
+)
+
+
+@dataclass
+class RunSpec:
+    name: str
+    config: TrainConfig
+
+
+def _finished(run_dir: Path, timesteps: int) -> bool:
+    if not (run_dir / "model.zip").exists() or not (run_dir / "progress.csv").exists():
+        return False
+    rows = _read_curve(run_dir)
+    return bool(rows) and rows[-1]["steps"] >= timesteps
+
+
+def _read_curve(run_dir: Path) -> list[dict[str, float]]:
+    rows = []
+    with (run_dir / "progress.csv").open() as f:
+        for row in csv.DictReader(f):
+            rows.append(
+                {k: (float(v) if v not in ("", None) else float("nan")) for k, v in row.items()}
+            )
+    return rows
+
+
+def _run(spec: RunSpec, root: Path, console) -> Path:
+    """Train one run unless a finished one exists; returns its folder."""
+    from robocup_gym.train.trainer import train
+
+    run_dir = root / spec.name
+    if _finished(run_dir, spec.config.timesteps):
+        console.print(f"[dim]reusing finished run {run_dir}[/dim]")
+        return run_dir
+    if (run_dir / "config.yaml").exists() and (run_dir / "model.zip").exists():
+        train(resume=run_dir, console=console)
+    else:
+        train(spec.config, run_dir=run_dir, console=console, log_every_s=60.0)
+    return run_dir
+
+
+def _base(scale: Scale, **kw: Any) -> TrainConfig:
+    steps = kw.get("timesteps", scale.timesteps)
+    freq = max(steps // scale.checkpoints, 1)
+    return TrainConfig(
+        checkpoint_freq=freq, eval_freq=freq, eval_episodes=scale.eval_episodes, **kw
+    )
+
+
+def plan(scale: Scale, seeds: int, only: list[str] | None = None) -> dict[str, list[RunSpec]]:
+    """The runs of each figure (a run shared by two figures appears in both)."""
+    figs = [f for f in FIGURES if not only or f in only]
+    out: dict[str, list[RunSpec]] = {}
+    if "algos" in figs:
+        out["algos"] = [
+            RunSpec(
+                f"velocity-kick-{algo}-{n}envs-s{s}",
+                _base(
+                    scale,
+                    task="velocity-kick",
+                    algo=algo,
+                    n_envs=n,
+                    seed=s,
+                    timesteps=scale.timesteps,
+                ),
+            )
+            for algo in ("ppo", "sac")
+            for n in scale.algo_envs
+            for s in range(seeds)
+        ]
+    if "tasks" in figs:
+        out["tasks"] = [
+            RunSpec(
+                f"{task}-ppo-{scale.task_envs}envs-s{s}-t{scale.task_timesteps}",
+                _base(
+                    scale,
+                    task=task,
+                    algo="ppo",
+                    n_envs=scale.task_envs,
+                    seed=s,
+                    timesteps=scale.task_timesteps,
+                ),
+            )
+            for task in ("simple-kick", "velocity-kick")
+            for s in range(seeds)
+        ]
+    if "workers" in figs:
+        out["workers"] = [
+            RunSpec(
+                f"workers-velocity-kick-ppo-{n}workers",
+                TrainConfig(
+                    task="velocity-kick",
+                    algo="ppo",
+                    n_envs=n,
+                    n_workers=n,
+                    seed=0,
+                    timesteps=scale.worker_timesteps,
+                    checkpoint_freq=0,
+                    eval_freq=0,
+                ),
+            )
+            for n in scale.worker_counts
+        ]
+    return out
+
+
+def _label(fig: str, cfg: TrainConfig) -> str:
+    if fig == "algos":
+        return f"{cfg.algo.upper()}, {cfg.n_envs} workers"
+    if fig == "tasks":
+        return {"simple-kick": "SimpleKick", "velocity-kick": "VelocityKick"}.get(
+            cfg.task, cfg.task
+        )
+    return f"{cfg.n_envs} workers"
+
+
+def _write_curves(fig: str, runs: list[Path], path: Path) -> list[dict[str, Any]]:
+    rows = []
+    for run_dir in runs:
+        cfg = load_run(run_dir).config
+        for r in _read_curve(run_dir):
+            rows.append(
+                {
+                    "figure": fig,
+                    "label": _label(fig, cfg),
+                    "seed": cfg.seed,
+                    "steps": int(r["steps"]),
+                    "wall_s": r["wall_s"],
+                    "ball_dx_mean": r["ball_dx_mean"],
+                    "return_mean": r["ep_return_mean"],
+                    "fall_rate": r["fall_rate"],
+                }
+            )
+    with path.open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=CURVE_COLUMNS)
+        w.writeheader()
+        w.writerows(rows)
+    return rows
+
+
+def _plot_curves(rows: list[dict[str, Any]], path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    labels = list(dict.fromkeys(r["label"] for r in rows))
+    for label in labels:
+        mine = [r for r in rows if r["label"] == label]
+        seeds = sorted({r["seed"] for r in mine})
+        max_steps = min(max(r["steps"] for r in mine if r["seed"] == s) for s in seeds)
+        grid = np.linspace(0, max_steps, 100)
+        for ax, key in zip(axes, ("ball_dx_mean", "return_mean"), strict=True):
+            ys = []
+            for s in seeds:
+                pts = sorted((r["steps"], r[key]) for r in mine if r["seed"] == s)
+                xs = np.array([p[0] for p in pts], float)
+                vs = np.array([p[1] for p in pts], float)
+                ok = np.isfinite(vs)
+                if ok.sum() >= 1:
+                    ys.append(np.interp(grid, xs[ok], vs[ok]))
+            if not ys:
+                continue
+            ys = np.array(ys)
+            mean = ys.mean(axis=0)
+            (line,) = ax.plot(grid, mean, label=label)
+            if len(ys) > 1:
+                std = ys.std(axis=0)
+                ax.fill_between(grid, mean - std, mean + std, alpha=0.2, color=line.get_color())
+    axes[0].set_ylabel("mean ball x-displacement (m)")
+    axes[1].set_ylabel("mean episode return")
+    for ax in axes:
+        ax.set_xlabel("environment steps")
+        ax.grid(alpha=0.3)
+        ax.legend()
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _workers_table(runs: list[Path], path: Path) -> list[dict[str, Any]]:
+    rows = []
+    for run_dir in runs:
+        cfg = load_run(run_dir).config
+        curve = _read_curve(run_dir)
+        last = curve[-1]
+        rows.append(
+            {
+                "workers": cfg.n_envs,
+                "steps": int(last["steps"]),
+                "wall_s": last["wall_s"],
+                "steps_per_s": last["steps"] / last["wall_s"] if last["wall_s"] > 0 else None,
+            }
+        )
+    rows.sort(key=lambda r: r["workers"])
+    with path.open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=("workers", "steps", "wall_s", "steps_per_s"))
+        w.writeheader()
+        w.writerows(rows)
+    return rows
+
+
+def _plot_workers(rows: list[dict[str, Any]], path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    w = [r["workers"] for r in rows]
+    axes[0].plot(w, [r["wall_s"] for r in rows], "o-")
+    axes[0].set_ylabel(f"wall-clock time for {rows[0]['steps']:,} steps (s)")
+    axes[1].plot(w, [r["steps_per_s"] for r in rows], "o-")
+    axes[1].set_ylabel("environment steps per second")
+    for ax in axes:
+        ax.set_xlabel("number of workers")
+        ax.set_xscale("log", base=2)
+        ax.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def run_paper(
+    scale: str | Scale = "quick",
+    out: str | Path = "runs/paper",
+    *,
+    only: list[str] | None = None,
+    seeds: int | None = None,
+    timesteps: int | None = None,
+    console=None,
+) -> dict[str, Any]:
+    """Run (or reuse) every run of the chosen figures and write their CSVs and PNGs.
+
+    Returns a summary: the files written and, per curve, the final mean ball x-displacement.
+    """
+    from rich.console import Console
+
+    console = console or Console()
+    if isinstance(scale, str):
+        name = scale
+        if scale not in SCALES:
+            raise ValueError(f"unknown scale {scale!r}; choose one of {', '.join(SCALES)}")
+        scale = SCALES[scale]
+    else:
+        name = "custom"
+    if only:
+        bad = sorted(set(only) - set(FIGURES))
+        if bad:
+            raise ValueError(f"unknown figure(s) {bad}; choose from {', '.join(FIGURES)}")
+    if timesteps is not None:
+        scale = Scale(
+            **{
+                **scale.__dict__,
+                "timesteps": timesteps,
+                "task_timesteps": timesteps,
+                "worker_timesteps": min(scale.worker_timesteps, timesteps),
+            }
+        )
+    n_seeds = seeds or scale.seeds
+    out = Path(out)
+    root = out / "runs"
+    root.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    figures = plan(scale, n_seeds, only)
+    total = sum(len(v) for v in figures.values())
+    console.print(f"[bold]paper experiments[/bold] ({name}): {total} runs → {out}")
+    summary: dict[str, Any] = {"scale": name, "out": str(out), "figures": {}}
+    for fig, specs in figures.items():
+        dirs = [_run(spec, root, console) for spec in specs]
+        csv_path, png_path = out / f"fig_{fig}.csv", out / f"fig_{fig}.png"
+        if fig == "workers":
+            rows = _workers_table(dirs, csv_path)
+            _plot_workers(
+                rows, png_path, "Wall-clock time vs number of workers (PPO, VelocityKick)"
+            )
+            result: dict[str, Any] = {r["workers"]: round(r["wall_s"], 1) for r in rows}
+        else:
+            rows = _write_curves(fig, dirs, csv_path)
+            title = (
+                "PPO vs SAC on VelocityKick"
+                if fig == "algos"
+                else "SimpleKick vs VelocityKick (PPO)"
+            )
+            _plot_curves(rows, png_path, title)
+            result = {}
+            for label in dict.fromkeys(r["label"] for r in rows):
+                finals = [r for r in rows if r["label"] == label]
+                last_steps = max(r["steps"] for r in finals)
+                vals = [r["ball_dx_mean"] for r in finals if r["steps"] == last_steps]
+                vals = [v for v in vals if np.isfinite(v)]
+                result[label] = round(float(np.mean(vals)), 3) if vals else None
+        summary["figures"][fig] = {"csv": str(csv_path), "png": str(png_path), "final": result}
+        console.print(f"[green]figure {fig}[/green]: {png_path} ({json.dumps(result)})")
+    summary["wall_s"] = round(time.perf_counter() - t0, 1)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary

@@ -1,0 +1,294 @@
+"""Export a trained policy to ONNX: observation → deterministic action, ready for an agent.
+
+The graph contains everything between the environment's observation and the action the
+environment expects: observation normalisation (when the run used ``VecNormalize``; the paper's
+setup normalises inside the environment, so usually there is none), the policy network, and the
+final squashing/clipping to the action space that Stable-Baselines3's ``predict`` applies. The
+export is verified against ``model.predict(obs, deterministic=True)`` on random observations and
+on observations from real episodes; a mismatch above the tolerance is an error.
+
+Next to ``policy.onnx`` a ``policy.json`` describes the observation layout (labels, analytic
+ranges, normalisation) and the action mapping, so that a team can rebuild the observation in its
+own agent; the same JSON is stored in the ONNX file's metadata (key ``robocup_gym``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.train.run import RunInfo, load_model, load_run
+
+METADATA_KEY = "robocup_gym"
+FORMAT = "robocup-gym-policy/1"
+INPUT_NAME = "obs"
+OUTPUT_NAME = "action"
+
+
+class ExportError(RuntimeError):
+    """The ONNX graph does not reproduce the policy within the tolerance."""
+
+
+def _policy_module(model, algo: str, obs_stats, action_space):
+    import torch
+    from torch import nn
+
+    policy = model.policy
+    low = torch.as_tensor(np.asarray(action_space.low, dtype=np.float32))
+    high = torch.as_tensor(np.asarray(action_space.high, dtype=np.float32))
+
+    class ExportPolicy(nn.Module):
+        def __init__(self) -> None:
+            super().__init__()
+            self.policy = policy
+            self.register_buffer("low", low)
+            self.register_buffer("high", high)
+            if obs_stats is not None:
+                mean, var, eps, clip = obs_stats
+                self.register_buffer("obs_mean", torch.as_tensor(mean, dtype=torch.float32))
+                self.register_buffer(
+                    "obs_std", torch.as_tensor(np.sqrt(var + eps), dtype=torch.float32)
+                )
+                self.obs_clip = float(clip)
+            else:
+                self.obs_mean = None
+
+        def forward(self, obs):
+            x = obs
+            if self.obs_mean is not None:
+                x = torch.clamp((x - self.obs_mean) / self.obs_std, -self.obs_clip, self.obs_clip)
+            if algo == "sac":
+                a = self.policy.actor(x, deterministic=True)  # tanh-squashed, in [-1, 1]
+                return self.low + 0.5 * (a + 1.0) * (self.high - self.low)
+            features = self.policy.pi_features_extractor(x)
+            latent = self.policy.mlp_extractor.forward_actor(features)
+            a = self.policy.action_net(latent)
+            if self.policy.squash_output:
+                a = torch.tanh(a)
+                return self.low + 0.5 * (a + 1.0) * (self.high - self.low)
+            return torch.maximum(torch.minimum(a, self.high), self.low)
+
+    module = ExportPolicy()
+    module.eval()
+    return module
+
+
+def _sample_observations(info: RunInfo, model, obs_space, n_random: int, seed: int) -> np.ndarray:
+    """Random observations in the space plus observations from one real episode."""
+    rng = np.random.default_rng(seed)
+    low = np.asarray(obs_space.low, dtype=np.float64)
+    high = np.asarray(obs_space.high, dtype=np.float64)
+    finite = np.isfinite(low) & np.isfinite(high)
+    samples = rng.normal(0.0, 1.0, (n_random, *obs_space.shape))
+    u = rng.uniform(0.0, 1.0, samples.shape)
+    samples = np.where(finite, low + u * (high - low), samples)
+    rows = [samples.astype(np.float32)]
+    try:
+        from robocup_gym.train.evaluate import run_episodes
+        from robocup_gym.train.tasks import make_env
+
+        cfg = info.config
+        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs)
+        seen: list[np.ndarray] = []
+        orig_step = env.step
+
+        def recording_step(action):
+            out = orig_step(action)
+            seen.append(np.asarray(out[0], dtype=np.float32))
+            return out
+
+        env.step = recording_step
+        try:
+            run_episodes(model, env, 1, seed=seed)
+        finally:
+            env.close()
+        if seen:
+            rows.append(np.stack(seen)[:256])
+    except Exception as exc:  # verification still runs on the random samples
+        warnings.warn(
+            f"could not collect episode observations for verification: {exc}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    return np.concatenate(rows, axis=0)
+
+
+def _env_description(info: RunInfo) -> dict[str, Any]:
+    """Observation/action layout of the run's environment (RobocupGym tasks)."""
+    from robocup_gym.train.tasks import make_env
+
+    cfg = info.config
+    out: dict[str, Any] = {}
+    try:
+        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs)
+    except Exception as exc:
+        return {"error": f"environment not available: {exc}"}
+    try:
+        base = env.unwrapped
+        config = getattr(base, "config", None)
+        if config is not None and hasattr(config, "to_dict"):
+            out["env_config"] = config.to_dict()
+        if hasattr(base, "observation_labels"):
+            out["observation_labels"] = list(base.observation_labels)
+        if hasattr(base, "raw_bounds"):
+            lo, hi = base.raw_bounds
+            out["observation_raw_low"] = np.asarray(lo, float).tolist()
+            out["observation_raw_high"] = np.asarray(hi, float).tolist()
+        if hasattr(base, "action_labels"):
+            out["action_labels"] = list(base.action_labels)
+        if hasattr(base, "controlled_joints"):
+            out["controlled_joints"] = list(base.controlled_joints)
+            model = getattr(base, "robot_model", None)
+            joints = getattr(getattr(base, "_actions", None), "joints", None)
+            if model is not None and joints is not None:
+                out["controlled_joint_max_speed_rad_s"] = (
+                    np.asarray(model.max_speeds)[joints].astype(float).tolist()
+                )
+    finally:
+        env.close()
+    return out
+
+
+def export_onnx(
+    run: str | os.PathLike,
+    onnx_path: str | os.PathLike,
+    *,
+    checkpoint: str | os.PathLike | None = None,
+    n_random: int = 512,
+    atol: float = 1e-5,
+    seed: int = 0,
+    opset: int = 17,
+) -> dict[str, Any]:
+    """Write ``onnx_path`` (and ``<name>.json`` beside it); returns the metadata.
+
+    Raises:
+        ExportError: when ONNX Runtime's actions differ from ``model.predict`` by more than
+            ``atol`` on any sample.
+    """
+    import onnx
+    import onnxruntime as ort
+    import torch
+
+    info = load_run(run)
+    cfg = info.config
+    model = load_model(info, checkpoint=checkpoint)
+    obs_space, act_space = model.observation_space, model.action_space
+    if len(obs_space.shape) != 1 or len(act_space.shape) != 1:
+        raise ExportError("only flat Box observation and action spaces can be exported")
+    obs_stats = info.obs_stats()
+    module = _policy_module(model, cfg.algo, obs_stats, act_space)
+
+    onnx_path = Path(onnx_path)
+    onnx_path.parent.mkdir(parents=True, exist_ok=True)
+    dummy = torch.zeros((1, obs_space.shape[0]), dtype=torch.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        torch.onnx.export(
+            module,
+            (dummy,),
+            str(onnx_path),
+            input_names=[INPUT_NAME],
+            output_names=[OUTPUT_NAME],
+            dynamic_axes={INPUT_NAME: {0: "batch"}, OUTPUT_NAME: {0: "batch"}},
+            opset_version=opset,
+            dynamo=False,
+        )
+
+    # ---- verify against the SB3 policy
+    obs = _sample_observations(info, model, obs_space, n_random, seed)
+    normalizer = info.obs_normalizer()
+    expected, _ = model.predict(
+        normalizer(obs) if normalizer is not None else obs, deterministic=True
+    )
+    session = ort.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
+    got = session.run([OUTPUT_NAME], {INPUT_NAME: obs.astype(np.float32)})[0]
+    max_diff = float(np.max(np.abs(got - expected)))
+    if not max_diff <= atol:
+        raise ExportError(
+            f"ONNX actions differ from the SB3 policy by up to {max_diff:.3g} (> {atol:g}) on "
+            f"{len(obs)} sample observations; the export is not faithful"
+        )
+
+    meta: dict[str, Any] = {
+        "format": FORMAT,
+        "task": cfg.task,
+        "env_id": cfg.env_id,
+        "backend": cfg.backend,
+        "env_kwargs": cfg.env_kwargs,
+        "algo": cfg.algo,
+        "run": str(info.path),
+        "model": str(checkpoint or info.model_path),
+        "timesteps_trained": int(model.num_timesteps),
+        "input": {
+            "name": INPUT_NAME,
+            "shape": ["batch", int(obs_space.shape[0])],
+            "dtype": "float32",
+            "low": np.asarray(obs_space.low, float).tolist(),
+            "high": np.asarray(obs_space.high, float).tolist(),
+        },
+        "output": {
+            "name": OUTPUT_NAME,
+            "shape": ["batch", int(act_space.shape[0])],
+            "dtype": "float32",
+            "low": np.asarray(act_space.low, float).tolist(),
+            "high": np.asarray(act_space.high, float).tolist(),
+        },
+        "obs_normalization_in_graph": obs_stats is not None,
+        "verification": {"samples": len(obs), "max_abs_diff": max_diff, "atol": atol},
+        **_env_description(info),
+    }
+    model_proto = onnx.load(str(onnx_path))
+    entry = model_proto.metadata_props.add()
+    entry.key = METADATA_KEY
+    entry.value = json.dumps(meta)
+    model_proto.producer_name = "robocup-gym"
+    onnx.save(model_proto, str(onnx_path))
+    onnx_path.with_suffix(".json").write_text(_compact_json(meta) + "\n")
+    return meta
+
+
+def _compact_json(data: Any) -> str:
+    """Indented JSON with lists of numbers/strings kept on one line."""
+    text = json.dumps(data, indent=2)
+    return re.sub(
+        r"\[\s+([^\[\]{}]*?)\s+\]", lambda m: "[" + " ".join(m.group(1).split()) + "]", text
+    )
+
+
+def read_metadata(onnx_path: str | os.PathLike) -> dict[str, Any]:
+    """The ``robocup_gym`` metadata of an exported policy (from the ONNX file itself)."""
+    import onnx
+
+    proto = onnx.load(str(onnx_path), load_external_data=False)
+    for p in proto.metadata_props:
+        if p.key == METADATA_KEY:
+            return json.loads(p.value)
+    sidecar = Path(onnx_path).with_suffix(".json")
+    if sidecar.exists():
+        return json.loads(sidecar.read_text())
+    raise ValueError(f"{onnx_path} carries no robocup_gym metadata (not exported by robocup-gym?)")
+
+
+class OnnxPolicy:
+    """An exported policy: ``policy(obs) → action`` with ONNX Runtime (no torch needed)."""
+
+    def __init__(self, onnx_path: str | os.PathLike) -> None:
+        import onnxruntime as ort
+
+        self.path = Path(onnx_path)
+        self.session = ort.InferenceSession(str(self.path), providers=["CPUExecutionProvider"])
+        self.metadata = read_metadata(self.path)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        x = np.asarray(obs, dtype=np.float32)
+        single = x.ndim == 1
+        if single:
+            x = x[None]
+        y = self.session.run([OUTPUT_NAME], {INPUT_NAME: x})[0]
+        return y[0] if single else y

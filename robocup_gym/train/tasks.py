@@ -1,0 +1,98 @@
+"""Task names of the CLI and how they map to Gymnasium ids and environments.
+
+``import robocup_gym.envs`` registers the tasks as ``RobocupGym/<Name>-v<N>``; the CLI names are
+their kebab-case forms (``RobocupGym/VelocityKick-v0`` → ``velocity-kick``). Any other registered
+Gymnasium id (``Pendulum-v1``) is accepted as is, which keeps the training code usable for stock
+environments and lets its tests run on a tiny one.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import gymnasium as gym
+
+NAMESPACE = "RobocupGym"
+_VERSION = re.compile(r"-v(\d+)$")
+
+
+def _register_tasks() -> None:
+    """Import the package's environments so that they register (no-op if not importable)."""
+    try:
+        import robocup_gym.envs  # noqa: F401
+    except ImportError as exc:  # the envs package is optional while it is being built
+        if "robocup_gym.envs" not in str(exc) and getattr(exc, "name", "") != "robocup_gym.envs":
+            raise
+
+
+def kebab(name: str) -> str:
+    """``VelocityKick`` → ``velocity-kick``."""
+    s = re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "-", name)
+    return s.replace("_", "-").lower()
+
+
+def registered_tasks() -> dict[str, str]:
+    """CLI task name → Gymnasium id (newest version) of every ``RobocupGym/…`` environment."""
+    _register_tasks()
+    best: dict[str, tuple[int, str]] = {}
+    for env_id in gym.registry:
+        if not env_id.startswith(NAMESPACE + "/"):
+            continue
+        base = env_id.split("/", 1)[1]
+        m = _VERSION.search(base)
+        version = int(m.group(1)) if m else 0
+        name = kebab(_VERSION.sub("", base))
+        if name not in best or version > best[name][0]:
+            best[name] = (version, env_id)
+    return {name: env_id for name, (_, env_id) in sorted(best.items())}
+
+
+def resolve_task(task: str) -> str:
+    """The Gymnasium id for a task name.
+
+    Accepts the CLI name (``velocity-kick``), the class-style name (``VelocityKick``), a full
+    RobocupGym id (``RobocupGym/VelocityKick-v0``) or any registered Gymnasium id.
+
+    Raises:
+        ValueError: for an unknown name, listing the known tasks.
+    """
+    tasks = registered_tasks()
+    key = kebab(_VERSION.sub("", task.split("/", 1)[-1]))
+    if task in gym.registry:
+        return task
+    if key in tasks:
+        return tasks[key]
+    known = ", ".join(tasks) or "(none registered: robocup_gym.envs did not register any task)"
+    raise ValueError(
+        f"unknown task {task!r}; known tasks: {known} (or any registered Gymnasium id)"
+    )
+
+
+def is_robocup_task(env_id: str) -> bool:
+    return env_id.startswith(NAMESPACE + "/")
+
+
+def task_name(env_id: str) -> str:
+    """Short name of an id for folder names (``RobocupGym/VelocityKick-v0`` → ``velocity-kick``)."""
+    base = env_id.split("/", 1)[-1]
+    return kebab(_VERSION.sub("", base)) if is_robocup_task(env_id) else base.lower()
+
+
+def make_env(
+    env_id: str,
+    *,
+    backend: str = "mujoco",
+    env_kwargs: dict[str, Any] | None = None,
+    render_mode: str | None = None,
+) -> gym.Env:
+    """``gymnasium.make`` with the backend and config passed only to RobocupGym tasks."""
+    kwargs = dict(env_kwargs or {})
+    if is_robocup_task(env_id):
+        _register_tasks()  # subprocess workers start with an empty registry
+        kwargs.setdefault("backend", backend)
+    elif backend != "mujoco":
+        raise ValueError(f"--backend only applies to RobocupGym tasks, not {env_id!r}")
+    if render_mode is not None:
+        kwargs["render_mode"] = render_mode
+    return gym.make(env_id, **kwargs)

@@ -1,0 +1,240 @@
+"""Training with Stable-Baselines3: run folder, live progress, checkpoints, evaluation, resume."""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from robocup_gym.train.config import TrainConfig
+from robocup_gym.train.run import checkpoints, load_run, new_run_dir
+from robocup_gym.train.tasks import make_env, resolve_task, task_name
+
+
+@dataclass
+class TrainResult:
+    run_dir: Path
+    timesteps: int
+    wall_s: float
+    steps_per_s: float
+    interrupted: bool = False
+    recent: dict[str, Any] = field(default_factory=dict)
+    """Running means over the last 100 training episodes."""
+    last_eval: dict[str, Any] | None = None
+
+
+def _previous_wall_s(curve: Path) -> float:
+    """Wall-clock seconds already spent by a resumed run (last row of progress.csv)."""
+    if not curve.exists():
+        return 0.0
+    last = None
+    with curve.open() as f:
+        for row in csv.DictReader(f):
+            last = row
+    try:
+        return float(last["wall_s"]) if last else 0.0
+    except (KeyError, TypeError, ValueError):
+        return 0.0
+
+
+def _console(console):
+    if console is not None:
+        return console
+    from rich.console import Console
+
+    return Console(soft_wrap=True)
+
+
+def prepare_run(
+    config: TrainConfig, out: str | os.PathLike = "runs", run_dir: str | os.PathLike | None = None
+) -> tuple[TrainConfig, Path]:
+    """Resolve the task, create the run folder and write ``config.yaml``."""
+    env_id = resolve_task(config.task)
+    config = config.merged(env_id=env_id)
+    if run_dir is None:
+        path = new_run_dir(out, task_name(env_id), config.algo)
+    else:
+        path = Path(run_dir)
+        path.mkdir(parents=True, exist_ok=True)
+    config.save(path / "config.yaml")
+    return config, path
+
+
+def train(
+    config: TrainConfig | None = None,
+    *,
+    out: str | os.PathLike = "runs",
+    run_dir: str | os.PathLike | None = None,
+    resume: str | os.PathLike | None = None,
+    extra_timesteps: int | None = None,
+    console=None,
+    progress: bool = True,
+    log_every_s: float = 30.0,
+    curve_every: int | None = None,
+) -> TrainResult:
+    """Train a policy; returns where it went and how it did.
+
+    Args:
+        config: What to train (ignored with ``resume``, which reads the run's own config).
+        out: Parent folder of new run folders.
+        run_dir: Use exactly this folder instead of a new timestamped one.
+        resume: A run folder to continue from its newest model/checkpoint up to its configured
+            ``timesteps`` (or ``timesteps`` given in ``extra_timesteps``, as the new total).
+        progress: Show the rich progress bar (or periodic lines when not on a terminal).
+        curve_every: Steps between rows of ``progress.csv`` (default: 1/200 of the run, >= 1000).
+    """
+    console = _console(console)
+    if resume is not None:
+        info = load_run(resume)
+        cfg, path = info.config, info.path
+        if extra_timesteps is not None:
+            cfg = cfg.merged(timesteps=extra_timesteps)
+            cfg.save(path / "config.yaml")
+        start_from = info.latest_model_path()
+    else:
+        cfg, path = prepare_run(config or TrainConfig(), out=out, run_dir=run_dir)
+        start_from = None
+
+    console.print(
+        f"[bold]robocup-gym train[/bold] {cfg.task} ({cfg.env_id}) · {cfg.algo.upper()} · "
+        f"{cfg.n_envs} env{'s' if cfg.n_envs != 1 else ''} · {cfg.timesteps:,} steps · "
+        f"seed {cfg.seed} · backend {cfg.backend}"
+    )
+    console.print(f"run folder: [cyan]{path}[/cyan]" + (" (resuming)" if start_from else ""))
+
+    with console.status(f"starting {cfg.n_envs} environment(s) and the learner…"):
+        import torch
+        from stable_baselines3.common.logger import configure
+        from stable_baselines3.common.utils import set_random_seed
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        from robocup_gym.train.callbacks import (
+            CheckpointCallback,
+            EpisodeStatsCallback,
+            PeriodicEvalCallback,
+            RichProgressCallback,
+            TorchThreadsCallback,
+        )
+        from robocup_gym.train.run import algo_class
+        from robocup_gym.train.vecenv import make_vec_env
+
+        if cfg.torch_threads > 0:
+            torch.set_num_threads(cfg.torch_threads)
+        set_random_seed(cfg.seed)
+        venv = make_vec_env(
+            cfg.env_id,
+            cfg.n_envs,
+            backend=cfg.backend,
+            env_kwargs=cfg.env_kwargs,
+            seed=cfg.seed if start_from is None else cfg.seed + 7919 * (1 + _n_ckpt(path)),
+            kind=cfg.vec_env,
+            start_method=cfg.start_method,
+            n_workers=cfg.n_workers,
+        )
+        if cfg.normalize_obs:
+            vn_path = path / "checkpoints" / "vecnormalize.pkl"
+            if start_from is not None and (path / "vecnormalize.pkl").exists():
+                vn_path = path / "vecnormalize.pkl"
+            if start_from is not None and vn_path.exists():
+                venv = VecNormalize.load(str(vn_path), venv)
+                venv.training = True
+            else:
+                venv = VecNormalize(venv, norm_obs=True, norm_reward=False)
+        cls = algo_class(cfg.algo)
+        if start_from is None:
+            model = cls(
+                "MlpPolicy",
+                venv,
+                seed=cfg.seed,
+                device=cfg.device,
+                verbose=0,
+                **cfg.resolved_algo_kwargs(),
+            )
+        else:
+            model = cls.load(start_from, env=venv, device=cfg.device)
+            rb = path / "checkpoints" / "replay_buffer.pkl"
+            if hasattr(model, "load_replay_buffer") and rb.exists():
+                model.load_replay_buffer(rb)
+        model.set_logger(configure(str(path / "tb"), ["tensorboard"]))
+
+    remaining = cfg.timesteps - int(model.num_timesteps)
+    curve = path / "progress.csv"
+    stats = EpisodeStatsCallback(
+        curve_path=curve,
+        curve_every=curve_every or max(1000, cfg.timesteps // 200),
+        wall_offset_s=_previous_wall_s(curve) if start_from is not None else 0.0,
+    )
+    callbacks: list = [stats]
+    if cfg.torch_threads != 1 and cfg.n_envs > 1 and cfg.vec_env != "dummy":
+        # several threads for the gradient steps only, one while the environments run
+        callbacks.append(TorchThreadsCallback(rollout_threads=1, train_threads=cfg.torch_threads))
+    if progress:
+        callbacks.append(
+            RichProgressCallback(
+                stats,
+                cfg.timesteps,
+                description=cfg.task,
+                console=console,
+                log_every_s=log_every_s,
+            )
+        )
+    if cfg.checkpoint_freq > 0:
+        callbacks.append(
+            CheckpointCallback(path / "checkpoints", cfg.checkpoint_freq, cfg.algo == "sac")
+        )
+    evaluator = None
+    if cfg.eval_freq > 0 and cfg.eval_episodes > 0:
+        evaluator = PeriodicEvalCallback(
+            lambda: make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs),
+            cfg.eval_freq,
+            cfg.eval_episodes,
+            path / "evaluations.jsonl",
+        )
+        callbacks.append(evaluator)
+
+    interrupted = False
+    t0 = time.perf_counter()
+    try:
+        if remaining > 0:
+            model.learn(total_timesteps=remaining, callback=callbacks, reset_num_timesteps=False)
+        else:
+            console.print(f"nothing to do: the run already has {model.num_timesteps:,} steps")
+    except KeyboardInterrupt:
+        interrupted = True
+        console.print("[yellow]interrupted: saving the model…[/yellow]")
+    finally:
+        model.save(path / "model.zip")
+        vn = model.get_vec_normalize_env()
+        if vn is not None:
+            vn.save(str(path / "vecnormalize.pkl"))
+        with contextlib.suppress(Exception):
+            venv.close()
+    wall = time.perf_counter() - t0
+    steps_done = int(model.num_timesteps)
+    result = TrainResult(
+        run_dir=path,
+        timesteps=steps_done,
+        wall_s=wall,
+        steps_per_s=stats.overall_steps_per_s() if remaining > 0 else 0.0,
+        interrupted=interrupted,
+        recent=stats.summary(),
+        last_eval=evaluator.last if evaluator is not None else None,
+    )
+    s = result.recent
+    dx = s.get("ball_dx_mean")
+    console.print(
+        f"[bold green]done[/bold green]: {steps_done:,} steps in {wall:,.0f} s "
+        f"({result.steps_per_s:,.0f} steps/s)"
+        + (f" · recent ball Δx {dx:.2f} m" if dx is not None else "")
+        + (f" · recent reward {s['return_mean']:.2f}" if s.get("return_mean") is not None else "")
+    )
+    console.print(f"model: [cyan]{path / 'model.zip'}[/cyan]  next: robocup-gym eval {path}")
+    return result
+
+
+def _n_ckpt(path: Path) -> int:
+    return len(checkpoints(path))

@@ -1,0 +1,290 @@
+"""Vectorised environments for training.
+
+``n_envs`` environments run in ``n_workers`` subprocesses (default: one per CPU core, at most one
+per environment). With one environment per worker this is SB3's ``SubprocVecEnv``; with several,
+:class:`BatchedSubprocVecEnv` steps a block of environments per worker, so one pipe round trip
+serves many environments (the paper's 16 workers on a 2-core machine would otherwise spend much
+of their time in inter-process traffic and context switches).
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+
+from robocup_gym.train.tasks import make_env
+
+
+class _EnvFactory:
+    """Picklable constructor of one seeded environment (for subprocess workers)."""
+
+    def __init__(
+        self, env_id: str, backend: str, env_kwargs: dict[str, Any], seed: int | None
+    ) -> None:
+        self.env_id = env_id
+        self.backend = backend
+        self.env_kwargs = dict(env_kwargs)
+        self.seed = seed
+
+    def __call__(self) -> gym.Env:
+        env = make_env(self.env_id, backend=self.backend, env_kwargs=self.env_kwargs)
+        if self.seed is not None:
+            env.reset(seed=self.seed)
+            env.action_space.seed(self.seed)
+        return env
+
+
+def env_factories(
+    env_id: str,
+    n_envs: int,
+    *,
+    backend: str = "mujoco",
+    env_kwargs: dict[str, Any] | None = None,
+    seed: int | None = 0,
+) -> list[Callable[[], gym.Env]]:
+    """``n_envs`` constructors, environment ``i`` seeded with ``seed + i``."""
+    return [
+        _EnvFactory(env_id, backend, env_kwargs or {}, None if seed is None else seed + i)
+        for i in range(n_envs)
+    ]
+
+
+def default_start_method() -> str:
+    """``forkserver`` where available (safe with torch threads), else ``spawn``."""
+    methods = mp.get_all_start_methods()
+    return "forkserver" if "forkserver" in methods else "spawn"
+
+
+def make_vec_env(
+    env_id: str,
+    n_envs: int,
+    *,
+    backend: str = "mujoco",
+    env_kwargs: dict[str, Any] | None = None,
+    seed: int | None = 0,
+    kind: str = "auto",
+    start_method: str = "",
+    n_workers: int = 0,
+):
+    """A vectorised environment of the task.
+
+    ``kind``: ``"dummy"`` (all in this process), ``"subproc"`` (worker processes) or ``"auto"``
+    (dummy for one environment, else subprocesses). ``n_workers`` (0 = one per CPU core, capped at
+    ``n_envs``) is the number of worker processes. Every environment is wrapped in SB3's
+    ``Monitor`` (episode return/length for the logs).
+    """
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    factories = env_factories(env_id, n_envs, backend=backend, env_kwargs=env_kwargs, seed=seed)
+    wrapped = [_Monitored(f) for f in factories]
+    if kind == "dummy" or (kind == "auto" and n_envs == 1):
+        return DummyVecEnv(wrapped)
+    workers = resolve_n_workers(n_envs, n_workers)
+    method = start_method or default_start_method()
+    if workers == n_envs:
+        return SubprocVecEnv(wrapped, start_method=method)
+    return BatchedSubprocVecEnv(wrapped, n_workers=workers, start_method=method)
+
+
+def resolve_n_workers(n_envs: int, n_workers: int = 0) -> int:
+    """Worker processes for ``n_envs`` environments (0 = one per available CPU core)."""
+    if n_workers <= 0:
+        try:
+            n_workers = len(os.sched_getaffinity(0))
+        except AttributeError:  # not on Linux
+            n_workers = os.cpu_count() or 1
+    return max(1, min(int(n_workers), n_envs))
+
+
+def _batched_worker(remote, parent_remote, env_fns_wrapper) -> None:
+    """Hosts a block of environments; every command addresses the whole block."""
+    from stable_baselines3.common.env_util import is_wrapped
+    from stable_baselines3.common.vec_env.patch_gym import _patch_env
+
+    parent_remote.close()
+    envs = [_patch_env(fn()) for fn in env_fns_wrapper.var]
+    try:
+        while True:
+            try:
+                cmd, data = remote.recv()
+            except (EOFError, KeyboardInterrupt):
+                break
+            if cmd == "step":
+                results = []
+                for env, action in zip(envs, data, strict=True):
+                    obs, reward, terminated, truncated, info = env.step(action)
+                    done = terminated or truncated
+                    info["TimeLimit.truncated"] = truncated and not terminated
+                    reset_info: dict[str, Any] = {}
+                    if done:
+                        info["terminal_observation"] = obs
+                        obs, reset_info = env.reset()
+                    results.append((obs, reward, done, info, reset_info))
+                remote.send(results)
+            elif cmd == "reset":
+                out = []
+                for env, (seed, options) in zip(envs, data, strict=True):
+                    kw = {"options": options} if options else {}
+                    out.append(env.reset(seed=seed, **kw))
+                remote.send(out)
+            elif cmd == "close":
+                for env in envs:
+                    env.close()
+                remote.close()
+                break
+            elif cmd == "get_spaces":
+                remote.send((envs[0].observation_space, envs[0].action_space))
+            elif cmd == "env_method":
+                i, name, args, kwargs = data
+                remote.send(envs[i].get_wrapper_attr(name)(*args, **kwargs))
+            elif cmd == "get_attr":
+                i, name = data
+                remote.send(envs[i].get_wrapper_attr(name))
+            elif cmd == "has_attr":
+                try:
+                    envs[0].get_wrapper_attr(data)
+                    remote.send(True)
+                except AttributeError:
+                    remote.send(False)
+            elif cmd == "set_attr":
+                i, name, value = data
+                remote.send(setattr(envs[i], name, value))
+            elif cmd == "is_wrapped":
+                i, cls = data
+                remote.send(is_wrapped(envs[i], cls))
+            elif cmd == "render":
+                remote.send(envs[data].render())
+            else:
+                raise NotImplementedError(f"unknown command {cmd!r}")
+    except KeyboardInterrupt:
+        pass
+
+
+def _split(n: int, parts: int) -> list[range]:
+    """``n`` indices in ``parts`` contiguous blocks of near-equal size."""
+    base, extra = divmod(n, parts)
+    out, start = [], 0
+    for p in range(parts):
+        size = base + (1 if p < extra else 0)
+        out.append(range(start, start + size))
+        start += size
+    return out
+
+
+class BatchedSubprocVecEnv(VecEnv):
+    """Like SB3's ``SubprocVecEnv``, but each worker process steps a block of environments.
+
+    Same semantics (auto-reset with ``terminal_observation`` in the info, seeds and options
+    passed on the next reset); environment ``i`` lives in the worker whose block contains ``i``.
+    """
+
+    def __init__(
+        self,
+        env_fns: list[Callable[[], gym.Env]],
+        n_workers: int,
+        start_method: str | None = None,
+    ) -> None:
+        from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper
+
+        self.waiting = False
+        self.closed = False
+        n_envs = len(env_fns)
+        self.blocks = _split(n_envs, max(1, min(n_workers, n_envs)))
+        ctx = mp.get_context(start_method or default_start_method())
+        self.remotes, work_remotes = zip(*[ctx.Pipe() for _ in self.blocks], strict=True)
+        self.processes = []
+        for work_remote, remote, block in zip(work_remotes, self.remotes, self.blocks, strict=True):
+            fns = CloudpickleWrapper([env_fns[i] for i in block])
+            process = ctx.Process(
+                target=_batched_worker, args=(work_remote, remote, fns), daemon=True
+            )
+            process.start()
+            self.processes.append(process)
+            work_remote.close()
+        self._where = [(w, k) for w, block in enumerate(self.blocks) for k in range(len(block))]
+        self.remotes[0].send(("get_spaces", None))
+        observation_space, action_space = self.remotes[0].recv()
+        super().__init__(n_envs, observation_space, action_space)
+
+    def step_async(self, actions: np.ndarray) -> None:
+        for remote, block in zip(self.remotes, self.blocks, strict=True):
+            remote.send(("step", [actions[i] for i in block]))
+        self.waiting = True
+
+    def step_wait(self):
+        results = [r for remote in self.remotes for r in remote.recv()]
+        self.waiting = False
+        obs, rews, dones, infos, self.reset_infos = zip(*results, strict=True)
+        return np.stack(obs), np.stack(rews), np.stack(dones), infos
+
+    def reset(self):
+        for remote, block in zip(self.remotes, self.blocks, strict=True):
+            remote.send(("reset", [(self._seeds[i], self._options[i]) for i in block]))
+        results = [r for remote in self.remotes for r in remote.recv()]
+        obs, self.reset_infos = zip(*results, strict=True)
+        self._reset_seeds()
+        self._reset_options()
+        return np.stack(obs)
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        if self.waiting:
+            for remote in self.remotes:
+                remote.recv()
+        for remote in self.remotes:
+            remote.send(("close", None))
+        for process in self.processes:
+            process.join()
+        for remote in self.remotes:
+            remote.close()
+        self.closed = True
+
+    def _targets(self, indices) -> list[tuple[int, int]]:
+        return [self._where[i] for i in self._get_indices(indices)]
+
+    def _ask(self, cmd: str, targets: list[tuple[int, int]], payload) -> list[Any]:
+        for w, k in targets:
+            self.remotes[w].send((cmd, payload(k)))
+        return [self.remotes[w].recv() for w, _ in targets]
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        return self._ask("render", self._targets(None), lambda k: k)
+
+    def has_attr(self, attr_name: str) -> bool:
+        self.remotes[0].send(("has_attr", attr_name))
+        return bool(self.remotes[0].recv())
+
+    def get_attr(self, attr_name: str, indices=None) -> list[Any]:
+        return self._ask("get_attr", self._targets(indices), lambda k: (k, attr_name))
+
+    def set_attr(self, attr_name: str, value: Any, indices=None) -> None:
+        self._ask("set_attr", self._targets(indices), lambda k: (k, attr_name, value))
+
+    def env_method(self, method_name: str, *method_args, indices=None, **method_kwargs):
+        return self._ask(
+            "env_method",
+            self._targets(indices),
+            lambda k: (k, method_name, method_args, method_kwargs),
+        )
+
+    def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
+        return self._ask("is_wrapped", self._targets(indices), lambda k: (k, wrapper_class))
+
+
+class _Monitored:
+    """Picklable ``Monitor(factory())``."""
+
+    def __init__(self, factory: Callable[[], gym.Env]) -> None:
+        self.factory = factory
+
+    def __call__(self) -> gym.Env:
+        from stable_baselines3.common.monitor import Monitor
+
+        return Monitor(self.factory())

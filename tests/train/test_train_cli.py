@@ -1,0 +1,312 @@
+"""Smoke runs of every robocup-gym command, checking real outputs."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+pytest.importorskip("typer")
+
+from .train_helpers import TINY_PPO, invoke, last_json
+
+
+def test_train_writes_a_complete_run_folder(ppo_run):
+    from stable_baselines3 import PPO
+
+    from robocup_gym.train.config import TrainConfig
+
+    cfg = TrainConfig.load(ppo_run / "config.yaml")
+    assert cfg.env_id == "RobocupGym/VelocityKick-v0" and cfg.n_envs == 2 and cfg.seed == 3
+    assert cfg.resolved_algo_kwargs()["gamma"] == 0.99  # paper defaults kept, overrides merged
+    assert cfg.resolved_algo_kwargs()["n_steps"] == 16
+    assert (ppo_run / "model.zip").exists()
+    ckpts = sorted((ppo_run / "checkpoints").glob("model_*_steps.zip"))
+    assert len(ckpts) >= 2
+    assert list((ppo_run / "tb").glob("events.out.tfevents.*"))
+    rows = (ppo_run / "progress.csv").read_text().splitlines()
+    assert rows[0].startswith("steps,wall_s,episodes,ep_return_mean")
+    assert int(rows[-1].split(",")[0]) >= 1024
+    evals = [json.loads(x) for x in (ppo_run / "evaluations.jsonl").read_text().splitlines()]
+    assert evals and evals[0]["episodes"] == 5 and evals[0]["ball_dx_mean"] is not None
+    # a checkpoint loads and acts
+    model = PPO.load(ckpts[0], device="cpu")
+    obs = np.zeros(model.observation_space.shape, dtype=np.float32)
+    action, _ = model.predict(obs, deterministic=True)
+    assert action.shape == model.action_space.shape
+
+
+def test_eval_prints_json_last(ppo_run):
+    result = invoke(["eval", ppo_run, "--episodes", 2])
+    summary = last_json(result.stdout)
+    for key in (
+        "ball_dx_mean",
+        "ball_dx_std",
+        "ball_distance_mean",
+        "fall_rate",
+        "return_mean",
+        "episodes",
+    ):
+        assert key in summary
+    assert summary["episodes"] == 2 and summary["deterministic"] is True
+    assert isinstance(summary["ball_dx_mean"], float)
+    assert "ball x-displacement" in result.stdout  # the table
+    assert json.loads((ppo_run / "eval.json").read_text())["episodes"] == 2
+
+
+def test_export_matches_policy_and_drives_a_robot(ppo_run, tmp_path):
+    import onnxruntime as ort
+    from stable_baselines3 import PPO
+
+    onnx_path = tmp_path / "kick.onnx"
+    result = invoke(["export", ppo_run, "--onnx", onnx_path])
+    out = last_json(result.stdout)
+    assert out["verification"]["max_abs_diff"] <= 1e-5
+    # independent check on fresh observations
+    model = PPO.load(ppo_run / "model.zip", device="cpu")
+    rng = np.random.default_rng(5)
+    obs = rng.uniform(-1, 1, (64, *model.observation_space.shape)).astype(np.float32)
+    sess = ort.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
+    got = sess.run(["action"], {"obs": obs})[0]
+    expected, _ = model.predict(obs, deterministic=True)
+    np.testing.assert_allclose(got, expected, atol=1e-5, rtol=0)
+    meta = json.loads(onnx_path.with_suffix(".json").read_text())
+    assert meta["env_id"] == "RobocupGym/VelocityKick-v0"
+    assert len(meta["observation_labels"]) == model.observation_space.shape[0]
+
+    # the runner drives a robot over the rcssserver3d protocol (embedded server in a thread)
+    from robocup_gym.server import SimServer
+    from robocup_gym.train.agent import run_onnx_agent
+
+    server = SimServer(
+        agent_port=0,
+        monitor_port=0,
+        host="127.0.0.1",
+        sync=True,
+        real_time=False,
+        ground_truth=True,
+        vision_noise=False,
+    )
+    agent_port, monitor_port = server.start_in_thread()
+    try:
+        reports = run_onnx_agent(
+            str(onnx_path), port=agent_port, monitor_port=monitor_port, episodes=2
+        )
+    finally:
+        server.stop()
+    assert len(reports) == 2
+    for rep in reports:
+        assert 1 <= rep.steps <= 40
+        assert rep.ball_displacement is not None and len(rep.ball_displacement) == 3
+    # same start state every episode → the (deterministic) policy behaves the same
+    assert reports[0].steps == reports[1].steps
+
+
+def test_resume_continues_the_run(ppo_run, tmp_path):
+    import shutil
+
+    from stable_baselines3 import PPO
+
+    run = tmp_path / "copy"
+    shutil.copytree(ppo_run, run)
+    invoke(["train", "--resume", run, "--timesteps", 1536, "--no-progress"])
+    assert PPO.load(run / "model.zip", device="cpu").num_timesteps >= 1536
+    steps = [int(r.split(",")[0]) for r in (run / "progress.csv").read_text().splitlines()[1:]]
+    assert steps == sorted(steps) and steps[-1] >= 1536
+
+
+def test_sac_train_and_export(tmp_path):
+    out = tmp_path / "runs"
+    invoke(
+        [
+            "train",
+            "velocity-kick",
+            "--algo",
+            "sac",
+            "--n-envs",
+            1,
+            "--timesteps",
+            300,
+            "--out",
+            out,
+            "--checkpoint-freq",
+            0,
+            "--eval-freq",
+            0,
+            "--hp",
+            "learning_starts=100",
+            "--hp",
+            "batch_size=32",
+            "--hp",
+            "policy_kwargs={net_arch: [32, 32]}",
+        ]
+    )
+    (run,) = list(out.iterdir())
+    result = invoke(["export", run, "--onnx", tmp_path / "sac.onnx"])
+    assert last_json(result.stdout)["verification"]["max_abs_diff"] <= 1e-5
+
+
+def _gl_available() -> bool:
+    code = "import mujoco; r = mujoco.Renderer(mujoco.MjModel.from_xml_string('<mujoco/>'), 8, 8)"
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    try:
+        return (
+            subprocess.run(
+                [sys.executable, "-c", code], env=env, capture_output=True, timeout=60
+            ).returncode
+            == 0
+        )
+    except subprocess.TimeoutExpired:
+        return False
+
+
+def test_eval_video(ppo_run, tmp_path):
+    if not _gl_available():
+        pytest.skip("no OpenGL for MuJoCo's offscreen renderer here (set MUJOCO_GL=egl/osmesa)")
+    video = tmp_path / "kick.mp4"
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "robocup_gym.cli",
+            "eval",
+            str(ppo_run),
+            "--episodes",
+            "1",
+            "--video",
+            str(video),
+        ],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert last_json(proc.stdout)["video"] == str(video)
+    import imageio.v2 as imageio
+
+    frames = list(imageio.get_reader(str(video), format="FFMPEG").iter_data())
+    assert len(frames) >= 10 and frames[0].ndim == 3 and frames[0].std() > 1  # not blank
+
+
+def test_experiments_writes_csv_and_plots(tmp_path):
+    from rich.console import Console
+
+    from robocup_gym.train.experiments import Scale, run_paper
+
+    tiny = Scale(
+        timesteps=256,
+        task_timesteps=256,
+        algo_envs=(1,),
+        task_envs=1,
+        worker_counts=(1, 2),
+        worker_timesteps=128,
+        seeds=1,
+        eval_episodes=1,
+        checkpoints=1,
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import robocup_gym.train.experiments as ex
+
+        orig = ex._base
+
+        def tiny_base(scale, **kw):  # tests only: small PPO/SAC networks and rollouts
+            cfg = orig(scale, **kw)
+            hp = (
+                {"n_steps": 64, "batch_size": 64, "n_epochs": 1}
+                if cfg.algo == "ppo"
+                else {"learning_starts": 64, "batch_size": 32}
+            )
+            return cfg.merged(algo_kwargs={**hp, "policy_kwargs": {"net_arch": [16]}})
+
+        ex._base = tiny_base
+        try:
+            summary = run_paper(tiny, tmp_path, console=Console(quiet=True))
+        finally:
+            ex._base = orig
+    for fig in ("algos", "tasks", "workers"):
+        assert (tmp_path / f"fig_{fig}.png").stat().st_size > 1000
+        assert (tmp_path / f"fig_{fig}.csv").read_text().count("\n") >= 2
+    assert set(summary["figures"]["algos"]["final"]) == {"PPO, 1 workers", "SAC, 1 workers"}
+    assert set(summary["figures"]["workers"]["final"]) == {1, 2}
+    # a second call reuses the finished runs
+    again = run_paper(tiny, tmp_path, only=["workers"], console=Console(quiet=True))
+    assert again["figures"]["workers"]["final"].keys() == {1, 2}
+
+
+def test_serve_is_wired_lazily(monkeypatch):
+    import robocup_gym.server as server_pkg
+
+    seen = {}
+    monkeypatch.setattr(server_pkg, "serve", lambda **kw: seen.update(kw))
+    invoke(
+        [
+            "serve",
+            "--agent-port",
+            3111,
+            "--monitor-port",
+            3211,
+            "--host",
+            "127.0.0.1",
+            "--sync",
+            "--no-real-time",
+        ]
+    )
+    assert seen == {
+        "agent_port": 3111,
+        "monitor_port": 3211,
+        "host": "127.0.0.1",
+        "sync": True,
+        "real_time": False,
+    }
+
+
+def test_serve_missing_module_is_a_clear_error(monkeypatch):
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    monkeypatch.setitem(sys.modules, "robocup_gym.server", None)
+    result = CliRunner().invoke(app, ["serve"])
+    assert result.exit_code == 1
+    assert "server is not available" in result.output
+
+
+def test_unknown_task_is_a_clear_error(tmp_path):
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    result = CliRunner().invoke(app, ["train", "penalty-kick", "--out", str(tmp_path)])
+    assert result.exit_code == 1
+    assert "unknown task" in result.output and "velocity-kick" in result.output
+
+
+def test_tiny_ppo_flags_are_valid():
+    assert TINY_PPO.count("--hp") == 4
+
+
+def test_normalized_observations_are_folded_into_the_onnx_graph(tmp_path):
+    cfg = tmp_path / "norm.yaml"
+    cfg.write_text(
+        "task: velocity-kick\nn_envs: 1\ntimesteps: 256\nnormalize_obs: true\n"
+        "checkpoint_freq: 0\neval_freq: 0\n"
+        "algo_kwargs: {n_steps: 64, batch_size: 64, n_epochs: 1, "
+        "policy_kwargs: {net_arch: [16]}}\n"
+    )
+    out = tmp_path / "runs"
+    invoke(["train", "--config", cfg, "--out", out, "--no-progress"])
+    (run,) = list(out.iterdir())
+    assert (run / "vecnormalize.pkl").exists()
+    meta = last_json(invoke(["export", run, "--onnx", tmp_path / "n.onnx"]).stdout)
+    assert meta["verification"]["max_abs_diff"] <= 1e-5
+    summary = last_json(invoke(["eval", run, "--episodes", 1]).stdout)
+    assert summary["episodes"] == 1

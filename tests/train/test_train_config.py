@@ -1,0 +1,74 @@
+"""TrainConfig: paper defaults, YAML files, overrides; task names."""
+
+from __future__ import annotations
+
+import pytest
+
+from robocup_gym.train.config import TrainConfig, algo_defaults
+from robocup_gym.train.tasks import kebab, registered_tasks, resolve_task, task_name
+
+
+def test_ppo_defaults_are_the_papers():
+    hp = TrainConfig().resolved_algo_kwargs()
+    assert hp["gamma"] == 0.99
+    assert hp["gae_lambda"] == 0.95
+    assert hp["n_steps"] == 64
+    assert hp["n_epochs"] == 10
+    assert hp["clip_range"] == 0.2
+    assert hp["learning_rate"] == 1e-4
+    assert hp["ent_coef"] == 0.0
+    assert TrainConfig().normalize_obs is False  # observation clipping happens in the env
+
+
+def test_sac_defaults_are_sb3s():
+    assert algo_defaults("sac") == {}
+    assert TrainConfig(algo="sac").resolved_algo_kwargs() == {}
+
+
+def test_yaml_round_trip_and_merge(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text(
+        "algo: ppo\nn_envs: 4\nalgo_kwargs: {learning_rate: 3.0e-4, "
+        "policy_kwargs: {net_arch: [8]}}\nenv_kwargs: {wait_steps: 5}\n"
+    )
+    cfg = TrainConfig.load(path)
+    hp = cfg.resolved_algo_kwargs()
+    assert hp["learning_rate"] == 3e-4 and hp["n_steps"] == 64
+    assert hp["policy_kwargs"]["net_arch"] == [8]
+    assert cfg.env_kwargs == {"wait_steps": 5}
+    cfg.save(tmp_path / "saved.yaml")
+    again = TrainConfig.load(tmp_path / "saved.yaml")
+    assert again.resolved_algo_kwargs() == hp
+    assert cfg.merged(n_envs=None, seed=7).n_envs == 4
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"algo": "dqn"}, "unknown algorithm"),
+        ({"n_envs": 0}, "n_envs"),
+        ({"backend": "gazebo"}, "unknown backend"),
+    ],
+)
+def test_invalid_config(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        TrainConfig(**kwargs)
+
+
+def test_unknown_config_key(tmp_path):
+    (tmp_path / "c.yaml").write_text("n_env: 3\n")
+    with pytest.raises(ValueError, match="unknown config key"):
+        TrainConfig.load(tmp_path / "c.yaml")
+
+
+def test_task_names():
+    tasks = registered_tasks()
+    assert tasks["velocity-kick"] == "RobocupGym/VelocityKick-v0"
+    assert tasks["simple-kick"] == "RobocupGym/SimpleKick-v0"
+    assert resolve_task("VelocityKick") == "RobocupGym/VelocityKick-v0"
+    assert resolve_task("RobocupGym/SimpleKick-v0") == "RobocupGym/SimpleKick-v0"
+    assert resolve_task("Pendulum-v1") == "Pendulum-v1"
+    assert kebab("VelocityKick") == "velocity-kick"
+    assert task_name("RobocupGym/VelocityKick-v0") == "velocity-kick"
+    with pytest.raises(ValueError, match="known tasks: simple-kick, velocity-kick"):
+        resolve_task("penalty-kick")

@@ -1,0 +1,41 @@
+"""The batched subprocess vector env steps exactly like SB3's DummyVecEnv."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+
+from robocup_gym.train.vecenv import BatchedSubprocVecEnv, _split, make_vec_env
+
+
+def test_split_blocks():
+    assert [list(b) for b in _split(5, 2)] == [[0, 1, 2], [3, 4]]
+    assert [len(b) for b in _split(16, 3)] == [6, 5, 5]
+
+
+def test_batched_matches_dummy():
+    kw = {"env_kwargs": {"max_episode_steps": 5, "wait_steps": 2}, "seed": 11}
+    batched = make_vec_env("RobocupGym/VelocityKick-v0", 3, n_workers=2, **kw)
+    dummy = make_vec_env("RobocupGym/VelocityKick-v0", 3, kind="dummy", **kw)
+    try:
+        assert isinstance(batched, BatchedSubprocVecEnv)
+        rng = np.random.default_rng(0)
+        np.testing.assert_allclose(batched.reset(), dummy.reset(), atol=1e-6)
+        for _ in range(12):  # crosses episode ends (auto-reset)
+            a = rng.uniform(-0.3, 0.3, (3, *batched.action_space.shape)).astype(np.float32)
+            ob, rb, db, ib = batched.step(a)
+            od, rd, dd, idd = dummy.step(a)
+            np.testing.assert_allclose(ob, od, atol=1e-6)
+            np.testing.assert_allclose(rb, rd, atol=1e-9)
+            assert (db == dd).all()
+            for x, y in zip(ib, idd, strict=True):
+                assert ("terminal_observation" in x) == ("terminal_observation" in y)
+        assert batched.get_attr("spec")[2].id == "RobocupGym/VelocityKick-v0"
+        assert batched.env_method("get_wrapper_attr", "episode_step", indices=[1]) == [
+            dummy.env_method("get_wrapper_attr", "episode_step", indices=[1])[0]
+        ]
+    finally:
+        batched.close()
+        dummy.close()
