@@ -15,8 +15,6 @@ from pathlib import Path
 
 import pytest
 
-from robocup_gym.server import SimServer
-
 HERE = Path(__file__).resolve().parent
 HOST = "127.0.0.1"
 
@@ -25,26 +23,6 @@ HOST = "127.0.0.1"
 def _quiet_logs(caplog):
     caplog.set_level(logging.WARNING, logger="robocup_gym.server")
     yield
-
-
-@pytest.fixture
-def make_server():
-    """``make_server(**options)`` → a started :class:`SimServer` (sync mode, real time off) on
-    free loopback ports; stopped after the test, even on failure."""
-    servers: list[SimServer] = []
-
-    def factory(**options) -> SimServer:
-        opts = {"sync": True, "real_time": False, "seed": 1}
-        opts.update(options)
-        server = SimServer(0, 0, HOST, **opts)
-        servers.append(server)
-        server.start_in_thread()
-        return server
-
-    yield factory
-    for server in servers:
-        server.stop()
-        assert server.stopped, "server thread did not stop"
 
 
 @pytest.fixture
