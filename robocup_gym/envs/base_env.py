@@ -650,9 +650,10 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
     def _w_ball_vision(self, out: np.ndarray) -> None:
         out[:] = self._vision_ball
 
-    def _w_foot_force(self, out: np.ndarray) -> None:
+    def _write_force_pair(self, out: np.ndarray, left: str, right: str) -> None:
+        """Point and force of two FRP sensors into ``out`` (12 values; zeros = no contact)."""
         fs = self.perception.force_sensors
-        for k, name in ((0, "lf"), (6, "rf")):
+        for k, name in ((0, left), (6, right)):
             fr = fs.get(name)
             if fr is None:
                 out[k : k + 6] = 0.0
@@ -660,15 +661,11 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                 out[k : k + 3] = fr.point
                 out[k + 3 : k + 6] = fr.force
 
+    def _w_foot_force(self, out: np.ndarray) -> None:
+        self._write_force_pair(out, "lf", "rf")
+
     def _w_toe_force(self, out: np.ndarray) -> None:
-        fs = self.perception.force_sensors
-        for k, name in ((0, "lf1"), (6, "rf1")):
-            fr = fs.get(name)
-            if fr is None:
-                out[k : k + 6] = 0.0
-            else:
-                out[k : k + 3] = fr.point
-                out[k + 3 : k + 6] = fr.force
+        self._write_force_pair(out, "lf1", "rf1")
 
     def _w_accel(self, out: np.ndarray) -> None:
         out[:] = self.perception.accel

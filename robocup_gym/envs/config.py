@@ -355,15 +355,6 @@ class EnvConfig:
         return out
 
 
-def _name_index(model: NaoModel) -> dict[str, int]:
-    idx: dict[str, int] = {}
-    for i, j in enumerate(model.joints):
-        idx[j.effector] = i
-        idx[j.perceptor] = i
-        idx[j.nao_name] = i
-    return idx
-
-
 def resolve_joints(model: NaoModel, names: Sequence[str], what: str) -> np.ndarray:
     """Canonical indices of joints given by effector (``rle3``), perceptor (``rlj3``) or Nao
     (``RHipPitch``) name.
@@ -371,7 +362,7 @@ def resolve_joints(model: NaoModel, names: Sequence[str], what: str) -> np.ndarr
     Raises:
         EnvConfigError: unknown or repeated name (lists the valid names for this robot type).
     """
-    idx = _name_index(model)
+    idx = model.joint_index
     out = []
     for n in names:
         if n not in idx:
@@ -399,7 +390,7 @@ def resolve_angles(
         return out
     if not isinstance(angles, Mapping):
         raise EnvConfigError(f"{what} must map joint names to degrees, got {type(angles).__name__}")
-    idx = _name_index(model)
+    idx = model.joint_index
     for n, v in angles.items():
         if n not in idx:
             raise EnvConfigError(

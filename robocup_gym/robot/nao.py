@@ -127,6 +127,16 @@ class NaoModel:
         """Joint limits in canonical order, shape (n, 2), degrees."""
         return np.array([(j.min_deg, j.max_deg) for j in self.joints])
 
+    @cached_property
+    def joint_index(self) -> dict[str, int]:
+        """Canonical index of every joint by effector, perceptor and Nao-style name."""
+        idx: dict[str, int] = {}
+        for i, j in enumerate(self.joints):
+            idx[j.effector] = i
+            idx[j.perceptor] = i
+            idx[j.nao_name] = i
+        return idx
+
     def body(self, name: str) -> Body:
         """The body called ``name``.
 
@@ -144,9 +154,9 @@ class NaoModel:
         Raises:
             KeyError: listing the valid effector names.
         """
-        for j in self.joints:
-            if name in (j.effector, j.perceptor):
-                return j
+        i = self.joint_index.get(name)
+        if i is not None:
+            return self.joints[i]
         raise KeyError(
             f"unknown joint {name!r}; valid effector names: {', '.join(self.effector_names)}"
         )

@@ -122,7 +122,6 @@ def see(
     rng: np.random.Generator,
     config: VisionConfig,
     mirror: bool = False,
-    torso_heading_deg: float | None = None,
 ) -> Vision:
     """Build one ``See`` percept.
 
@@ -136,7 +135,6 @@ def see(
         rng: Noise source.
         config: Vision settings.
         mirror: True for a right-team observer (ground-truth extensions are team-mirrored).
-        torso_heading_deg: unused, kept for API symmetry.
     """
     half = float(int(config.view_cone_deg) // 2)
     cal = calibration if config.noise else np.zeros(3)

@@ -193,11 +193,6 @@ class World:
             m.body_rootid[self._drag_bodies] if len(drag_bodies) else np.zeros(0, int)
         )
         self._xfrc = np.zeros((len(self._drag_bodies), 6))
-        self._motor_dofs = (
-            np.concatenate([r.qvel_motors for r in self.robots])
-            if self.robots
-            else np.zeros(0, int)
-        )
         self._gravity = np.array([0.0, 0.0, -phys.GRAVITY])
         self.seed = seed
         self.rng = np.random.default_rng(seed)
@@ -457,13 +452,8 @@ class World:
         return out
 
     def _joint_index(self, r: RobotState, name: str) -> int:
-        idx = r.model.__dict__.setdefault("_name_index", {})
-        if not idx:
-            for i, j in enumerate(r.model.joints):
-                idx[j.effector] = i
-                idx[j.perceptor] = i
         try:
-            return idx[name]
+            return r.model.joint_index[name]
         except KeyError:
             raise KeyError(
                 f"unknown joint {name!r} for robot type {r.model.robot_type.index}; valid effector "
@@ -540,8 +530,7 @@ class World:
         Returns whether the beam was applied."""
         if self.game.play_mode not in ("BeforeKickOff", "Goal_Left", "Goal_Right"):
             return False
-        vals = (x, y, rot_deg)
-        if not all(math.isfinite(float(v)) for v in vals):
+        if not all(math.isfinite(float(v)) for v in (x, y, rot_deg)):
             return False
         r = self.robot(index)
         if self.vision_config.noise:
