@@ -9,13 +9,12 @@ Prints one line per measurement and, as its LAST line, one JSON object:
 
 * ``world_cycles_per_s``: :meth:`World.step` (one robot + ball, random joint velocities on all
   joints, robot re-placed upright every 60 cycles), one core, in-process;
-* ``raw_cycles_per_s``: the same model and substeps stepped with bare
-  ``mujoco.mj_step(model, data, nstep=world.substeps)``, no Python work in between (from the
-  placed robot, motor velocities set once per 60-cycle chunk, so its motion is tamer than the
-  world's: this is a ceiling, not the same workload);
-* ``raw_same_states_cycles_per_s``: bare ``mj_step`` timed on exactly the states the world
-  stepped through (recorded, then replayed one ``mj_step`` at a time) — the same workload, so
-  ``world_vs_raw_same_states`` is the cost of the world's Python work;
+* ``raw_cycles_per_s``: MuJoCo alone on the same model, timed on exactly the states the world
+  stepped through (recorded, then replayed): ``mj_step1``, the motor rows' reference shift (one
+  in-place add: the only Python the motor model needs) and ``mj_step2`` per MuJoCo step, nothing
+  else — the same workload, so ``world_vs_raw`` is the cost of the world's Python work;
+* ``bare_mj_step_cycles_per_s``: plain ``mujoco.mj_step`` from the same states (without the
+  shift the motors hold their joints, so the solve differs slightly; for reference);
 * ``env_steps_per_s``: ``VelocityKick`` with random actions, counting every simulated cycle (the
   wait steps after each episode included) over the whole time, resets included;
 * ``reset_ms``: mean wall time of ``env.reset()`` (no simulated warm-up cycles);
@@ -77,7 +76,7 @@ def _place(world: World) -> None:
 
 class WorldRunner:
     """World.step with random joint velocities on all joints; the robot is re-placed upright
-    every ``EPISODE_CYCLES`` cycles (not timed). Also times bare mj_step on the same model."""
+    every ``EPISODE_CYCLES`` cycles (not timed)."""
 
     def __init__(self, seed: int = 0) -> None:
         self.world = World([0], seed=seed)
@@ -86,9 +85,7 @@ class WorldRunner:
         self.commands = rng.uniform(-1.0, 1.0, (4096, len(vmax))) * vmax
         self.k = 0
         self.cycles = self.busy = 0.0
-        self.raw_cycles = self.raw_busy = 0.0
         self.diverged = 0
-        self.raw_data = mujoco.MjData(self.world.model)
         _place(self.world)
         self.run(20)  # warm up
         self.cycles = self.busy = 0.0
@@ -119,52 +116,42 @@ class WorldRunner:
             _place(world)
         self.cycles += done
 
-    def run_raw(self, cycles: int) -> None:
-        """Bare MuJoCo: same model (drag damping included) and substeps; motor velocities set
-        once per chunk (not timed), then ``mj_step`` back to back."""
-        world, m, d = self.world, self.world.model, self.raw_data
-        motors = world.robots[0].qvel_motors
-        sub = world.substeps
-        done = 0
-        while done < cycles:
-            n = min(EPISODE_CYCLES, cycles - done)
-            _place(world)
-            d.qpos[:] = world.data.qpos
-            d.qvel[:] = world.data.qvel
-            d.qvel[motors] = self._next()
-            mujoco.mj_forward(m, d)
-            t0 = time.perf_counter()
-            for _ in range(n):
-                mujoco.mj_step(m, d, nstep=sub)
-            self.raw_busy += time.perf_counter() - t0
-            done += n
-            if not np.isfinite(d.qvel).all():
-                mujoco.mj_resetData(m, d)
-        self.raw_cycles += done
-
 
 class _RecordingMujoco:
     """Stands in for the ``mujoco`` module inside :mod:`robocup_gym.sim.world` while recording:
-    captures the complete input of every ``mj_step`` the world makes (untimed)."""
+    captures the complete input of every physics step the world makes (untimed): the state, the
+    model fields the world retunes per cycle, and the motor rows' reference shift."""
 
     SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 
     def __init__(self, states: list) -> None:
         self._states = states
+        self._pending: tuple | None = None
 
     def __getattr__(self, name: str):
         return getattr(mujoco, name)
 
-    def mj_step(self, m, d, nstep=1):
+    def mj_step1(self, m, d):
         buf = np.empty(mujoco.mj_stateSize(m, self.SPEC))
         mujoco.mj_getState(m, d, buf, self.SPEC)
-        self._states.append((buf, m.tendon_frictionloss.copy(), m.pair_solref.copy(), int(nstep)))
-        mujoco.mj_step(m, d, nstep=nstep)
+        self._pending = (buf, m.dof_frictionloss.copy(), m.pair_solref.copy())
+        mujoco.mj_step1(m, d)
+        self._aref = d.efc_aref.copy()
+
+    def mj_step2(self, m, d):
+        shift = d.efc_aref - self._aref
+        n = int(np.flatnonzero(shift)[-1]) + 1 if shift.any() else 0
+        self._states.append((*self._pending, shift[:n].copy()))
+        mujoco.mj_step2(m, d)
 
 
-def replay_cycles_per_s(runner: WorldRunner, cycles: int) -> float:
-    """Bare ``mj_step`` timed on exactly the states (and model settings) the world stepped
-    through: the world's own workload without its Python work around each step."""
+def replay_cycles_per_s(runner: WorldRunner, cycles: int) -> tuple[float, float]:
+    """MuJoCo alone, timed on exactly the states (and model settings) the world stepped through,
+    i.e. the world's own workload without its Python work around each step. Returns
+    ``(raw, bare)``: ``raw`` = ``mj_step1`` + the motor rows' reference shift (one in-place
+    add, the only thing the motor model needs between the two halves) + ``mj_step2``; ``bare``
+    = plain ``mj_step`` from the same states (the motors then hold their joints instead of
+    following the commands, so the solve differs a little)."""
     from robocup_gym.sim import world as world_module
 
     states: list = []
@@ -178,15 +165,26 @@ def replay_cycles_per_s(runner: WorldRunner, cycles: int) -> float:
         world_module.mujoco = saved
     m = copy.deepcopy(runner.world.model)
     d = mujoco.MjData(m)
-    busy = 0.0
-    for buf, frictionloss, solref, nstep in states:
-        mujoco.mj_setState(m, d, buf, _RecordingMujoco.SPEC)
-        m.tendon_frictionloss[:] = frictionloss
+    sub = runner.world.substeps
+    raw = bare = 0.0
+    for buf, frictionloss, solref, shift in states:
+        m.dof_frictionloss[:] = frictionloss
         m.pair_solref[:] = solref
+        mujoco.mj_setState(m, d, buf, _RecordingMujoco.SPEC)
+        n = len(shift)
         t0 = time.perf_counter()
-        mujoco.mj_step(m, d, nstep=nstep)
-        busy += time.perf_counter() - t0
-    return len(states) / busy
+        mujoco.mj_step1(m, d)
+        d.efc_aref[:n] += shift
+        mujoco.mj_step2(m, d)
+        t1 = time.perf_counter()
+        mujoco.mj_setState(m, d, buf, _RecordingMujoco.SPEC)
+        t2 = time.perf_counter()
+        mujoco.mj_step(m, d)
+        t3 = time.perf_counter()
+        raw += t1 - t0
+        bare += t3 - t2
+    n_cycles = len(states) / sub
+    return n_cycles / raw, n_cycles / bare
 
 
 class EnvRunner:
@@ -279,15 +277,16 @@ def main(argv: list[str] | None = None) -> dict:
     # hit all three alike
     world, env = WorldRunner(), EnvRunner()
     rounds, chunk = (2, 150) if quick else (10, 600)
-    replay = []
+    raw, bare = [], []
     for _ in range(rounds):
         world.run(chunk)
-        world.run_raw(chunk)
-        replay.append(replay_cycles_per_s(world, chunk // 2))
+        r, b = replay_cycles_per_s(world, chunk)
+        raw.append(r)
+        bare.append(b)
         env.run(chunk)
     results["world_cycles_per_s"] = world.cycles / world.busy
-    results["raw_cycles_per_s"] = world.raw_cycles / world.raw_busy
-    results["raw_same_states_cycles_per_s"] = float(np.median(replay))
+    results["raw_cycles_per_s"] = float(np.median(raw))
+    results["bare_mj_step_cycles_per_s"] = float(np.median(bare))
     results["env_steps_per_s"] = env.cycles / env.busy
     results["env_agent_steps_per_s"] = env.steps / env.busy
     results["reset_ms"] = env.reset_ms(20 if quick else 500)
@@ -297,7 +296,7 @@ def main(argv: list[str] | None = None) -> dict:
     env.env.close()
     print(f"world  {results['world_cycles_per_s']:9.0f} cycles/s", file=sys.stderr)
     print(f"raw    {results['raw_cycles_per_s']:9.0f} cycles/s", file=sys.stderr)
-    print(f"replay {results['raw_same_states_cycles_per_s']:9.0f} cycles/s", file=sys.stderr)
+    print(f"bare   {results['bare_mj_step_cycles_per_s']:9.0f} cycles/s", file=sys.stderr)
     print(f"env    {results['env_steps_per_s']:9.0f} cycles/s", file=sys.stderr)
     print(f"reset  {results['reset_ms']:9.3f} ms", file=sys.stderr)
     results["env_steps_per_s_2_workers"] = measure_vector_env(100 if quick else 3000, 2)
@@ -305,9 +304,6 @@ def main(argv: list[str] | None = None) -> dict:
     for name, fn in EXTRA_MEASUREMENTS.items():
         results[name] = fn(quick)
     results["world_vs_raw"] = results["world_cycles_per_s"] / results["raw_cycles_per_s"]
-    results["world_vs_raw_same_states"] = (
-        results["world_cycles_per_s"] / results["raw_same_states_cycles_per_s"]
-    )
     results["env_vs_world"] = results["env_steps_per_s"] / results["world_cycles_per_s"]
     results["scaling_2_workers"] = results["env_steps_per_s_2_workers"] / results["env_steps_per_s"]
     results["loadavg_1min_end"] = os.getloadavg()[0]

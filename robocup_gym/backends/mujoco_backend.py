@@ -59,7 +59,7 @@ class MujocoBackend(Backend):
         self._zero = np.zeros(self._n_joints)
         self._diverged = False
         # model fields the world retunes every cycle, restored at every reset (see reset_episode)
-        self._tendon_frictionloss = self.world.model.tendon_frictionloss.copy()
+        self._dof_frictionloss = self.world.model.dof_frictionloss.copy()
         self._renderer: Any = None
         self._camera: Any = None
 
@@ -87,7 +87,7 @@ class MujocoBackend(Backend):
         # retuning (motors at a joint stop are relaxed in the model), which World.place_robot
         # keeps; the world recomputes both in its next step anyway.
         w.data.qacc_warmstart[:] = 0.0
-        w.model.tendon_frictionloss[:] = self._tendon_frictionloss
+        w.model.dof_frictionloss[:] = self._dof_frictionloss
         angles = pose.joint_angles_deg
         if angles is None:
             angles = self._zero

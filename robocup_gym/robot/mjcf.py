@@ -7,14 +7,11 @@ Nothing here is hand-copied XML: every body, inertia, joint and geom comes from
 How SimSpark's joint motor is modelled
 --------------------------------------
 A SimSpark hinge is driven by an ODE *velocity motor*: a constraint row that makes the joint rate
-equal to the commanded velocity using at most 10 N·m. MuJoCo's velocity actuator is a damper, not a
-constraint: with a force limit it loses its implicit treatment and chatters, and without a very high
-gain it drifts under load. We reproduce the ODE row exactly instead: every joint gets a massive
-auxiliary hinge (``<prefix>motor_<effector>``, armature 1e6) whose velocity is set to the command,
-and a fixed tendon ``joint − aux`` with ``frictionloss = 10``. Friction loss is a force-bounded
-velocity constraint solved by MuJoCo's constraint solver, so the joint moves at exactly the
-commanded velocity whenever ≤ 10 N·m suffices and otherwise accelerates with exactly 10 N·m — the
-ODE motor semantics.
+equal to the commanded velocity using at most 10 N·m. Each hinge here has ``frictionloss = 10``:
+MuJoCo's friction-loss row is exactly such a force-bounded velocity row, with target velocity 0.
+The world (:mod:`robocup_gym.sim.world`) shifts the row's reference acceleration every step so
+that its target is the commanded velocity, which gives the ODE motor semantics: the joint moves at
+the commanded velocity whenever ≤ 10 N·m suffices and otherwise accelerates with exactly 10 N·m.
 """
 
 from __future__ import annotations
@@ -22,10 +19,6 @@ from __future__ import annotations
 import numpy as np
 
 from robocup_gym.robot.nao import Body, NaoModel, nao_model
-
-MOTOR_ARMATURE = 1.0e6
-"""Armature of the auxiliary motor dofs (kg·m²): large enough that 10 N·m moves them < 1e-6 rad/s
-per cycle, so their velocity is the commanded velocity."""
 
 
 def _fmt(v) -> str:
@@ -54,13 +47,11 @@ def robot_xml(
     *,
     rgba: str = "0.85 0.85 0.9 1",
     accent: str = "0.2 0.4 0.9 1",
-) -> tuple[str, str, str]:
-    """MJCF fragments for one Nao whose names all start with ``prefix``.
-
-    Returns ``(bodies, tendons, motors)``: the robot's body tree (torso with a free joint at the
-    origin in the zero pose; the world moves it), the motor tendons, and one body per auxiliary
-    motor dof (MuJoCo allows at most 6 dofs per body). Robot geoms use default class ``robot``;
-    the non-colliding mass-only spheres get a visual-only sphere (group 3).
+) -> str:
+    """MJCF of one Nao whose names all start with ``prefix``: its body tree (torso with a free
+    joint at the origin in the zero pose; the world moves it). Robot geoms use default class
+    ``robot``, joints class ``robot_joint`` (limits and motor rows, set by the scene); the
+    non-colliding mass-only spheres get a visual-only sphere (group 3).
     """
     model = nao_model(type_index)
     children: dict[str | None, list[Body]] = {}
@@ -103,21 +94,7 @@ def robot_xml(
         lines.append(f"{ind}</body>")
         return "\n".join(lines)
 
-    bodies = emit(children[None][0], None, 2)
-    tendons = "\n".join(
-        f'    <fixed name="{prefix}motor_{j.effector}" class="motor">'
-        f'<joint joint="{prefix}{j.effector}" coef="1"/>'
-        f'<joint joint="{prefix}motor_{j.effector}" coef="-1"/></fixed>'
-        for j in model.joints
-    )
-    motors = "\n".join(
-        f'    <body name="{prefix}motor_{j.effector}" pos="0 0 -5">'
-        f'<inertial pos="0 0 0" mass="1e-6" diaginertia="1e-9 1e-9 1e-9"/>'
-        f'<joint name="{prefix}motor_{j.effector}" type="hinge" axis="1 0 0" class="motor_dof"/>'
-        f"</body>"
-        for j in model.joints
-    )
-    return bodies, tendons, motors
+    return emit(children[None][0], None, 2)
 
 
 def self_collision_excludes(prefix: str, model: NaoModel) -> str:

@@ -1,14 +1,15 @@
 """Physics settings of the embedded world and where each number comes from.
 
-SimSpark steps ODE once per 20 ms cycle with the exact big-matrix solver. MuJoCo needs a finer
-timestep for the same contacts, so one 20 ms agent cycle is ``substeps`` MuJoCo steps. Commands,
-drag forces and the accelerometer sample are applied once per cycle, as in SimSpark (spec §7.7).
-``docs/physics.md`` lists every knowing difference from SimSpark and why.
+SimSpark steps ODE once per 20 ms cycle with the exact big-matrix solver (``dWorldStep``). The
+embedded world does the same: **one MuJoCo step of 20 ms per cycle**, every constraint row
+translated from ODE's ERP/CFM formulation to MuJoCo's soft-constraint parameters so that both
+solve the same regularised problem (:func:`ode_solref`, :func:`ode_impedance`). Commands, drag
+forces and the accelerometer sample are applied once per cycle, as in SimSpark (spec §7.7).
+``docs/physics.md`` derives the mapping and lists every knowing difference from SimSpark.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 CYCLE_S = 0.02
@@ -16,8 +17,17 @@ CYCLE_S = 0.02
 GRAVITY = 9.81
 """m/s² (spec §7.1)."""
 SURFACE_LAYER = 0.001
-"""ODE contact surface layer (m): resting bodies sink this deep into the ground (spec §7.1).
-Reproduced by placing the ground's collision plane this far below z = 0."""
+"""ODE contact surface layer (m): resting bodies sink this deep into the ground (spec §7.1)."""
+CONTACT_HEADROOM = 1e-4
+"""How much less than the surface layer the ground's collision plane lies below z = 0, m.
+
+ODE's contact exists as soon as a body touches the real ground (z = 0) and pushes back only
+beyond the 1 mm layer; a MuJoCo contact exists only once the geoms overlap. With the plane 1 mm
+down, a body placed at ODE's resting depth would just touch it, get no contact in its first step
+and fall freely for 20 ms (3.9 mm). 0.9 mm keeps resting heights within 0.1 mm of ODE's and
+gives such a body its contact from the first step."""
+GROUND_PLANE_Z = -(SURFACE_LAYER - CONTACT_HEADROOM)
+"""Height of the ground's collision plane, m."""
 
 BALL_RADIUS = 0.042
 BALL_MASS = 0.026
@@ -37,16 +47,34 @@ BALL_RESTITUTION = 0.8
 BALL_BOUNCE_MIN_SPEED = 0.8
 """Approach speed above which ODE applies the ball's restitution, m/s."""
 
-
-def damping_ratio_for_restitution(e: float) -> float:
-    """Damping ratio ζ of a linear spring-damper contact with coefficient of restitution ``e``."""
-    le = math.log(e)
-    return -le / math.sqrt(math.pi**2 + le * le)
+MAX_IMPEDANCE = 0.9999
+"""MuJoCo's largest constraint impedance (``mjMAXIMP``): the hardest row it allows."""
 
 
-def spring_from_ode(erp: float, cfm: float, h: float = CYCLE_S) -> tuple[float, float]:
-    """ODE (ERP, CFM) at step ``h`` → equivalent (k N/m, c N·s/m) per contact row (spec §7.4)."""
-    return erp / (h * cfm), (1 - erp) / cfm
+def ode_impedance(cfm: float, inv_weight: float, h: float = CYCLE_S) -> float:
+    """MuJoCo impedance ``d`` of a row that is as soft as an ODE row with constraint force mixing
+    ``cfm`` (m/s per N at step ``h``).
+
+    ODE adds ``cfm / h`` to the diagonal of the constraint matrix; MuJoCo adds the regulariser
+    ``R = (1 − d)/d · A`` with ``A`` its approximation of that diagonal (``inv_weight``, 1/kg or
+    1/(kg·m²)). Equal regularisers give ``d = A / (A + cfm/h)``.
+    """
+    r = cfm / h
+    d = inv_weight / (inv_weight + r) if inv_weight > 0 else MAX_IMPEDANCE
+    return min(max(d, 1e-4), MAX_IMPEDANCE)
+
+
+def ode_solref(erp: float, d: float, *, restitution: float = 0.0, h: float = CYCLE_S) -> tuple:
+    """Direct MuJoCo ``solref = (−k, −b)`` of an ODE contact/limit row with error reduction
+    ``erp`` and restitution ``restitution`` solved with impedance ``d``.
+
+    ODE asks the row velocity after the step to be ``−erp·pos/h − e·v`` (``pos`` the signed
+    distance, ``v`` the approach velocity), i.e. a reference acceleration
+    ``a = −(1 + e)/h · v − erp/h² · pos``. MuJoCo's direct form gives
+    ``a = −b/d · v − k/d · pos`` for a row of constant impedance ``d``, hence
+    ``b = (1 + e)·d/h`` and ``k = erp·d/h²``.
+    """
+    return (-erp * d / (h * h), -(1.0 + restitution) * d / h)
 
 
 @dataclass(frozen=True)
@@ -54,26 +82,37 @@ class PhysicsConfig:
     """MuJoCo settings of the embedded world (defaults are the documented choice).
 
     Attributes:
-        timestep: MuJoCo step, s; ``CYCLE_S`` must be a whole multiple of it.
-        iterations: Newton solver iterations per step.
-        robot_friction: Coulomb μ for robot contacts. ODE uses μ = ∞ with force-dependent slip
-            (slip 0.005 m/s per N per row); a Nao cannot push hard enough sideways to slide at
-            μ = 2, so this behaves the same while staying well conditioned.
-        ball_friction: Coulomb μ ball–anything. ODE: μ = ∞ + slip 0.30 → a kicked ball starts to
-            roll within a few ms; μ = 1 converts sliding to rolling within ~0.05 s.
+        timestep: MuJoCo step, s; ``CYCLE_S`` must be a whole multiple of it. Default: one step
+            per cycle, as SimSpark's single ``dWorldStep(0.02)``.
+        solver: MuJoCo solver. ``"Newton"`` solves the regularised problem exactly (as ODE's
+            big-matrix LCP solver does) in a few iterations.
+        iterations, ls_iterations, tolerance: Newton solver limits. A random-flailing robot
+            needs 14 iterations on average and up to ~45; an unconverged solve can diverge, so
+            the cap is well above that (it costs nothing when not reached).
+        motor_impedance: impedance of the velocity-motor rows: ODE's motor row has CFM 1e-8,
+            i.e. MuJoCo's hardest row (0.9999). Softer rows solve faster (0.99: half the
+            iterations) but let the other joints of a chain yield: a knee then reaches only
+            ~70 % of a commanded step in velocity, and the scripted kick changes completely.
+        jacobian: MuJoCo constraint Jacobian layout; sparse is faster here (each motor row has
+            one non-zero).
+        robot_friction: Coulomb μ of robot contacts. ODE uses μ = ∞ with force-dependent slip;
+            the slip is modelled by the friction rows' regulariser (``impratio``), the cone is
+            only there for MuJoCo and wide enough never to bind.
+        ball_friction: Coulomb μ ball–anything (ODE μ = ∞ + slip 0.30, see ``robot_friction``).
+        impratio: MuJoCo's frictional-to-normal regulariser ratio; ``cfm/slip`` of the
+            robot contacts (1e-4 / 0.005) gives ODE's force-dependent slip for them.
     """
 
-    timestep: float = 0.005
-    solver: str = "PGS"
-    """Projected Gauss-Seidel: exact for the force-bounded motor rows. Newton diverged on them
-    as soon as two robots (or one robot and a free ball in one island) were solved together."""
-    iterations: int = 50
-    tolerance: float = 1e-10
-    """Solver tolerance: the stiff motor rows need a converged solve (with MuJoCo's default the
-    solver stops early and the robot creeps and falls)."""
+    timestep: float = CYCLE_S
+    solver: str = "Newton"
+    iterations: int = 100
     ls_iterations: int = 50
-    robot_friction: float = 2.0
-    ball_friction: float = 1.0
+    tolerance: float = 1e-8
+    motor_impedance: float = MAX_IMPEDANCE
+    robot_friction: float = 10.0
+    ball_friction: float = 10.0
+    impratio: float = 0.02
+    jacobian: str = "sparse"
 
     @property
     def substeps(self) -> int:
@@ -83,37 +122,22 @@ class PhysicsConfig:
             raise ValueError(f"timestep {self.timestep} s must divide the 0.02 s cycle")
         return n
 
-    def robot_ground_solref(self) -> str:
-        """Robot–ground: ODE k ≈ 2e5 N/m per row and heavy damping (ERP 0.4, CFM 1e-4) is stiffer
-        than any stable MuJoCo contact at this timestep, so we use the stiffest stable one
-        (time constant 2·timestep), critically damped: no bounce, as in SimSpark."""
-        return f"{2 * self.timestep:.6g} 1"
+    def solref(self, erp: float, d: float, *, restitution: float = 0.0) -> tuple:
+        """:func:`ode_solref` at this config's timestep."""
+        return ode_solref(erp, d, restitution=restitution, h=self.timestep)
 
-    def ball_solref(self, erp: float, cfm: float, *, bouncy: bool = True) -> str:
-        """Direct (negative) solref ``"-k/m -c/m"`` for a ball contact with ODE ``erp``/``cfm``.
-
-        Stiffness per unit ball mass from the ODE spring equivalent. ODE's bounce mode imposes
-        restitution 0.8 when the approach speed exceeds 0.8 m/s and otherwise leaves the
-        (over-damped) ODE spring: ``bouncy=True`` gives the damping of a spring with restitution
-        0.8, ``bouncy=False`` ODE's own damping.
-        """
-        k, c = spring_from_ode(erp, cfm)
-        k_acc = k / BALL_MASS
-        if bouncy:
-            b_acc = 2 * damping_ratio_for_restitution(BALL_RESTITUTION) * math.sqrt(k_acc)
-        else:
-            # ODE's damping is over-critical (ζ ≈ 2); MuJoCo's explicit reference acceleration is
-            # unstable for b·timestep > 2, so it is capped at critical damping (no bounce either).
-            b_acc = min(c / BALL_MASS, 2 * math.sqrt(k_acc))
-        return f"{-k_acc:.6g} {-b_acc:.6g}"
-
-    def ball_solref_values(self, erp: float, cfm: float, *, bouncy: bool) -> tuple[float, float]:
-        """:meth:`ball_solref` as numbers (for switching a contact pair at run time)."""
-        a, b = self.ball_solref(erp, cfm, bouncy=bouncy).split()
-        return float(a), float(b)
+    def impedance(self, cfm: float, inv_weight: float) -> float:
+        """:func:`ode_impedance` at this config's timestep."""
+        return ode_impedance(cfm, inv_weight, h=self.timestep)
 
 
-# ODE mixed contact parameters (spec §7.4).
+# ODE mixed contact parameters (spec §7.4) as (soft ERP, soft CFM).
+ROBOT_GROUND_ERP_CFM = (0.40, 1e-4)
+"""Robot part ↔ ground (robot 0.6 mixed with the ground's 0.2; CFM from the robot side)."""
+ROBOT_SLIP = 0.005
+"""ODE force-dependent slip of robot contacts, m/s per N."""
+JOINT_STOP_ERP_CFM = (0.8, 1e-8)
+"""Hinge stops (spec §2.4)."""
 BALL_GROUND_ERP_CFM = (0.35, 0.05)
 BALL_ROBOT_ERP_CFM = (0.55, 0.02505)
 BALL_WALL_ERP_CFM = (0.50, 0.05)

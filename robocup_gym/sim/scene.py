@@ -8,16 +8,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from robocup_gym.robot.mjcf import MOTOR_ARMATURE, robot_xml, self_collision_excludes
+import mujoco
+
+from robocup_gym.robot.mjcf import robot_xml, self_collision_excludes
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim.field import FIELD_LINES
 from robocup_gym.sim.physics import (
     BALL_GROUND_ERP_CFM,
     BALL_MASS,
     BALL_RADIUS,
+    BALL_RESTITUTION,
     BALL_ROBOT_ERP_CFM,
+    JOINT_STOP_ERP_CFM,
     MOTOR_MAX_TORQUE,
-    SURFACE_LAYER,
+    ROBOT_GROUND_ERP_CFM,
+    GROUND_PLANE_Z,
     PhysicsConfig,
 )
 
@@ -62,14 +67,19 @@ def _goal(side: int) -> list[str]:
 def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> str:
     """The complete MJCF of a world with ``robots`` (may be empty), ball and field."""
     ph = physics or PhysicsConfig()
-    ball_robot = ph.ball_solref(*BALL_ROBOT_ERP_CFM)
-    ball_ground = ph.ball_solref(*BALL_GROUND_ERP_CFM, bouncy=False)
-    bodies, tendons, motors, excludes, pairs = [], [], [], [], []
+    ball_robot = _solref_str(ph, *BALL_ROBOT_ERP_CFM, 1.0 / BALL_MASS, BALL_RESTITUTION)
+    ball_ground = _solref_str(ph, *BALL_GROUND_ERP_CFM, 1.0 / BALL_MASS, 0.0)
+    # robot rows: a first guess of the impedance; apply_ode_softness() sets it per body
+    robot = _solref_str(ph, *ROBOT_GROUND_ERP_CFM, 1.0, 0.0)
+    stop_erp, stop_cfm = JOINT_STOP_ERP_CFM
+    d_stop = ph.impedance(stop_cfm, 1.0)
+    limit_ref = " ".join(f"{v:.6g}" for v in ph.solref(stop_erp, d_stop))
+    dm = ph.motor_impedance
+    bodies, excludes, pairs = [], [], []
     for slot in robots:
-        b, t, m = robot_xml(slot.prefix, slot.type_index, accent=TEAM_COLOURS.get(slot.team, ""))
-        bodies.append(b)
-        tendons.append(t)
-        motors.append(m)
+        bodies.append(
+            robot_xml(slot.prefix, slot.type_index, accent=TEAM_COLOURS.get(slot.team, ""))
+        )
         excludes.append(self_collision_excludes(slot.prefix, nao_model(slot.type_index)))
     walls = [
         _box("wall_left", (-24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
@@ -80,15 +90,17 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
     pairs.append(
         f'    <pair geom1="ball" geom2="ground" condim="3" '
         f'friction="{ph.ball_friction} {ph.ball_friction} 0.005 0.0001 0.0001" '
-        f'solref="{ball_ground}" solimp="0.99 0.99 0.001"/>'
+        f'solref="{ball_ground[0]}" solimp="{ball_ground[1]}"/>'
     )
     return f"""<mujoco model="robocup_gym">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{ph.timestep}" gravity="0 0 -9.81" integrator="Euler"
           solver="{ph.solver}" iterations="{ph.iterations}" ls_iterations="{ph.ls_iterations}"
-          tolerance="{ph.tolerance}"
-          cone="pyramidal"/>
-  <size memory="8M"/>
+          tolerance="{ph.tolerance}" cone="elliptic" impratio="{ph.impratio}"
+          jacobian="{ph.jacobian}">
+    <flag autoreset="disable"/>
+  </option>
+  <size memory="16M"/>
   <visual>
     <global offwidth="1280" offheight="720"/>
     <quality shadowsize="2048"/>
@@ -96,24 +108,19 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
   <default>
     <default class="robot">
       <geom condim="3" friction="{ph.robot_friction} 0.005 0.0001"
-            solref="{ph.robot_ground_solref()}" solimp="0.95 0.99 0.001" group="1"/>
+            solref="{robot[0]}" solimp="{robot[1]}" group="1"/>
     </default>
     <default class="visual">
       <geom contype="0" conaffinity="0" group="3" mass="0"/>
     </default>
     <default class="robot_joint">
-      <joint limited="true" solreflimit="{2 * ph.timestep:.6g} 1" solimplimit="0.95 0.99 0.001"/>
-    </default>
-    <default class="motor_dof">
-      <joint armature="{MOTOR_ARMATURE:.6g}" limited="false"/>
-    </default>
-    <default class="motor">
-      <tendon frictionloss="{MOTOR_MAX_TORQUE}" solreffriction="{2 * ph.timestep:.6g} 1"
-              solimpfriction="0.999 0.9999 0.001"/>
+      <joint limited="true" solreflimit="{limit_ref}" solimplimit="{d_stop:.6g} {d_stop:.6g} 0.001"
+             frictionloss="{MOTOR_MAX_TORQUE}" solreffriction="{2 * ph.timestep:.6g} 1"
+             solimpfriction="{dm:.6g} {dm:.6g} 0.001"/>
     </default>
     <default class="static">
-      <geom condim="3" friction="{ph.robot_friction} 0.005 0.0001"
-            solref="{ph.robot_ground_solref()}" solimp="0.95 0.99 0.001" group="0"/>
+      <geom condim="3" friction="{ph.robot_friction} 0.005 0.0001" solmix="0"
+            solref="{robot[0]}" solimp="{robot[1]}" group="0"/>
     </default>
   </default>
   <asset>
@@ -126,7 +133,7 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
   <worldbody>
     <light pos="-10 10 10" dir="0.5 -0.5 -1" diffuse="0.8 0.8 0.8"/>
     <light pos="10 -10 10" dir="-0.5 0.5 -1" diffuse="0.4 0.4 0.4"/>
-    <geom name="ground" type="plane" pos="0 0 {-SURFACE_LAYER}" size="25 25 0.1"
+    <geom name="ground" type="plane" pos="0 0 {GROUND_PLANE_Z}" size="25 25 0.1"
           material="grass" class="static" contype="4" conaffinity="1"/>
 {chr(10).join(walls)}
 {chr(10).join(_goal(-1) + _goal(1))}
@@ -134,20 +141,41 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
       <freejoint name="ball"/>
       <geom name="ball" type="sphere" size="{BALL_RADIUS}" mass="{BALL_MASS}" priority="1"
             contype="2" conaffinity="1" condim="3" friction="{ph.ball_friction} 0.005 0.0001"
-            solref="{ball_robot}" solimp="0.99 0.99 0.001" rgba="1 0.9 0.9 1"/>
+            solref="{ball_robot[0]}" solimp="{ball_robot[1]}" rgba="1 0.9 0.9 1"/>
     </body>
 {chr(10).join(bodies)}
-{chr(10).join(motors)}
   </worldbody>
-  <tendon>
-{chr(10).join(tendons)}
-  </tendon>
   <contact>
 {chr(10).join(pairs)}
 {chr(10).join(excludes)}
   </contact>
 </mujoco>
 """
+
+
+def _solref_str(
+    ph: PhysicsConfig, erp: float, cfm: float, inv_weight: float, restitution: float
+) -> tuple[str, str]:
+    """(solref, solimp) attribute strings of an ODE row (see :mod:`robocup_gym.sim.physics`)."""
+    d = ph.impedance(cfm, inv_weight)
+    k, b = ph.solref(erp, d, restitution=restitution)
+    return f"{k:.8g} {b:.8g}", f"{d:.8g} {d:.8g} 0.001"
+
+
+def apply_ode_softness(model: mujoco.MjModel, physics: PhysicsConfig) -> None:
+    """Give every robot geom the impedance that makes its ground contacts exactly as soft as
+    ODE's (CFM 1e-4 at that body's inverse weight, ERP 0.4); see :func:`ode_impedance`.
+
+    MuJoCo's regulariser is relative to its approximation of the constraint matrix diagonal, the
+    body's inverse weight, which is known only once the model is compiled."""
+    erp, cfm = ROBOT_GROUND_ERP_CFM
+    robot = model.geom_group == 1
+    for g in range(model.ngeom):
+        if not robot[g]:
+            continue
+        d = physics.impedance(cfm, float(model.body_invweight0[model.geom_bodyid[g], 0]))
+        model.geom_solimp[g, :3] = (d, d, 0.001)
+        model.geom_solref[g] = physics.solref(erp, d)
 
 
 def _field_lines_xml() -> list[str]:

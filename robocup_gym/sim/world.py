@@ -27,10 +27,15 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+try:  # the clip ufunc itself: np.clip's Python wrapper costs more than the clipping here
+    from numpy._core.umath import clip as _clip
+except ImportError:  # numpy < 2
+    from numpy.core.umath import clip as _clip
+
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
-from robocup_gym.sim.scene import RobotSlot, scene_xml
+from robocup_gym.sim.scene import RobotSlot, apply_ode_softness, scene_xml
 from robocup_gym.sim.vision import CALIBRATION_ERROR_M, PLAYER_PARTS, VisionConfig, see
 from robocup_gym.types import (
     AgentCommand,
@@ -46,6 +51,16 @@ PAUSED_MODES = ("BeforeKickOff", "GameOver")
 CREEP_WINDOW_RAD = math.radians(0.5)
 """Largest position error the motor creep compensation corrects (anti-windup), rad."""
 SAY_MAX_CHARS = 20
+_LEVI_CIVITA = np.zeros((3, 3, 3))
+_LEVI_CIVITA[0, 1, 2] = _LEVI_CIVITA[1, 2, 0] = _LEVI_CIVITA[2, 0, 1] = 1.0
+_LEVI_CIVITA[0, 2, 1] = _LEVI_CIVITA[2, 1, 0] = _LEVI_CIVITA[1, 0, 2] = -1.0
+"""ε_ijk: (a × b)_i = ε_ijk a_j b_k, for row-wise cross products with one einsum."""
+DIVERGED_QVEL_SQ = 1e10
+"""Squared norm of the velocity vector above which the world counts as diverged (no Nao or
+ball gets near 1e5 rad/s or m/s)."""
+_DRAG = np.array([-phys.BODY_LINEAR_DRAG] * 3 + [-phys.BODY_ANGULAR_DRAG] * 3)
+"""Drag coefficients per xfrc_applied component (force, torque)."""
+
 _DIVERGENCE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQACC),
     int(mujoco.mjtWarning.mjWARN_BADQVEL),
@@ -75,7 +90,6 @@ class RobotState:
     qvel_root: int = 0
     qpos_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     qvel_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    qvel_motors: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     torso_body: int = 0
     head_body: int = 0
     part_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
@@ -83,7 +97,6 @@ class RobotState:
     foot_bodies: dict[str, int] = field(default_factory=dict)
     robot_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     robot_geoms: frozenset = frozenset()
-    motor_tendons: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     range_rad: tuple = (np.zeros(0), np.zeros(0))
     """(lower, upper) joint limits in rad, canonical order."""
     max_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -91,6 +104,8 @@ class RobotState:
     """Active motor targets, rad/s, canonical order."""
     q_ref: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Integral of the commanded velocities (rad) used for creep compensation."""
+    joint_slice: slice = field(default_factory=lambda: slice(0, 0))
+    """This robot's joints in the world-level joint arrays."""
     pending: list = field(default_factory=list)
     """Commands waiting out the dead time: list of (due_cycle, velocities array or None mask)."""
     accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
@@ -165,6 +180,7 @@ class World:
         slots = [RobotSlot(f"r{i}_", int(t), teams[i]) for i, t in enumerate(robot_types)]
         self.xml = scene_xml(slots, self.physics)
         self.model = mujoco.MjModel.from_xml_string(self.xml)
+        apply_ode_softness(self.model, self.physics)
         self.data = mujoco.MjData(self.model)
         m = self.model
         self._ball_body = m.body("ball").id
@@ -177,7 +193,11 @@ class World:
         # ball-ground contact pair: ODE bounces only above 0.8 m/s approach (switched per cycle)
         self._ball_ground_pair = 0
         self._ball_ground_solref = {
-            b: self.physics.ball_solref_values(*phys.BALL_GROUND_ERP_CFM, bouncy=b)
+            b: self.physics.solref(
+                phys.BALL_GROUND_ERP_CFM[0],
+                self.physics.impedance(phys.BALL_GROUND_ERP_CFM[1], 1.0 / phys.BALL_MASS),
+                restitution=phys.BALL_RESTITUTION if b else 0.0,
+            )
             for b in (False, True)
         }
         self._ball_bouncy = False
@@ -188,11 +208,21 @@ class World:
             r.team = slot.team
             self.robots.append(r)
             drag_bodies.extend(r.robot_bodies.tolist())
+        self._init_motor_arrays()
+        self._motors_relaxed = False
+        self._inv_timestep = 1.0 / m.opt.timestep
         self._drag_bodies = np.array(drag_bodies, dtype=int)
         self._drag_roots = (
             m.body_rootid[self._drag_bodies] if len(drag_bodies) else np.zeros(0, int)
         )
         self._xfrc = np.zeros((len(self._drag_bodies), 6))
+        db = self._drag_bodies
+        self._drag_slice = (
+            slice(int(db[0]), int(db[-1]) + 1)
+            if len(db) and np.array_equal(db, np.arange(db[0], db[-1] + 1))
+            else db
+        )
+        """Robot bodies as one slice when they are contiguous (always, in our scenes)."""
         self._gravity = np.array([0.0, 0.0, -phys.GRAVITY])
         self.seed = seed
         self.rng = np.random.default_rng(seed)
@@ -200,11 +230,56 @@ class World:
         self.time = 0.0
         self.game = GameState()
         self._qpos0 = self.data.qpos.copy()
-        self._tendon_frictionloss0 = self.model.tendon_frictionloss.copy()
+        self._dof_frictionloss0 = self.model.dof_frictionloss.copy()
         self._warning_counts = [0] * len(_DIVERGENCE_WARNINGS)
         self.reset(seed=seed)
 
     # ------------------------------------------------------------------ construction helpers
+    def _init_motor_arrays(self) -> None:
+        """World-level arrays over every robot's joints (robot after robot, canonical order);
+        each robot's ``targets`` and ``q_ref`` are views into them, so one cycle's motor work is
+        a few vector operations whatever the number of robots.
+
+        Motor rows are the dof friction-loss rows, which MuJoCo puts first in the constraint
+        list, in dof order; ``_motor_sort`` maps canonical order to dof order.
+        """
+        m = self.model
+        robots = self.robots
+        cat = (lambda xs: np.concatenate(xs)) if robots else (lambda xs: np.zeros(0))
+        self._qpos_j = cat([r.qpos_joints for r in robots]).astype(int)
+        self._qvel_j = cat([r.qvel_joints for r in robots]).astype(int)
+        self._lo = cat([r.range_rad[0] for r in robots])
+        self._hi = cat([r.range_rad[1] for r in robots])
+        self._vmax = cat([r.max_speeds for r in robots])
+        n = len(self._qvel_j)
+        self._targets = np.zeros(n)
+        self._q_ref = np.zeros(n)
+        off = 0
+        for r in robots:
+            k = len(r.qvel_joints)
+            r.targets = self._targets[off : off + k]
+            r.q_ref = self._q_ref[off : off + k]
+            r.joint_slice = slice(off, off + k)
+            off += k
+        sort = np.argsort(self._qvel_j, kind="stable")
+        self._motor_sort = None if np.array_equal(sort, np.arange(n)) else sort
+        dofs = self._qvel_j if self._motor_sort is None else self._qvel_j[sort]
+        self._motor_dofs_sorted = dofs
+        tc = np.maximum(m.dof_solref[dofs, 0], 2 * m.opt.timestep)
+        self._motor_b = 2.0 / (m.dof_solimp[dofs, 1] * tc)
+        """Damping B of each motor row, dof order (MuJoCo's aref = −B·v for friction rows)."""
+        self._torso_bodies = np.array([r.torso_body for r in robots], dtype=int)
+        self._root_vel = (
+            (np.array([r.qvel_root for r in robots])[:, None] + np.arange(3)).astype(int)
+            if robots
+            else np.zeros((0, 3), int)
+        )
+        self._prev_root_vel = np.zeros((len(robots), 3))
+        self._accel = np.tile([0.0, 0.0, phys.GRAVITY], (len(robots), 1))
+        for i, r in enumerate(robots):
+            r.prev_vel = self._prev_root_vel[i]
+            r.accel = self._accel[i]
+
     def _index_robot(self, i: int, slot: RobotSlot) -> RobotState:
         m = self.model
         model = nao_model(slot.type_index)
@@ -215,9 +290,6 @@ class World:
         r.qvel_root = int(m.jnt_dofadr[root])
         r.qpos_joints = np.array([m.jnt_qposadr[m.joint(p + e).id] for e in model.effector_names])
         r.qvel_joints = np.array([m.jnt_dofadr[m.joint(p + e).id] for e in model.effector_names])
-        r.qvel_motors = np.array(
-            [m.jnt_dofadr[m.joint(f"{p}motor_{e}").id] for e in model.effector_names]
-        )
         r.torso_body = m.body(f"{p}torso").id
         r.head_body = m.body(f"{p}head").id
         r.part_bodies = np.array([m.body(p + part).id for part in PLAYER_PARTS])
@@ -228,7 +300,6 @@ class World:
             feet.update({"rf1": "rtoe", "lf1": "ltoe"})
         r.foot_geoms = {m.geom(p + body).id: name for name, body in feet.items()}
         r.foot_bodies = {name: m.body(p + body).id for name, body in feet.items()}
-        r.motor_tendons = np.array([m.tendon(f"{p}motor_{e}").id for e in model.effector_names])
         r.range_rad = tuple(np.radians(model.ranges_deg).T.copy())
         r.max_speeds = model.max_speeds
         r.targets = np.zeros(len(model.joints))
@@ -296,7 +367,8 @@ class World:
     def _restore_run_time_parameters(self) -> None:
         """Undo the per-cycle parameter switches (motor relaxation at stops, ball bounce mode) and
         the solver's warm start, so that a reset or placement never depends on the past."""
-        self.model.tendon_frictionloss[:] = self._tendon_frictionloss0
+        self.model.dof_frictionloss[:] = self._dof_frictionloss0
+        self._motors_relaxed = False
         self.model.pair_solref[self._ball_ground_pair] = self._ball_ground_solref[False]
         self._ball_bouncy = False
         self.data.qacc_warmstart[:] = 0.0
@@ -342,15 +414,14 @@ class World:
         d.qpos[a + 3 : a + 7] = q / np.linalg.norm(q)
         d.qvel[r.qvel_root : r.qvel_root + 6] = 0.0
         d.qvel[r.qvel_joints] = 0.0
-        d.qvel[r.qvel_motors] = 0.0
         r.targets[:] = 0.0
         r.pending.clear()
         r.last_frp = {}
-        self.model.tendon_frictionloss[r.motor_tendons] = phys.MOTOR_MAX_TORQUE
+        self.model.dof_frictionloss[r.qvel_joints] = phys.MOTOR_MAX_TORQUE
         d.qacc_warmstart[:] = 0.0
-        r.q_ref = d.qpos[r.qpos_joints].copy()
-        r.prev_vel = np.zeros(3)
-        r.accel = np.array([0.0, 0.0, phys.GRAVITY])
+        r.q_ref[:] = d.qpos[r.qpos_joints]
+        r.prev_vel[:] = 0.0
+        r.accel[:] = (0.0, 0.0, phys.GRAVITY)
         if z is None:
             mujoco.mj_kinematics(self.model, d)
             lowest = self._lowest_point(r)
@@ -485,10 +556,11 @@ class World:
                 f"velocity array must have shape ({n},) in effector order "
                 f"{', '.join(r.effector_names)}; got {out.shape}"
             )
-        bad = ~np.isfinite(out)
-        if bad.any():
-            i = int(np.argmax(bad))
-            raise ValueError(f"velocity command for joint {r.effector_names[i]} is {out[i]}")
+        if not math.isfinite(float(out.sum())):  # one check for any NaN/inf
+            bad = ~np.isfinite(out)
+            if bad.any():
+                i = int(np.argmax(bad))
+                raise ValueError(f"velocity command for joint {r.effector_names[i]} is {out[i]}")
         return out.copy()
 
     def command(self, index: int, command: AgentCommand | Mapping[str, float] | np.ndarray) -> None:
@@ -504,25 +576,23 @@ class World:
             vel = self.command_array(index, command)
         r.pending.append((self.cycle + self.dead_time_cycles, vel))
 
-    def _realise_commands(self, r: RobotState) -> np.ndarray:
-        """Write due commands into the motors (SimSpark's hinge effector, spec §8.3).
-
-        A command is taken only while the joint is strictly inside its limits; otherwise the
-        previous target stays. Returns the mask of joints resting at a stop with a motor target
-        that does not pull them away from it.
-        """
-        q = self.data.qpos[r.qpos_joints]
-        lo, hi = r.range_rad
-        at_lo = q <= lo
-        at_hi = q >= hi
-        if r.pending and r.pending[0][0] <= self.cycle:
-            inside = ~(at_lo | at_hi)
-            vmax = r.max_speeds
-            while r.pending and r.pending[0][0] <= self.cycle:
-                _, vel = r.pending.pop(0)
-                take = ~np.isnan(vel) & inside
-                r.targets[take] = np.clip(vel[take], -vmax[take], vmax[take])
-        return (at_lo & (r.targets <= 0.0)) | (at_hi & (r.targets >= 0.0))
+    def _realise_commands(self, r: RobotState, inside: np.ndarray | None) -> None:
+        """Write robot ``r``'s due commands into its motors (SimSpark's hinge effector, spec
+        §8.3): a command is taken only by joints strictly inside their limits (``inside``, this
+        robot's slice, ``None`` when all are); the others keep their previous target. Commands
+        are clipped to each joint's maximum speed."""
+        vmax = r.max_speeds
+        while r.pending and r.pending[0][0] <= self.cycle:
+            _, vel = r.pending.pop(0)
+            if inside is None and not np.isnan(vel.sum()):
+                _clip(vel, -vmax, vmax, out=r.targets)  # every joint takes its command
+                continue
+            clipped = _clip(vel, -vmax, vmax)
+            # NaN (no command for that joint) compares False: the old target stays
+            take = vel == vel
+            if inside is not None:
+                take &= inside
+            np.copyto(r.targets, clipped, where=take)
 
     def beam(self, index: int, x: float, y: float, rot_deg: float) -> bool:
         """SimSpark ``beam`` in the robot's team frame (spec §9.4): only in BeforeKickOff and the
@@ -542,11 +612,9 @@ class World:
         heading = rot_deg
         if r.team == "right":
             x, y, heading = -x, -y, rot_deg + 180.0
-        d = self.data
         vel = r.targets.copy()
         self.place_robot(index, x, y, z=0.4, heading_deg=heading)
         r.targets[:] = vel
-        d.qvel[r.qvel_motors] = vel
         return True
 
     def say(self, index: int, message: str) -> None:
@@ -601,30 +669,70 @@ class World:
                 for i, c in commands.items():
                     self.command(i, c)
         d = self.data
+        m = self.model
+        q = d.qpos[self._qpos_j]
+        at_lo = q <= self._lo
+        at_hi = q >= self._hi
+        limited = at_lo | at_hi
+        any_limited = bool(limited.any())
+        due = self.cycle
         for r in self.robots:
-            at_stop = self._realise_commands(r)
-            # Creep compensation: MuJoCo regularises the motor rows, so a held joint creeps
-            # slowly under load where ODE's rigid motor row does not. Each motor follows the
-            # integral of its commanded velocity; the small difference is corrected within a
-            # cycle. Anti-windup keeps saturated motors ODE-like (lost motion is never caught up).
-            q = d.qpos[r.qpos_joints]
-            np.clip(r.q_ref, q - CREEP_WINDOW_RAD, q + CREEP_WINDOW_RAD, out=r.q_ref)
-            r.q_ref[at_stop] = q[at_stop]
-            d.qvel[r.qvel_motors] = r.targets + (r.q_ref - q) / CYCLE_S
-            r.q_ref += r.targets * CYCLE_S
-            # ODE's motor "fudge factor" (spec §2.4): at a stop the motor barely acts unless it
-            # pulls the joint away from the stop; modelled by relaxing that motor row this cycle.
-            self.model.tendon_frictionloss[r.motor_tendons] = np.where(
-                at_stop, 0.0, phys.MOTOR_MAX_TORQUE
-            )
-            # accelerometer, sampled before the physics step (spec §4.5)
-            v = d.qvel[r.qvel_root : r.qvel_root + 3].copy()
-            a_world = (v - r.prev_vel) / CYCLE_S - self._gravity
-            r.prev_vel = v
-            r.accel = d.xmat[r.torso_body].reshape(3, 3).T @ a_world
+            if r.pending and r.pending[0][0] <= due:
+                self._realise_commands(r, ~limited[r.joint_slice] if any_limited else None)
+        targets = self._targets
+        at_stop = None
+        if any_limited:
+            # joints resting at a stop whose target does not pull them away from it
+            at_stop = (at_lo & (targets <= 0.0)) | (at_hi & (targets >= 0.0))
+            if not at_stop.any():
+                at_stop = None
+        # Creep compensation: MuJoCo regularises the motor rows, so a held joint creeps slowly
+        # under load where ODE's rigid motor row does not. Each motor follows the integral of its
+        # commanded velocity; the small difference is corrected within a cycle. Anti-windup
+        # keeps saturated motors ODE-like (motion lost while saturated is never caught up).
+        q_ref = self._q_ref
+        _clip(q_ref, q - CREEP_WINDOW_RAD, q + CREEP_WINDOW_RAD, out=q_ref)
+        if at_stop is not None:
+            np.copyto(q_ref, q, where=at_stop)
+        motor_target = q_ref - q
+        motor_target *= 1.0 / CYCLE_S
+        motor_target += targets
+        q_ref += targets * CYCLE_S
+        sort = self._motor_sort
+        if sort is not None:
+            motor_target = motor_target[sort]
+        shift = self._motor_b * motor_target
+        # ODE's motor "fudge factor" (spec §2.4): at a stop the motor barely acts unless it pulls
+        # the joint away from the stop; modelled by removing that motor row this cycle.
+        if at_stop is not None:
+            rows = ~(at_stop if sort is None else at_stop[sort])
+            m.dof_frictionloss[self._motor_dofs_sorted] = np.where(rows, phys.MOTOR_MAX_TORQUE, 0.0)
+            shift = shift[rows]
+            self._motors_relaxed = True
+        elif self._motors_relaxed:
+            m.dof_frictionloss[self._motor_dofs_sorted] = phys.MOTOR_MAX_TORQUE
+            self._motors_relaxed = False
+        nrows = len(shift)
+        # Warm start: every motor reaches its target (the solver corrects saturated ones).
+        dofs = self._motor_dofs_sorted
+        d.qacc_warmstart[dofs] = (motor_target - d.qvel[dofs]) * self._inv_timestep
+        # accelerometer, sampled before the physics step (spec §4.5)
+        qvel, xmat = d.qvel, d.xmat
+        for r in self.robots:
+            v = qvel[r.qvel_root : r.qvel_root + 3]
+            a_world = (v - r.prev_vel) * (1.0 / CYCLE_S)
+            a_world[2] += phys.GRAVITY
+            r.prev_vel[:] = v
+            np.matmul(a_world, xmat[r.torso_body].reshape(3, 3), out=r.accel)
         self._apply_drag()
         self._ball_ground_contact_mode()
-        mujoco.mj_step(self.model, d, nstep=self._substeps)
+        for _ in range(self._substeps):
+            mujoco.mj_step1(m, d)
+            # The motor rows' reference acceleration −B·v becomes −B·(v − target): MuJoCo's
+            # friction-loss row turned into ODE's velocity motor (see robocup_gym/robot/mjcf.py).
+            if nrows:
+                d.efc_aref[:nrows] += shift
+            mujoco.mj_step2(m, d)
         self.cycle += 1
         self.time = round(self.time + CYCLE_S, 10)
         if self.game.play_mode not in PAUSED_MODES:
@@ -640,7 +748,7 @@ class World:
         vz = self.data.qvel[self._ball_qvel + 2]
         bouncy = bool(
             vz < -phys.BALL_BOUNCE_MIN_SPEED
-            and z - phys.BALL_RADIUS + phys.SURFACE_LAYER + vz * CYCLE_S < 0.0
+            and z - phys.BALL_RADIUS - phys.GROUND_PLANE_Z + vz * CYCLE_S < 0.0
         )
         if bouncy != self._ball_bouncy:
             self.model.pair_solref[self._ball_ground_pair] = self._ball_ground_solref[bouncy]
@@ -651,38 +759,38 @@ class World:
         if len(self._drag_bodies) == 0:
             return
         d = self.data
-        cvel = d.cvel[self._drag_bodies]
+        b = self._drag_slice
+        cvel = d.cvel[b]
         w = cvel[:, :3]
-        r = d.xipos[self._drag_bodies] - d.subtree_com[self._drag_roots]
-        v = cvel[:, 3:].copy()
-        # v += w × r (written out: np.cross is slow for small arrays)
-        v[:, 0] += w[:, 1] * r[:, 2] - w[:, 2] * r[:, 1]
-        v[:, 1] += w[:, 2] * r[:, 0] - w[:, 0] * r[:, 2]
-        v[:, 2] += w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
+        # velocity of each body's centre of mass: v_origin + ω × (com − subtree com of the root)
+        r = d.xipos[b] - d.subtree_com[self._drag_roots]
         xf = self._xfrc
-        xf[:, :3] = v
-        xf[:, :3] *= -phys.BODY_LINEAR_DRAG
+        np.einsum("ijk,nj,nk->ni", _LEVI_CIVITA, w, r, out=xf[:, :3])
+        xf[:, :3] += cvel[:, 3:]
         xf[:, 3:] = w
-        xf[:, 3:] *= -phys.BODY_ANGULAR_DRAG
-        d.xfrc_applied[self._drag_bodies] = xf
+        xf *= _DRAG
+        d.xfrc_applied[b] = xf
 
     def _check_state(self) -> None:
+        """Raise :class:`SimulationDivergedError` if the last step blew up: a NaN/inf or absurd
+        velocity (|qvel| > 1e5; MuJoCo's automatic reset is disabled so that the blow-up stays
+        visible). The MuJoCo warnings of the step name the cause."""
+        qvel = self.data.qvel
+        if float(qvel @ qvel) < DIVERGED_QVEL_SQ:  # False for NaN
+            return
         d = self.data
         counts = [d.warning[i].number for i in _DIVERGENCE_WARNINGS]
-        if counts != self._warning_counts or not np.isfinite(d.qvel).all():
-            names = [
-                mujoco.mjtWarning(i).name
-                for i, n, old in zip(
-                    _DIVERGENCE_WARNINGS, counts, self._warning_counts, strict=True
-                )
-                if n > old
-            ]
-            self._warning_counts = counts
-            raise SimulationDivergedError(
-                f"simulation diverged at cycle {self.cycle} (t = {self.time:.2f} s)"
-                + (f"; MuJoCo warnings: {', '.join(names)}" if names else "; NaN/inf state")
-                + ". Call World.reset() to continue."
-            )
+        names = [
+            mujoco.mjtWarning(i).name
+            for i, n, old in zip(_DIVERGENCE_WARNINGS, counts, self._warning_counts, strict=True)
+            if n > old
+        ]
+        self._warning_counts = counts
+        raise SimulationDivergedError(
+            f"simulation diverged at cycle {self.cycle} (t = {self.time:.2f} s)"
+            + (f"; MuJoCo warnings: {', '.join(names)}" if names else "; NaN/inf state")
+            + ". Call World.reset() to continue."
+        )
 
     # ------------------------------------------------------------------ perception
     def ground_truth(self, index: int = 0) -> GroundTruth:
