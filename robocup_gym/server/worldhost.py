@@ -32,24 +32,6 @@ from robocup_gym.sim.world import World
 
 log = logging.getLogger("robocup_gym.server")
 
-# RobotState fields that are simulation/agent state (copied on rebuild). Everything else in a
-# RobotState is an index into the compiled model and is recomputed by the new World.
-_ROBOT_STATE_FIELDS = (
-    "team",
-    "team_name",
-    "unum",
-    "announce_team",
-    "targets",
-    "q_ref",
-    "accel",
-    "prev_vel",
-    "perception_counter",
-    "calibration",
-    "heard",
-    "hear_capacity",
-    "last_frp",
-)
-
 BALL_RADIUS = 0.042
 PRE_INIT_POS = (0.0, -1.0, 1.5)
 """Where a robot appears after ``scene`` (torso centre, unrotated model: facing +y), as in the
@@ -173,9 +155,7 @@ class WorldHost:
             if i is None:
                 continue
             r_old = old.robots[i]
-            for f in _ROBOT_STATE_FIELDS:
-                if hasattr(r_old, f):
-                    setattr(r_new, f, getattr(r_old, f))
+            world.import_robot_state(j, old.export_robot_state(i))
             src = {name: (qa, qn, da, dn) for name, qa, qn, da, dn in old_layout[r_old.prefix]}
             for name, qa, qn, da, dn in new_layout[r_new.prefix]:
                 got = src.get(name)

@@ -20,6 +20,7 @@ Example::
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -306,6 +307,44 @@ class World:
         r.q_ref = np.zeros(len(model.joints))
         return r
 
+    # ------------------------------------------------------------------ robot state transfer
+    _AGENT_STATE = (
+        "team",
+        "team_name",
+        "unum",
+        "announce_team",
+        "perception_counter",
+        "calibration",
+        "heard",
+        "hear_capacity",
+        "last_frp",
+    )
+    _ARRAY_STATE = ("targets", "q_ref", "accel", "prev_vel")
+
+    def export_robot_state(self, index: int) -> dict:
+        """Robot ``index``'s simulation and agent state other than its MuJoCo pose: motor targets,
+        creep reference, accelerometer history, pending commands, team/uniform, hearing, FRP
+        memory. With :meth:`import_robot_state` it moves a robot into a rebuilt world (the
+        ``serve`` server rebuilds its world when robots join)."""
+        r = self.robot(index)
+        out = {name: copy.deepcopy(getattr(r, name)) for name in self._AGENT_STATE}
+        out.update({name: getattr(r, name).copy() for name in self._ARRAY_STATE})
+        out["pending"] = [(due, vel.copy()) for due, vel in r.pending]
+        return out
+
+    def import_robot_state(self, index: int, state: Mapping) -> None:
+        """Restore what :meth:`export_robot_state` returned into robot ``index`` (of the same
+        type). Arrays are copied in place: a robot's arrays are views into the world's."""
+        r = self.robot(index)
+        for name in self._AGENT_STATE:
+            if name in state:
+                setattr(r, name, copy.deepcopy(state[name]))
+        for name in self._ARRAY_STATE:
+            if name in state:
+                getattr(r, name)[:] = state[name]
+        if "pending" in state:
+            r.pending = [(due, np.array(vel, float)) for due, vel in state["pending"]]
+
     # ------------------------------------------------------------------ properties
     @property
     def n_robots(self) -> int:
@@ -358,9 +397,9 @@ class World:
             x = -14.2 + 0.8 * col
             y = 9.2 - 1.2 * row
             if r.team == "right":
-                self.place_robot(r.index, x=-x, y=y, heading_deg=180.0)
+                self.place_robot(r.index, x=-x, y=y, heading_deg=180.0, forward=False)
             else:
-                self.place_robot(r.index, x=x, y=y, heading_deg=0.0)
+                self.place_robot(r.index, x=x, y=y, heading_deg=0.0, forward=False)
         self.place_ball((0.0, 0.0))
         mujoco.mj_forward(self.model, self.data)
 
@@ -383,6 +422,7 @@ class World:
         z: float | None = None,
         joint_angles_deg: Mapping[str, float] | np.ndarray | None = None,
         quat: Sequence[float] | None = None,
+        forward: bool = True,
     ) -> None:
         """Teleport a robot instantly: no warm-up cycles, no controller loop.
 
@@ -395,6 +435,9 @@ class World:
             joint_angles_deg: Joint angles in degrees, by effector/perceptor name (others 0) or as
                 an array in canonical order. ``None`` keeps the current angles.
             quat: Full torso orientation ``(w, x, y, z)`` instead of ``heading_deg``.
+            forward: Recompute the derived quantities (contacts, sensors) now. Pass ``False``
+                when placing several robots in a row and call ``mujoco.mj_forward`` once at the
+                end (robots still overlapping half-way would create thousands of contacts).
 
         All velocities and joint targets are zeroed.
         """
@@ -426,7 +469,8 @@ class World:
             mujoco.mj_kinematics(self.model, d)
             lowest = self._lowest_point(r)
             d.qpos[a + 2] += -phys.SURFACE_LAYER - lowest
-        mujoco.mj_forward(self.model, d)
+        if forward:
+            mujoco.mj_forward(self.model, d)
 
     def _lowest_point(self, r: RobotState) -> float:
         m, d = self.model, self.data
