@@ -19,10 +19,10 @@ from robocup_gym.sim.physics import (
     BALL_RADIUS,
     BALL_RESTITUTION,
     BALL_ROBOT_ERP_CFM,
+    GROUND_PLANE_Z,
     JOINT_STOP_ERP_CFM,
     MOTOR_MAX_TORQUE,
     ROBOT_GROUND_ERP_CFM,
-    GROUND_PLANE_Z,
     PhysicsConfig,
 )
 
