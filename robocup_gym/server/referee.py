@@ -298,8 +298,10 @@ class Referee:
         self.players = players
         self.mode_cycles += 1
         touching = self.host.ball_touchers()
-        by_index = {p.index: p for p in players}
-        toucher = next((by_index[i] for i in sorted(touching) if i in by_index), None)
+        toucher = None
+        if touching:
+            by_index = {p.index: p for p in players}
+            toucher = next((by_index[i] for i in sorted(touching) if i in by_index), None)
         if toucher is not None:
             self.last_touch = (toucher.side, toucher.unum)
             self.touched_in_mode = True
@@ -317,12 +319,13 @@ class Referee:
             if self.half == 2 and t >= 2 * HALF_TIME:
                 self.set_play_mode("GameOver")
                 return
-        pos = self.host.ball_state()[0]
-        if abs(pos[0]) < FIELD_HALF_LENGTH and abs(pos[1]) < FIELD_HALF_WIDTH:
-            self.last_inside_x = float(pos[0])
+        pos = self.host.ball_position()
+        x, y = pos[0].item(), pos[1].item()
+        if abs(x) < FIELD_HALF_LENGTH and abs(y) < FIELD_HALF_WIDTH:
+            self.last_inside_x = x
         if pm == "BeforeKickOff":
             if players:
-                self._hold_ball(np.array([0.0, 0.0]))
+                self._hold_ball((0.0, 0.0))
                 self._keep_in_halves()
         elif pm in ("KickOff_Left", "KickOff_Right"):
             kicker = "left" if pm == "KickOff_Left" else "right"
@@ -408,10 +411,16 @@ class Referee:
             self.set_play_mode("PlayOn")
 
     # ------------------------------------------------------------------ moving things
-    def _hold_ball(self, xy: np.ndarray) -> None:
-        p, v, _ = self.host.ball_state()
+    def _hold_ball(self, xy: np.ndarray | tuple[float, float]) -> None:
+        (px, py, _), (vx, vy, vz) = self.host.ball_pos_vel()
         # a resting ball jitters by micrometres on its contact: only re-place a ball that moved
-        if abs(p[0] - xy[0]) > 1e-3 or abs(p[1] - xy[1]) > 1e-3 or np.any(np.abs(v) > 1e-2):
+        if (
+            abs(px - xy[0]) > 1e-3
+            or abs(py - xy[1]) > 1e-3
+            or abs(vx) > 1e-2
+            or abs(vy) > 1e-2
+            or abs(vz) > 1e-2
+        ):
             self.host.set_ball((float(xy[0]), float(xy[1]), BALL_RADIUS), (0.0, 0.0, 0.0))
 
     def _body_x_extent(self, index: int) -> tuple[float, float]:

@@ -38,6 +38,8 @@ import time
 from collections.abc import Callable
 from typing import ClassVar
 
+import numpy as np
+
 from robocup_gym.protocol import effectors as fx
 from robocup_gym.protocol import trainer as tc
 from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT
@@ -688,7 +690,7 @@ class SimServer:
                 i = host.index(a.key)
                 if i is not None:
                     try:
-                        world.command(i, a.joints)
+                        world.command(i, _joint_command(a.joints, world.robots[i].effector_names))
                     except (KeyError, ValueError) as exc:
                         a.conn.warn("joint command ignored: %s", exc)
             a.clear_actions()
@@ -759,7 +761,7 @@ class SimServer:
             if i is None:
                 continue
             try:
-                text = format_perception(world.perceive(i))
+                text = format_perception(world.perceive(i, ground_truth=False))
             except Exception:
                 log.exception("%r: percept could not be built", a.conn)
                 continue
@@ -811,6 +813,20 @@ class SimServer:
             for m in new:
                 if m.conn.send(frame):
                     m.needs_full = False
+
+
+def _joint_command(
+    joints: dict[str, float], names: tuple[str, ...]
+) -> dict[str, float] | np.ndarray:
+    """The joint velocities for :meth:`World.command`: when every joint is commanded (the usual
+    case), the same numbers as an array in the robot's effector order (much cheaper to check than
+    the mapping); otherwise the mapping itself."""
+    if len(joints) != len(names):
+        return joints
+    try:
+        return np.array([joints[n] for n in names], dtype=float)
+    except KeyError:
+        return joints
 
 
 def _name(act: object) -> str:

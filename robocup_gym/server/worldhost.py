@@ -76,7 +76,9 @@ class WorldHost:
         self.divergences = 0
         self._joint_layout: dict[str, list[tuple[str, int, int, int, int]]] = {}
         self._geom_robot = np.zeros(0, int)
+        self._geom_robot_list: list[int] = []
         self._ball_geom = 0
+        self._ball_adr_cache: tuple[object, int, int] | None = None
         self._refresh_maps()
 
     # ------------------------------------------------------------------ lookups
@@ -200,6 +202,7 @@ class WorldHost:
             for g in r.robot_geoms:
                 geom_robot[g] = r.index
         self._geom_robot = geom_robot
+        self._geom_robot_list = [int(i) for i in geom_robot]
         self._ball_geom = m.geom("ball").id
 
     # ------------------------------------------------------------------ divergence
@@ -269,24 +272,47 @@ class WorldHost:
     def ball_touchers(self) -> set[int]:
         """Robot indices with a contact with the ball after the last physics step."""
         d = self.world.data
-        if d.ncon == 0:
-            return set()
-        geoms = d.contact.geom[: d.ncon]
+        ncon = d.ncon
+        out: set[int] = set()
+        if ncon == 0:
+            return out
         ball = self._ball_geom
-        other = np.where(
-            geoms[:, 0] == ball, geoms[:, 1], np.where(geoms[:, 1] == ball, geoms[:, 0], -1)
-        )
-        other = other[other >= 0]
-        if other.size == 0:
-            return set()
-        idx = self._geom_robot[other]
-        return {int(i) for i in idx[idx >= 0]}
+        geom_robot = self._geom_robot_list
+        for g1, g2 in d.contact.geom[:ncon].tolist():  # a few pairs: plain Python is fastest
+            if g1 == ball:
+                i = geom_robot[g2]
+            elif g2 == ball:
+                i = geom_robot[g1]
+            else:
+                continue
+            if i >= 0:
+                out.add(i)
+        return out
+
+    def _ball_adr(self) -> tuple[int, int]:
+        """(qpos, qvel) address of the ball's free joint in the current World's model."""
+        m = self.world.model
+        got = self._ball_adr_cache
+        if got is None or got[0] is not m:
+            j = m.joint("ball").id
+            got = self._ball_adr_cache = (m, int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j]))
+        return got[1], got[2]
+
+    def ball_position(self) -> np.ndarray:
+        """Ball centre (a copy) from the World's data."""
+        qa = self._ball_adr()[0]
+        return self.world.data.qpos[qa : qa + 3].copy()
+
+    def ball_pos_vel(self) -> tuple[list[float], list[float]]:
+        """Ball position and linear velocity as lists of floats (cheap per-cycle checks)."""
+        d = self.world.data
+        qa, da = self._ball_adr()
+        return d.qpos[qa : qa + 3].tolist(), d.qvel[da : da + 3].tolist()
 
     def ball_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Ball (position, linear velocity, angular velocity) from the World's data."""
-        m, d = self.world.model, self.world.data
-        j = m.joint("ball").id
-        qa, da = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+        d = self.world.data
+        qa, da = self._ball_adr()
         return (
             d.qpos[qa : qa + 3].copy(),
             d.qvel[da : da + 3].copy(),

@@ -108,6 +108,7 @@ class PhysicsConfig:
     iterations: int = 100
     ls_iterations: int = 50
     tolerance: float = 1e-8
+    ls_tolerance: float = 0.01
     motor_impedance: float = MAX_IMPEDANCE
     robot_friction: float = 10.0
     ball_friction: float = 10.0

@@ -96,8 +96,8 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{ph.timestep}" gravity="0 0 -9.81" integrator="Euler"
           solver="{ph.solver}" iterations="{ph.iterations}" ls_iterations="{ph.ls_iterations}"
-          tolerance="{ph.tolerance}" cone="elliptic" impratio="{ph.impratio}"
-          jacobian="{ph.jacobian}">
+          ls_tolerance="{ph.ls_tolerance}" tolerance="{ph.tolerance}" cone="elliptic"
+          impratio="{ph.impratio}" jacobian="{ph.jacobian}">
     <flag autoreset="disable"/>
   </option>
   <size memory="16M"/>

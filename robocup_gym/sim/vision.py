@@ -8,6 +8,7 @@ robot's left, vertical positive up.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -26,6 +27,12 @@ PLAYER_PARTS = ("head", "rlowerarm", "llowerarm", "rfoot", "lfoot")
 
 _LANDMARK_NAMES = tuple(LANDMARKS)
 _LANDMARK_POS = np.array(list(LANDMARKS.values()))
+_OBJECT_NAMES = (*_LANDMARK_NAMES, "B")
+_OBJECTS = np.vstack([_LANDMARK_POS, np.zeros((1, 3))])
+"""Landmarks and a slot for the ball."""
+_LINE_ENDS = np.ascontiguousarray(FIELD_LINE_POINTS.reshape(-1, 3))
+_ZERO3 = np.zeros(3)
+_NOISE_SIGMA = np.array([[DISTANCE_NOISE_PERCENT], [HORIZONTAL_NOISE_DEG], [VERTICAL_NOISE_DEG]])
 
 
 @dataclass(frozen=True)
@@ -73,11 +80,16 @@ def _visible(pol: np.ndarray, half_cone: float) -> np.ndarray:
 
 
 def _noisy(pol: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    # One draw for the three components: the same numbers in the same order as three
+    # ``rng.normal(0.0, sigma, n)`` calls (distances, then horizontal, then vertical angles),
+    # each ``0.0 + sigma * z`` as numpy computes them.
+    z = rng.standard_normal((3, len(pol)))
+    z *= _NOISE_SIGMA
+    z += 0.0
     out = pol.copy()
-    n = len(pol)
-    out[:, 0] += rng.normal(0.0, DISTANCE_NOISE_PERCENT, n) * out[:, 0] / 100.0
-    out[:, 1] += rng.normal(0.0, HORIZONTAL_NOISE_DEG, n)
-    out[:, 2] += rng.normal(0.0, VERTICAL_NOISE_DEG, n)
+    out[:, 0] += z[0] * out[:, 0] / 100.0
+    out[:, 1] += z[1]
+    out[:, 2] += z[2]
     return out
 
 
@@ -112,6 +124,46 @@ def clip_segment(a: np.ndarray, b: np.ndarray, half_cone_deg: float) -> tuple | 
     return a + t0 * d, a + t1 * d
 
 
+def _clip_segments(ends: np.ndarray, half_cone_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`clip_segment` for many head-frame segments ``ends`` (n, 2, 3) at once, with the
+    same arithmetic per segment.
+
+    Returns ``(inside (n,) bool, clipped ends (n, 2, 3))``; rows where ``inside`` is False are
+    meaningless. ``t0`` only grows and ``t1`` only shrinks from plane to plane, so "empty after
+    some plane" is "empty after all planes" and the planes can be done together.
+    """
+    t = float(np.tan(np.radians(min(half_cone_deg, 89.0))))
+    ad = ends.copy()
+    ad[:, 1] -= ad[:, 0]  # rows: start a, direction d = b - a
+    # f(p) = n·p - c of the five planes of clip_segment for a (fa) and d (fd) at once; the terms
+    # with coefficient 0 or ±1 are exact, so each is the two-term expression clip_segment computes
+    coef_y, coef_x, coef_z, const = _planes(t)
+    f = ad[:, :, 1:2] * coef_y + ad[:, :, 0:1] * coef_x + ad[:, :, 2:3] * coef_z - const
+    fa = f[:, 0]
+    fd = f[:, 1]
+    up = fd >= 1e-12  # (fd > 0 and not parallel)
+    down = fd <= -1e-12  # (fd <= 0 and not parallel)
+    par = ~(up | down)
+    tt = -fa / np.where(par, 1.0, fd)
+    t01 = np.empty((len(ad), 2))
+    # + 0.0: never -0.0 (as max() starting from 0.0)
+    t01[:, 0] = np.maximum(np.where(up, tt, 0.0).max(axis=1), 0.0) + 0.0
+    t01[:, 1] = np.minimum(np.where(down, tt, 1.0).min(axis=1), 1.0)
+    inside = ~((par & (fa < 0)).any(axis=1) | (t01[:, 0] > t01[:, 1]))
+    return inside, ad[:, 0:1] + t01[:, :, None] * ad[:, 1:2]
+
+
+@cache
+def _planes(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Coefficients of y, x and z and the constant (for a point and for a direction) of the
+    planes ``n · p >= c`` of :func:`clip_segment`."""
+    coef_y = np.array([1.0, t, t, t, t])
+    coef_x = np.array([0.0, -1.0, 1.0, 0.0, 0.0])
+    coef_z = np.array([0.0, 0.0, 0.0, -1.0, 1.0])
+    const = np.array([[MIN_DISTANCE_M, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0]])
+    return coef_y, coef_x, coef_z, const
+
+
 def see(
     *,
     head_pos: np.ndarray,
@@ -137,24 +189,40 @@ def see(
         mirror: True for a right-team observer (ground-truth extensions are team-mirrored).
     """
     half = float(int(config.view_cone_deg) // 2)
-    cal = calibration if config.noise else np.zeros(3)
-    objs = np.vstack([_LANDMARK_POS, ball_pos[None, :]])
-    rel = to_head_frame(objs, head_pos, head_rot) + cal
-    pol = polar(rel)
-    vis = _visible(pol, half)
-    if config.noise:
+    noise = config.noise
+    cal = calibration if noise else _ZERO3
+    objs = _OBJECTS.copy()
+    objs[-1] = ball_pos
+    # head-frame positions: landmarks and ball, each player's parts, line end points
+    rels = [to_head_frame(objs, head_pos, head_rot) + cal]
+    for _, _, parts in players:
+        rels.append(to_head_frame(parts, head_pos, head_rot) + cal)
+    n_obj = len(objs)
+    n_pts = n_obj + len(PLAYER_PARTS) * len(players)
+    if config.lines:
+        ends = to_head_frame(_LINE_ENDS, head_pos, head_rot) + cal
+        inside, clipped = _clip_segments(ends.reshape(-1, 2, 3), half)
+        rels.append(clipped.reshape(-1, 3))
+    # one polar conversion and one visibility test for everything (element-wise operations)
+    pol_all = polar(np.concatenate(rels))
+    vis_all = _visible(pol_all, half)
+
+    pol = pol_all[:n_obj]
+    vis = vis_all[:n_obj]
+    if noise:
         pol = _noisy(pol, rng)
-    names = (*_LANDMARK_NAMES, "B")
+    names = _OBJECT_NAMES
     objects = {names[i]: pol[i] for i in np.flatnonzero(vis)}
 
     seen_players: list[SeenPlayer] = []
-    for team, unum, parts in players:
-        prel = to_head_frame(parts, head_pos, head_rot) + cal
-        ppol = polar(prel)
-        pvis = _visible(ppol, half)
+    k = n_obj
+    for team, unum, _ in players:
+        ppol = pol_all[k : k + len(PLAYER_PARTS)]
+        pvis = vis_all[k : k + len(PLAYER_PARTS)]
+        k += len(PLAYER_PARTS)
         if not pvis.any():
             continue
-        if config.noise:
+        if noise:
             ppol = _noisy(ppol, rng)
         seen_players.append(
             SeenPlayer(team, unum, {PLAYER_PARTS[i]: ppol[i] for i in np.flatnonzero(pvis)})
@@ -162,20 +230,13 @@ def see(
 
     lines = np.zeros((0, 2, 3))
     if config.lines:
-        ends = to_head_frame(FIELD_LINE_POINTS.reshape(-1, 3), head_pos, head_rot) + cal
-        ends = ends.reshape(-1, 2, 3)
-        out = []
-        for a, b in ends:
-            seg = clip_segment(a, b, half)
-            if seg is None:
-                continue
-            lp = polar(np.stack(seg))
-            if not _visible(lp, half + 1e-6).all():
-                continue
-            out.append(lp)
-        if out:
-            lines = np.stack(out)
-            if config.noise:
+        lpol = pol_all[n_pts:].reshape(-1, 2, 3)
+        # both ends inside the cone (slightly widened: clipped ends lie on its border)
+        lvis = _visible(pol_all[n_pts:], half + 1e-6).reshape(-1, 2).all(axis=1)
+        keep = inside & lvis
+        if keep.any():
+            lines = lpol[keep]
+            if noise:
                 lines = _noisy(lines.reshape(-1, 3), rng).reshape(-1, 2, 3)
 
     vision = Vision(objects=objects, players=seen_players, lines=lines)

@@ -68,6 +68,8 @@ _DIVERGENCE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQPOS),
 )
 HEARING_RANGE_M = 50.0
+_XYZ = (0, 1, 2)
+_ELLIPTIC = int(mujoco.mjtCone.mjCONE_ELLIPTIC)
 
 
 class SimulationDivergedError(RuntimeError):
@@ -888,47 +890,81 @@ class World:
         (N) and force-weighted centre of pressure (m), both in the foot's own frame."""
         r = self.robot(index)
         m, d = self.model, self.data
-        acc: dict[str, list] = {}
-        f6 = np.zeros(6)
-        for i in range(d.ncon):
-            c = d.contact[i]
-            g1, g2 = int(c.geom1), int(c.geom2)
-            if g1 in r.foot_geoms:
-                name, sign = r.foot_geoms[g1], -1.0
-            elif g2 in r.foot_geoms:
-                name, sign = r.foot_geoms[g2], 1.0
+        out: dict[str, ForceResistance] = {}
+        ncon = d.ncon
+        if ncon == 0:
+            r.last_frp = out
+            return out
+        con = d.contact
+        # the few contacts are sorted out in plain Python: which foot, which side (sign)
+        foot_geoms = r.foot_geoms
+        groups: dict[str, list[int]] = {}  # foot → contacts, feet in order of first contact
+        signs: dict[int, float] = {}
+        pairs = con.geom[:ncon].tolist()
+        efc = con.efc_address[:ncon].tolist()
+        for i, e in enumerate(efc):
+            g1, g2 = pairs[i]
+            name = foot_geoms.get(g1)
+            if name is not None:
+                sign = -1.0
             else:
+                name = foot_geoms.get(g2)
+                if name is None:
+                    continue
+                sign = 1.0
+            if e < 0:
                 continue
-            if c.efc_address < 0:
-                continue
-            mujoco.mj_contactForce(m, d, i, f6)
-            frame = c.frame.reshape(3, 3)
-            f_world = sign * (frame.T @ f6[:3])
-            acc.setdefault(name, []).append((c.pos.copy(), f_world))
-        out = {}
-        for name, items in acc.items():
-            body = r.foot_bodies[name]
-            rot = d.xmat[body].reshape(3, 3)
-            origin = d.xpos[body]
-            forces = np.array([f for _, f in items])
-            points = np.array([p for p, _ in items])
-            total = forces.sum(axis=0)
-            mags = np.linalg.norm(forces, axis=1)
-            if mags.sum() <= 0:
+            signs[i] = sign
+            groups.setdefault(name, []).append(i)
+        if not groups:
+            r.last_frp = out
+            return out
+        rows = [i for idx in groups.values() for i in idx]  # grouped by foot, contact order kept
+        sel = np.array(rows)
+        # contact-frame forces as mj_contactForce gives them (elliptic cones: efc_force as is)
+        if m.opt.cone == _ELLIPTIC and min(con.dim[sel].tolist()) >= 3:
+            f_con = d.efc_force[[efc[i] + k for i in rows for k in _XYZ]].reshape(-1, 3)
+        else:
+            f6 = np.zeros(6)
+            f_con = np.empty((len(rows), 3))
+            for k, i in enumerate(rows):
+                mujoco.mj_contactForce(m, d, i, f6)
+                f_con[k] = f6[:3]
+        frames = con.frame[sel].reshape(-1, 3, 3)
+        sign = np.array([signs[i] for i in rows])
+        f_world = (f_con[:, None, :] @ frames)[:, 0, :]  # frame.T @ f of every contact
+        f_world *= sign[:, None]
+        # |f| per contact as np.linalg.norm(axis=1), and |f|-weighted contact points
+        mags = np.sqrt(np.add.reduce(f_world * f_world, axis=1))
+        weighted = mags[:, None] * con.pos[sel]
+        add = np.add.reduce
+        start = 0
+        for name, idx in groups.items():
+            end = start + len(idx)
+            msum = add(mags[start:end])
+            if msum <= 0:
                 if name in r.last_frp:
                     out[name] = r.last_frp[name]
+                start = end
                 continue
-            cop = (mags[:, None] * points).sum(axis=0) / mags.sum()
-            out[name] = ForceResistance(point=rot.T @ (cop - origin), force=rot.T @ total)
+            total = add(f_world[start:end], axis=0)
+            cop = add(weighted[start:end], axis=0) / msum
+            body = r.foot_bodies[name]
+            rot_t = d.xmat[body].reshape(3, 3).T
+            out[name] = ForceResistance(point=rot_t @ (cop - d.xpos[body]), force=rot_t @ total)
+            start = end
         r.last_frp = out
         return out
 
-    def perceive(self, index: int = 0, *, vision: bool | None = None) -> Perception:
+    def perceive(
+        self, index: int = 0, *, vision: bool | None = None, ground_truth: bool = True
+    ) -> Perception:
         """Robot ``index``'s perception of the current state, as rcssserver3d would send it.
 
         Vision (``See``) is included every ``vision.interval``-th cycle (or when ``vision`` is
         forced True/False). GS carries unum/team once after :meth:`set_team`. Messages heard since
-        the last call are returned and cleared. Ground truth is always attached.
+        the last call are returned and cleared. Ground truth is attached unless ``ground_truth``
+        is False (the server, which does not send it, saves the work).
         """
         r = self.robot(index)
         d = self.data
@@ -959,7 +995,7 @@ class World:
             force_sensors=self.force_sensors(index),
             vision=vis,
             heard=heard,
-            ground_truth=self.ground_truth(index),
+            ground_truth=self.ground_truth(index) if ground_truth else None,
         )
 
     def vision(self, index: int = 0):
