@@ -244,3 +244,22 @@ def test_robocupgym_naive_client_gets_one_whole_percept_per_recv(make_server):
         assert re.search(r"\(t ([-0-9.]+)\)", msg)
     finally:
         s.close()
+
+
+def test_full_teams_of_eleven_in_sync_mode(make_server):
+    """Up to 11 agents per team, any mix of robot types (the World is rebuilt as they join)."""
+    server = make_server()
+    specs = [("Home", 0, i % 5) for i in range(11)] + [("Away", 0, (i + 2) % 5) for i in range(11)]
+
+    def message(i: int, k: int) -> str:
+        return f"(beam {-1 - (i % 11)} {i % 11 - 5} 0)" if k == 0 else "(lae1 1.0)"
+
+    out = run_agents(server, specs, 4, message, timeout=60.0)
+    unums: dict[str, set[int]] = {"left": set(), "right": set()}
+    for msgs in out:
+        assert len(msgs) == 6
+        gs = re.search(r"\(GS \(unum (\d+)\) \(team (left|right)\)", "".join(msgs))
+        unums[gs.group(2)].add(int(gs.group(1)))
+        p = parse_perception(msgs[-1])
+        assert len(p.joint_names) in (22, 24)  # type 4 has toes
+    assert unums == {"left": set(range(1, 12)), "right": set(range(1, 12))}
