@@ -779,6 +779,12 @@ class World:
             if nrows:
                 d.efc_aref[:nrows] += shift
             mujoco.mj_step2(m, d)
+        # MuJoCo computes positions at the start of a step; SimSpark senses after it. Bring the
+        # body poses (vision, monitor, referee, fall checks) and body velocities (next cycle's
+        # drag) up to the new state.
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_comVel(m, d)
         self.cycle += 1
         self.time = round(self.time + CYCLE_S, 10)
         if self.game.play_mode not in PAUSED_MODES:
