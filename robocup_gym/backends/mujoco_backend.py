@@ -58,8 +58,6 @@ class MujocoBackend(Backend):
         self._n_joints = len(self._model.joints)
         self._zero = np.zeros(self._n_joints)
         self._diverged = False
-        # model fields the world retunes every cycle, restored at every reset (see reset_episode)
-        self._dof_frictionloss = self.world.model.dof_frictionloss.copy()
         self._renderer: Any = None
         self._camera: Any = None
 
@@ -82,12 +80,8 @@ class MujocoBackend(Backend):
             # full reset: clears a diverged state, re-seeds noise and calibration
             w.reset(seed=seed)
             self._diverged = False
-        # An episode must depend only on its start state: forget the solver warm start (used by
-        # the placements' mj_forward and the first steps) and undo the world's per-cycle motor
-        # retuning (motors at a joint stop are relaxed in the model), which World.place_robot
-        # keeps; the world recomputes both in its next step anyway.
-        w.data.qacc_warmstart[:] = 0.0
-        w.model.dof_frictionloss[:] = self._dof_frictionloss
+        # An episode depends only on its start state: place_robot forgets the solver warm start
+        # and restores the robot's motor rows (relaxed at joint stops by the last cycle).
         angles = pose.joint_angles_deg
         if angles is None:
             angles = self._zero

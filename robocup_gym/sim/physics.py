@@ -77,6 +77,18 @@ def ode_solref(erp: float, d: float, *, restitution: float = 0.0, h: float = CYC
     return (-erp * d / (h * h), -(1.0 + restitution) * d / h)
 
 
+# ODE mixed contact parameters (spec §7.4) as (soft ERP, soft CFM).
+ROBOT_GROUND_ERP_CFM = (0.40, 1e-4)
+"""Robot part ↔ ground (robot 0.6 mixed with the ground's 0.2; CFM from the robot side)."""
+ROBOT_SLIP = 0.005
+"""ODE force-dependent slip of robot contacts, m/s per N."""
+JOINT_STOP_ERP_CFM = (0.8, 1e-8)
+"""Hinge stops (spec §2.4)."""
+BALL_GROUND_ERP_CFM = (0.35, 0.05)
+BALL_ROBOT_ERP_CFM = (0.55, 0.02505)
+BALL_WALL_ERP_CFM = (0.50, 0.05)
+
+
 @dataclass(frozen=True)
 class PhysicsConfig:
     """MuJoCo settings of the embedded world (defaults are the documented choice).
@@ -112,7 +124,7 @@ class PhysicsConfig:
     motor_impedance: float = MAX_IMPEDANCE
     robot_friction: float = 10.0
     ball_friction: float = 10.0
-    impratio: float = 0.02
+    impratio: float = ROBOT_GROUND_ERP_CFM[1] / ROBOT_SLIP
     jacobian: str = "sparse"
 
     @property
@@ -131,14 +143,10 @@ class PhysicsConfig:
         """:func:`ode_impedance` at this config's timestep."""
         return ode_impedance(cfm, inv_weight, h=self.timestep)
 
-
-# ODE mixed contact parameters (spec §7.4) as (soft ERP, soft CFM).
-ROBOT_GROUND_ERP_CFM = (0.40, 1e-4)
-"""Robot part ↔ ground (robot 0.6 mixed with the ground's 0.2; CFM from the robot side)."""
-ROBOT_SLIP = 0.005
-"""ODE force-dependent slip of robot contacts, m/s per N."""
-JOINT_STOP_ERP_CFM = (0.8, 1e-8)
-"""Hinge stops (spec §2.4)."""
-BALL_GROUND_ERP_CFM = (0.35, 0.05)
-BALL_ROBOT_ERP_CFM = (0.55, 0.02505)
-BALL_WALL_ERP_CFM = (0.50, 0.05)
+    def ode_row(
+        self, erp: float, cfm: float, inv_weight: float, restitution: float = 0.0
+    ) -> tuple[tuple[float, float], float]:
+        """``(solref, impedance)`` of an ODE row with ``erp``/``cfm`` on a body of inverse
+        weight ``inv_weight``: :meth:`impedance` and :meth:`solref` together."""
+        d = self.impedance(cfm, inv_weight)
+        return self.solref(erp, d, restitution=restitution), d

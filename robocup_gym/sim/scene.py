@@ -157,8 +157,7 @@ def _solref_str(
     ph: PhysicsConfig, erp: float, cfm: float, inv_weight: float, restitution: float
 ) -> tuple[str, str]:
     """(solref, solimp) attribute strings of an ODE row (see :mod:`robocup_gym.sim.physics`)."""
-    d = ph.impedance(cfm, inv_weight)
-    k, b = ph.solref(erp, d, restitution=restitution)
+    (k, b), d = ph.ode_row(erp, cfm, inv_weight, restitution)
     return f"{k:.8g} {b:.8g}", f"{d:.8g} {d:.8g} 0.001"
 
 
@@ -173,9 +172,9 @@ def apply_ode_softness(model: mujoco.MjModel, physics: PhysicsConfig) -> None:
     for g in range(model.ngeom):
         if not robot[g]:
             continue
-        d = physics.impedance(cfm, float(model.body_invweight0[model.geom_bodyid[g], 0]))
+        solref, d = physics.ode_row(erp, cfm, float(model.body_invweight0[model.geom_bodyid[g], 0]))
         model.geom_solimp[g, :3] = (d, d, 0.001)
-        model.geom_solref[g] = physics.solref(erp, d)
+        model.geom_solref[g] = solref
 
 
 def _field_lines_xml() -> list[str]:

@@ -69,7 +69,6 @@ _DIVERGENCE_WARNINGS = (
 )
 HEARING_RANGE_M = 50.0
 _XYZ = (0, 1, 2)
-_ELLIPTIC = int(mujoco.mjtCone.mjCONE_ELLIPTIC)
 
 
 class SimulationDivergedError(RuntimeError):
@@ -196,11 +195,11 @@ class World:
         # ball-ground contact pair: ODE bounces only above 0.8 m/s approach (switched per cycle)
         self._ball_ground_pair = 0
         self._ball_ground_solref = {
-            b: self.physics.solref(
-                phys.BALL_GROUND_ERP_CFM[0],
-                self.physics.impedance(phys.BALL_GROUND_ERP_CFM[1], 1.0 / phys.BALL_MASS),
-                restitution=phys.BALL_RESTITUTION if b else 0.0,
-            )
+            b: self.physics.ode_row(
+                *phys.BALL_GROUND_ERP_CFM,
+                1.0 / phys.BALL_MASS,
+                phys.BALL_RESTITUTION if b else 0.0,
+            )[0]
             for b in (False, True)
         }
         self._ball_bouncy = False
@@ -226,7 +225,6 @@ class World:
             else db
         )
         """Robot bodies as one slice when they are contiguous (always, in our scenes)."""
-        self._gravity = np.array([0.0, 0.0, -phys.GRAVITY])
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self.cycle = 0
@@ -240,8 +238,8 @@ class World:
     # ------------------------------------------------------------------ construction helpers
     def _init_motor_arrays(self) -> None:
         """World-level arrays over every robot's joints (robot after robot, canonical order);
-        each robot's ``targets`` and ``q_ref`` are views into them, so one cycle's motor work is
-        a few vector operations whatever the number of robots.
+        each robot's ``targets`` and ``q_ref`` are views into them (created here), so one cycle's
+        motor work is a few vector operations whatever the number of robots.
 
         Motor rows are the dof friction-loss rows, which MuJoCo puts first in the constraint
         list, in dof order; ``_motor_sort`` maps canonical order to dof order.
@@ -253,7 +251,6 @@ class World:
         self._qvel_j = cat([r.qvel_joints for r in robots]).astype(int)
         self._lo = cat([r.range_rad[0] for r in robots])
         self._hi = cat([r.range_rad[1] for r in robots])
-        self._vmax = cat([r.max_speeds for r in robots])
         n = len(self._qvel_j)
         self._targets = np.zeros(n)
         self._q_ref = np.zeros(n)
@@ -271,17 +268,6 @@ class World:
         tc = np.maximum(m.dof_solref[dofs, 0], 2 * m.opt.timestep)
         self._motor_b = 2.0 / (m.dof_solimp[dofs, 1] * tc)
         """Damping B of each motor row, dof order (MuJoCo's aref = −B·v for friction rows)."""
-        self._torso_bodies = np.array([r.torso_body for r in robots], dtype=int)
-        self._root_vel = (
-            (np.array([r.qvel_root for r in robots])[:, None] + np.arange(3)).astype(int)
-            if robots
-            else np.zeros((0, 3), int)
-        )
-        self._prev_root_vel = np.zeros((len(robots), 3))
-        self._accel = np.tile([0.0, 0.0, phys.GRAVITY], (len(robots), 1))
-        for i, r in enumerate(robots):
-            r.prev_vel = self._prev_root_vel[i]
-            r.accel = self._accel[i]
 
     def _index_robot(self, i: int, slot: RobotSlot) -> RobotState:
         m = self.model
@@ -305,8 +291,6 @@ class World:
         r.foot_bodies = {name: m.body(p + body).id for name, body in feet.items()}
         r.range_rad = tuple(np.radians(model.ranges_deg).T.copy())
         r.max_speeds = model.max_speeds
-        r.targets = np.zeros(len(model.joints))
-        r.q_ref = np.zeros(len(model.joints))
         return r
 
     # ------------------------------------------------------------------ robot state transfer
@@ -895,7 +879,7 @@ class World:
         """``FRP`` readings of robot ``index`` from the contacts of the last physics step: force
         (N) and force-weighted centre of pressure (m), both in the foot's own frame."""
         r = self.robot(index)
-        m, d = self.model, self.data
+        d = self.data
         out: dict[str, ForceResistance] = {}
         ncon = d.ncon
         if ncon == 0:
@@ -927,15 +911,9 @@ class World:
             return out
         rows = [i for idx in groups.values() for i in idx]  # grouped by foot, contact order kept
         sel = np.array(rows)
-        # contact-frame forces as mj_contactForce gives them (elliptic cones: efc_force as is)
-        if m.opt.cone == _ELLIPTIC and min(con.dim[sel].tolist()) >= 3:
-            f_con = d.efc_force[[efc[i] + k for i in rows for k in _XYZ]].reshape(-1, 3)
-        else:
-            f6 = np.zeros(6)
-            f_con = np.empty((len(rows), 3))
-            for k, i in enumerate(rows):
-                mujoco.mj_contactForce(m, d, i, f6)
-                f_con[k] = f6[:3]
+        # contact-frame forces: with the scene's elliptic cones and condim 3 these are the
+        # contact's efc_force rows as they are (what mj_contactForce returns)
+        f_con = d.efc_force[[efc[i] + k for i in rows for k in _XYZ]].reshape(-1, 3)
         frames = con.frame[sel].reshape(-1, 3, 3)
         sign = np.array([signs[i] for i in rows])
         f_world = (f_con[:, None, :] @ frames)[:, 0, :]  # frame.T @ f of every contact
