@@ -55,7 +55,9 @@ SAY_MAX_CHARS = 20
 _LEVI_CIVITA = np.zeros((3, 3, 3))
 _LEVI_CIVITA[0, 1, 2] = _LEVI_CIVITA[1, 2, 0] = _LEVI_CIVITA[2, 0, 1] = 1.0
 _LEVI_CIVITA[0, 2, 1] = _LEVI_CIVITA[2, 1, 0] = _LEVI_CIVITA[1, 0, 2] = -1.0
-"""ε_ijk: (a × b)_i = ε_ijk a_j b_k, for row-wise cross products with one einsum."""
+_CROSS = _LEVI_CIVITA.transpose(1, 2, 0).reshape(9, 3).copy()
+"""ε_jk,i as a (9, 3) matrix: row-wise cross products a × b = (a ⊗ b).reshape(n, 9) @ _CROSS
+(one outer product and one matrix product: cheaper than an einsum or np.cross on a few rows)."""
 DIVERGED_QVEL_SQ = 1e10
 """Squared norm of the velocity vector above which the world counts as diverged (no Nao or
 ball gets near 1e5 rad/s or m/s)."""
@@ -69,6 +71,8 @@ _DIVERGENCE_WARNINGS = (
 )
 HEARING_RANGE_M = 50.0
 _XYZ = (0, 1, 2)
+_any = np.logical_or.reduce
+"""``a.any()`` for a 1-d bool array without the method's Python wrapper (hot path)."""
 
 
 class SimulationDivergedError(RuntimeError):
@@ -217,7 +221,12 @@ class World:
         self._drag_roots = (
             m.body_rootid[self._drag_bodies] if len(drag_bodies) else np.zeros(0, int)
         )
-        self._xfrc = np.zeros((len(self._drag_bodies), 6))
+        nd = len(self._drag_bodies)
+        self._drag_arm = np.zeros((nd, 3))
+        self._drag_outer = np.zeros((nd, 3, 3))
+        roots = np.unique(self._drag_roots)
+        self._drag_root: int | None = int(roots[0]) if len(roots) == 1 else None
+        """The one root body when all drag bodies belong to one robot (subtree com broadcast)."""
         db = self._drag_bodies
         self._drag_slice = (
             slice(int(db[0]), int(db[-1]) + 1)
@@ -580,18 +589,18 @@ class World:
                     raise ValueError(f"velocity command for joint {r.effector_names[i]} is {v}")
                 out[i] = v
             return out
-        out = np.asarray(velocities, dtype=float)
+        out = np.array(velocities, dtype=float)  # a copy: the caller may reuse its array
         if out.shape != (n,):
             raise ValueError(
                 f"velocity array must have shape ({n},) in effector order "
                 f"{', '.join(r.effector_names)}; got {out.shape}"
             )
-        if not math.isfinite(float(out.sum())):  # one check for any NaN/inf
+        if not math.isfinite(out @ out):  # one check for any NaN/inf (or a huge value)
             bad = ~np.isfinite(out)
             if bad.any():
                 i = int(np.argmax(bad))
                 raise ValueError(f"velocity command for joint {r.effector_names[i]} is {out[i]}")
-        return out.copy()
+        return out
 
     def command(self, index: int, command: AgentCommand | Mapping[str, float] | np.ndarray) -> None:
         """Queue one cycle's command for robot ``index`` (it acts after the dead time)."""
@@ -704,7 +713,7 @@ class World:
         at_lo = q <= self._lo
         at_hi = q >= self._hi
         limited = at_lo | at_hi
-        any_limited = bool(limited.any())
+        any_limited = bool(_any(limited))
         due = self.cycle
         for r in self.robots:
             if r.pending and r.pending[0][0] <= due:
@@ -714,7 +723,7 @@ class World:
         if any_limited:
             # joints resting at a stop whose target does not pull them away from it
             at_stop = (at_lo & (targets <= 0.0)) | (at_hi & (targets >= 0.0))
-            if not at_stop.any():
+            if not _any(at_stop):
                 at_stop = None
         # Creep compensation: MuJoCo regularises the motor rows, so a held joint creeps slowly
         # under load where ODE's rigid motor row does not. Each motor follows the integral of its
@@ -775,7 +784,9 @@ class World:
             self.game.game_time = round(self.game.game_time + CYCLE_S, 10)
         for r in self.robots:
             r.perception_counter += 1
-        self._check_state()
+        qvel = d.qvel
+        if not qvel @ qvel < DIVERGED_QVEL_SQ:  # also True for NaN
+            self._raise_diverged()
 
     def _ball_ground_contact_mode(self) -> None:
         """Bouncy ball-ground contact only if the ball will hit the ground this cycle faster than
@@ -799,21 +810,25 @@ class World:
         cvel = d.cvel[b]
         w = cvel[:, :3]
         # velocity of each body's centre of mass: v_origin + ω × (com − subtree com of the root)
-        r = d.xipos[b] - d.subtree_com[self._drag_roots]
-        xf = self._xfrc
-        np.einsum("ijk,nj,nk->ni", _LEVI_CIVITA, w, r, out=xf[:, :3])
-        xf[:, :3] += cvel[:, 3:]
+        arm = self._drag_arm
+        sc = d.subtree_com
+        root = self._drag_root
+        np.subtract(d.xipos[b], sc[root] if root is not None else sc[self._drag_roots], out=arm)
+        outer = self._drag_outer
+        np.multiply(w[:, :, None], arm[:, None, :], out=outer)
+        xf = d.xfrc_applied[b]  # a view when b is a slice (always, in our scenes)
+        lin = xf[:, :3]
+        np.matmul(outer.reshape(-1, 9), _CROSS, out=lin)
+        lin += cvel[:, 3:]
         xf[:, 3:] = w
         xf *= _DRAG
-        d.xfrc_applied[b] = xf
+        if not isinstance(b, slice):
+            d.xfrc_applied[b] = xf
 
-    def _check_state(self) -> None:
-        """Raise :class:`SimulationDivergedError` if the last step blew up: a NaN/inf or absurd
-        velocity (|qvel| > 1e5; MuJoCo's automatic reset is disabled so that the blow-up stays
+    def _raise_diverged(self) -> None:
+        """Raise :class:`SimulationDivergedError`: the last step blew up (a NaN/inf or absurd
+        velocity, |qvel| > 1e5; MuJoCo's automatic reset is disabled so that the blow-up stays
         visible). The MuJoCo warnings of the step name the cause."""
-        qvel = self.data.qvel
-        if float(qvel @ qvel) < DIVERGED_QVEL_SQ:  # False for NaN
-            return
         d = self.data
         counts = [d.warning[i].number for i in _DIVERGENCE_WARNINGS]
         names = [
