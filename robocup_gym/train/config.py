@@ -91,11 +91,10 @@ class TrainConfig:
     eval_episodes: int = 5
     device: str = "cpu"
     """Torch device; small MLPs train fastest on the CPU."""
-    torch_threads: int = 0
-    """Torch intra-op threads for the gradient steps; 0 = one per core. While the environment
-    workers step, torch runs on one thread (a second one would only compete with them); with
-    environments in subprocesses the gradient steps then use all cores (measured on the 2-core
-    reference machine: ~12 % more steps/s end to end than one thread throughout)."""
+    torch_threads: int = 1
+    """Torch intra-op threads. 1 is fastest for these small MLPs: with more, every tiny matrix
+    product pays a thread barrier, which costs milliseconds when the environment workers (or
+    anything else) keep the other cores busy. 0 = torch's default."""
     vec_env: str = "auto"
     """``auto`` (subprocesses when n_envs > 1), ``subproc`` or ``dummy``."""
     n_workers: int = 0
