@@ -224,9 +224,6 @@ class World:
         nd = len(self._drag_bodies)
         self._drag_arm = np.zeros((nd, 3))
         self._drag_outer = np.zeros((nd, 3, 3))
-        roots = np.unique(self._drag_roots)
-        self._drag_root: int | None = int(roots[0]) if len(roots) == 1 else None
-        """The one root body when all drag bodies belong to one robot (subtree com broadcast)."""
         db = self._drag_bodies
         self._drag_slice = (
             slice(int(db[0]), int(db[-1]) + 1)
@@ -811,9 +808,7 @@ class World:
         w = cvel[:, :3]
         # velocity of each body's centre of mass: v_origin + ω × (com − subtree com of the root)
         arm = self._drag_arm
-        sc = d.subtree_com
-        root = self._drag_root
-        np.subtract(d.xipos[b], sc[root] if root is not None else sc[self._drag_roots], out=arm)
+        np.subtract(d.xipos[b], d.subtree_com[self._drag_roots], out=arm)
         outer = self._drag_outer
         np.multiply(w[:, :, None], arm[:, None, :], out=outer)
         xf = d.xfrc_applied[b]  # a view when b is a slice (always, in our scenes)

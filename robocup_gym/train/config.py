@@ -95,8 +95,8 @@ class TrainConfig:
     """Torch intra-op threads. 1 keeps a run's numbers the same on every machine (reductions
     over several threads round differently, and PPO amplifies that into a different policy) and
     is about as fast for these small MLPs: every tiny matrix product pays a thread barrier while
-    the environment workers keep the other cores busy. With more than 1, torch runs on one thread
-    while the workers step and on ``torch_threads`` for the gradient steps (0 = one per core;
+    the environment workers keep the other cores busy. With any other value, torch runs on one
+    thread while the workers step and on ``torch_threads`` for the gradient steps (0 = one per core;
     measured on the 2-core machine: gradient steps ~20 % faster, a whole run within the noise)."""
     vec_env: str = "auto"
     """``auto`` (subprocesses when n_envs > 1), ``subproc`` or ``dummy``."""
