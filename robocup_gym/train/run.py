@@ -29,9 +29,13 @@ _CKPT = re.compile(r"model_(\d+)_steps\.zip$")
 
 
 def algo_class(algo: str):
-    from stable_baselines3 import PPO, SAC
+    """The Stable-Baselines3 class that trains ``algo``: SAC, or PPO with pipelined rollouts
+    (:class:`robocup_gym.train.pipelined.PipelinedPPO`, the same algorithm, less waiting)."""
+    from stable_baselines3 import SAC
 
-    return {"ppo": PPO, "sac": SAC}[algo.lower()]
+    from robocup_gym.train.pipelined import PipelinedPPO
+
+    return {"ppo": PipelinedPPO, "sac": SAC}[algo.lower()]
 
 
 def new_run_dir(root: str | os.PathLike, task: str, algo: str) -> Path:

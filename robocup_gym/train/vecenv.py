@@ -9,7 +9,9 @@ of their time in inter-process traffic and context switches).
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
+import multiprocessing.connection as mp_connection
 import os
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -208,26 +210,67 @@ class BatchedSubprocVecEnv(VecEnv):
             self.processes.append(process)
             work_remote.close()
         self._where = [(w, k) for w, block in enumerate(self.blocks) for k in range(len(block))]
+        self._block_pending = [False] * len(self.blocks)
         self.remotes[0].send(("get_spaces", None))
         observation_space, action_space = self.remotes[0].recv()
         super().__init__(n_envs, observation_space, action_space)
+        self.reset_infos = [{} for _ in range(n_envs)]
 
     def step_async(self, actions: np.ndarray) -> None:
-        for remote, block in zip(self.remotes, self.blocks, strict=True):
-            remote.send(("step", [actions[i] for i in block]))
+        for w, block in enumerate(self.blocks):
+            self.step_block_async(w, actions[block.start : block.stop])
         self.waiting = True
 
     def step_wait(self):
-        results = [r for remote in self.remotes for r in remote.recv()]
+        results = [self.step_block_wait(w) for w in range(len(self.blocks))]
         self.waiting = False
-        obs, rews, dones, infos, self.reset_infos = zip(*results, strict=True)
+        obs, rews, dones, infos = zip(*results, strict=True)
+        return (
+            np.concatenate(obs),
+            np.concatenate(rews),
+            np.concatenate(dones),
+            tuple(i for block_infos in infos for i in block_infos),
+        )
+
+    # -------------------------------------------------------------- one block at a time
+    def step_block_async(self, worker: int, actions: np.ndarray) -> None:
+        """Send one step's actions to worker ``worker`` only (its block of environments,
+        ``blocks[worker]``, in order); the other workers are not touched. Collect the result with
+        :meth:`step_block_wait` (or wait for any worker with :meth:`ready_blocks`)."""
+        if self._block_pending[worker]:
+            raise RuntimeError(f"worker {worker} is still stepping; call step_block_wait first")
+        self.remotes[worker].send(("step", list(actions)))
+        self._block_pending[worker] = True
+
+    def step_block_wait(self, worker: int):
+        """``(obs, rewards, dones, infos)`` of worker ``worker``'s block, as :meth:`step_wait`
+        returns them for all environments (auto-reset, ``terminal_observation`` in the info)."""
+        try:
+            results = self.remotes[worker].recv()
+        except EOFError:
+            raise RuntimeError(
+                f"environment worker {worker} (environments {self.blocks[worker].start}–"
+                f"{self.blocks[worker].stop - 1}) died"
+            ) from None
+        finally:
+            self._block_pending[worker] = False
+        obs, rews, dones, infos, reset_infos = zip(*results, strict=True)
+        block = self.blocks[worker]
+        self.reset_infos[block.start : block.stop] = reset_infos
         return np.stack(obs), np.stack(rews), np.stack(dones), infos
+
+    def ready_blocks(self, workers: Sequence[int]) -> list[int]:
+        """Block until at least one of ``workers`` (each stepping) has its result; returns those
+        that have, in ascending order."""
+        conns = {self.remotes[w]: w for w in workers}
+        return sorted(conns[c] for c in mp_connection.wait(list(conns)))
 
     def reset(self):
         for remote, block in zip(self.remotes, self.blocks, strict=True):
             remote.send(("reset", [(self._seeds[i], self._options[i]) for i in block]))
         results = [r for remote in self.remotes for r in remote.recv()]
-        obs, self.reset_infos = zip(*results, strict=True)
+        obs, reset_infos = zip(*results, strict=True)
+        self.reset_infos = list(reset_infos)
         self._reset_seeds()
         self._reset_options()
         return np.stack(obs)
@@ -235,9 +278,10 @@ class BatchedSubprocVecEnv(VecEnv):
     def close(self) -> None:
         if self.closed:
             return
-        if self.waiting:
-            for remote in self.remotes:
-                remote.recv()
+        for remote, pending in zip(self.remotes, self._block_pending, strict=True):
+            if pending:
+                with contextlib.suppress(EOFError, OSError):
+                    remote.recv()
         for remote in self.remotes:
             remote.send(("close", None))
         for process in self.processes:
