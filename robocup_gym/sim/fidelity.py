@@ -79,12 +79,19 @@ class KickResult:
 def scripted_kick(spec: dict | None = None, world: World | None = None) -> KickResult:
     """Replay a scripted kick in the format of ``kick_D.json``: same placement, same commands
     (every cycle all joints are sent, unlisted joints 0 rad/s), one-cycle dead time as in sync
-    mode."""
+    mode.
+
+    The robot is placed as the trainer's ``move`` put it: torso centre at ``torso_before_kick``
+    (z = 0.385 m, all joints 0: the soles exactly at z = 0, ~2 mm above the resting height) and
+    asleep. On the real server ODE's auto-disable keeps it hanging there through the zero-velocity
+    cycles until the first non-zero joint velocity wakes it (fixture README); it then falls those
+    2 mm while the kick starts."""
     spec = spec or load_data("kick_D.json")
     w = world or World([int(spec.get("robot_type", 0))])
     model = nao_model(int(spec.get("robot_type", 0)))
     torso = spec["torso_before_kick"]
-    w.place_robot(0, x=torso[0], y=torso[1], heading_deg=0.0)
+    z = torso[2] if len(torso) > 2 else None
+    w.place_robot(0, x=torso[0], y=torso[1], z=z, heading_deg=0.0, asleep=True)
     start = np.array(spec["ball_start"][:2], dtype=float)
     w.place_ball(start)
     names = model.effector_names

@@ -121,6 +121,11 @@ class RobotState:
     heard: list[HeardMessage] = field(default_factory=list)
     hear_capacity: dict[str, int] = field(default_factory=lambda: {"team": 2, "opp": 2})
     last_frp: dict[str, ForceResistance] = field(default_factory=dict)
+    asleep: bool = False
+    """Held where it was placed (ODE auto-disable) until a non-zero motor target or a contact
+    with a moving body wakes it (see :meth:`World.place_robot`)."""
+    sleep_qpos: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Root pose (7) and joint angles at which a sleeping robot is held."""
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -239,6 +244,9 @@ class World:
         self._qpos0 = self.data.qpos.copy()
         self._dof_frictionloss0 = self.model.dof_frictionloss.copy()
         self._warning_counts = [0] * len(_DIVERGENCE_WARNINGS)
+        self._sleepers: list[RobotState] = []
+        """Robots that are asleep (held in place), see :meth:`place_robot`."""
+        self._static_geoms = frozenset(np.flatnonzero(m.geom_bodyid == 0).tolist())
         self.reset(seed=seed)
 
     # ------------------------------------------------------------------ construction helpers
@@ -310,6 +318,8 @@ class World:
         "heard",
         "hear_capacity",
         "last_frp",
+        "asleep",
+        "sleep_qpos",
     )
     _ARRAY_STATE = ("targets", "q_ref", "accel", "prev_vel")
 
@@ -336,6 +346,7 @@ class World:
                 getattr(r, name)[:] = state[name]
         if "pending" in state:
             r.pending = [(due, np.array(vel, float)) for due, vel in state["pending"]]
+        self._update_sleepers()
 
     # ------------------------------------------------------------------ properties
     @property
@@ -380,6 +391,7 @@ class World:
             r.heard.clear()
             r.hear_capacity = {"team": 2, "opp": 2}
             r.last_frp = {}
+            r.asleep = False
             r.calibration = self.rng.uniform(-CALIBRATION_ERROR_M, CALIBRATION_ERROR_M, 3)
         counts = {"left": 0, "right": 0, None: 0}
         for r in self.robots:
@@ -415,6 +427,7 @@ class World:
         joint_angles_deg: Mapping[str, float] | np.ndarray | None = None,
         quat: Sequence[float] | None = None,
         forward: bool = True,
+        asleep: bool = False,
     ) -> None:
         """Teleport a robot instantly: no warm-up cycles, no controller loop.
 
@@ -430,6 +443,12 @@ class World:
             forward: Recompute the derived quantities (contacts, sensors) now. Pass ``False``
                 when placing several robots in a row and call ``mujoco.mj_forward`` once at the
                 end (robots still overlapping half-way would create thousands of contacts).
+            asleep: Leave the robot asleep, as ODE's auto-disable leaves a resting robot that a
+                trainer ``move`` teleports (spec §7.1, §8.3; fixture README: the real robot then
+                hangs where it was put, e.g. 2 mm above its resting height, until the first
+                non-zero joint velocity): it is held exactly in the placed pose, feeling no
+                gravity, until a non-zero motor target is realised for it or one of its parts
+                touches a moving body (ball, another robot); then it wakes in that very step.
 
         All velocities and joint targets are zeroed.
         """
@@ -461,8 +480,48 @@ class World:
             mujoco.mj_kinematics(self.model, d)
             lowest = self._lowest_point(r)
             d.qpos[a + 2] += -phys.SURFACE_LAYER - lowest
+        r.asleep = bool(asleep)
+        if r.asleep:
+            r.sleep_qpos = np.concatenate((d.qpos[a : a + 7], d.qpos[r.qpos_joints]))
+        self._update_sleepers()
         if forward:
             mujoco.mj_forward(self.model, d)
+
+    def _update_sleepers(self) -> None:
+        self._sleepers = [r for r in self.robots if r.asleep]
+
+    def _wake_touched(self) -> None:
+        """Wake every sleeping robot one of whose parts touches a moving body (the ball or
+        another robot) in this step's contacts: in ODE the contact joint joins it to that body's
+        island, which is enabled as a whole."""
+        d = self.data
+        if d.ncon == 0:
+            return
+        pairs = d.contact.geom[: d.ncon]
+        static = self._static_geoms
+        woke = False
+        for r in self._sleepers:
+            own = r.robot_geoms
+            for g1, g2 in pairs.tolist():
+                if (g1 in own and g2 not in own and g2 not in static) or (
+                    g2 in own and g1 not in own and g1 not in static
+                ):
+                    r.asleep = False
+                    woke = True
+                    break
+        if woke:
+            self._update_sleepers()
+
+    def _hold_sleepers(self) -> None:
+        """Put every sleeping robot back into its held pose with zero velocity (a disabled ODE
+        body is not integrated)."""
+        d = self.data
+        for r in self._sleepers:
+            a = r.qpos_root
+            d.qpos[a : a + 7] = r.sleep_qpos[:7]
+            d.qpos[r.qpos_joints] = r.sleep_qpos[7:]
+            d.qvel[r.qvel_root : r.qvel_root + 6] = 0.0
+            d.qvel[r.qvel_joints] = 0.0
 
     def _lowest_point(self, r: RobotState) -> float:
         m, d = self.model, self.data
@@ -715,6 +774,12 @@ class World:
         for r in self.robots:
             if r.pending and r.pending[0][0] <= due:
                 self._realise_commands(r, ~limited[r.joint_slice] if any_limited else None)
+        if self._sleepers:
+            # a non-zero motor target wakes the robot for this very step (spec §8.3)
+            for r in self._sleepers:
+                if _any(r.targets != 0.0):
+                    r.asleep = False
+            self._update_sleepers()
         targets = self._targets
         at_stop = None
         if any_limited:
@@ -768,7 +833,11 @@ class World:
             # friction-loss row turned into ODE's velocity motor (see robocup_gym/robot/mjcf.py).
             if nrows:
                 d.efc_aref[:nrows] += shift
+            if self._sleepers:
+                self._wake_touched()
             mujoco.mj_step2(m, d)
+            if self._sleepers:
+                self._hold_sleepers()
         # MuJoCo computes positions at the start of a step; SimSpark senses after it. Bring the
         # body poses (vision, monitor, referee, fall checks) and body velocities (next cycle's
         # drag) up to the new state.

@@ -124,6 +124,45 @@ def test_accelerometer_in_free_fall_reads_zero(world):
     assert np.abs(w.perceive(0).accel).max() < 0.5
 
 
+def test_asleep_robot_hangs_until_a_non_zero_command_then_lands(world):
+    """ODE auto-disable after a trainer move (fixture README): the robot hangs where it was put
+    (accelerometer 9.81, no foot contact) through zero-velocity cycles; the first non-zero joint
+    velocity wakes it and it lands one step later with ~51 N per foot."""
+    w = fresh(world)
+    w.place_robot(0, -1.0, 0.0, z=0.385, asleep=True)
+    r = w.robots[0]
+    robot_q = np.r_[r.qpos_root : r.qpos_root + 7, r.qpos_joints]
+    pose = w.data.qpos[robot_q].copy()
+    zero = np.zeros(22)
+    for _ in range(5):
+        w.step({0: zero})
+        p = w.perceive(0)
+        assert p.accel == pytest.approx([0, 0, 9.81], abs=1e-9)
+        assert not p.force_sensors
+    np.testing.assert_array_equal(w.data.qpos[robot_q], pose)
+    cmd = dict.fromkeys(w.robots[0].effector_names, 0.0)
+    cmd["he1"] = 0.01
+    w.step({0: cmd})  # queued: the dead time passes, still asleep
+    assert w.torso_position(0)[2] == 0.385
+    w.step({0: cmd})  # the command acts: awake, falling freely
+    assert w.torso_position(0)[2] < 0.3835
+    assert not w.force_sensors(0)
+    w.step({0: cmd})  # lands
+    forces = {k: float(np.linalg.norm(v.force)) for k, v in w.force_sensors(0).items()}
+    assert forces["rf"] == pytest.approx(51.0, abs=5.0)
+    assert forces["lf"] == pytest.approx(51.0, abs=5.0)
+
+
+def test_asleep_robot_wakes_when_the_ball_hits_it(world):
+    w = fresh(world)
+    w.place_robot(0, -1.0, 0.0, z=0.385, asleep=True)
+    w.place_ball((-0.7, -0.055), vel=(-3.0, 0.0, 0.0))
+    for _ in range(10):
+        w.step()
+    assert not w.robots[0].asleep
+    assert w.torso_position(0)[2] < 0.3845
+
+
 def test_placement_is_instant_with_joint_angles(world):
     w = fresh(world)
     w.place_robot(0, 2.0, 3.0, heading_deg=90.0, joint_angles_deg={"rle3": 30.0, "lae1": -90})
