@@ -104,66 +104,108 @@ def resolve_n_workers(n_envs: int, n_workers: int = 0) -> int:
     return max(1, min(int(n_workers), n_envs))
 
 
-def _batched_worker(remote, parent_remote, env_fns_wrapper) -> None:
-    """Hosts a block of environments; every command addresses the whole block."""
+class _WorkerError:
+    """An exception raised inside a worker, sent back instead of the command's result."""
+
+    def __init__(self, message: str) -> None:
+        self.message = message
+
+
+def _worker_failed(result: Any) -> Any:
+    """``result`` unless it is a worker's error, which is raised here as a ``RuntimeError``."""
+    if isinstance(result, _WorkerError):
+        raise RuntimeError(result.message)
+    return result
+
+
+def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0) -> None:
+    """Hosts a block of environments (global indices ``first_index``…); every command addresses
+    the whole block. An exception in an environment is sent back (and raised by the parent)
+    naming the environment, instead of killing the worker."""
     from stable_baselines3.common.env_util import is_wrapped
     from stable_baselines3.common.vec_env.patch_gym import _patch_env
 
     parent_remote.close()
-    envs = [_patch_env(fn()) for fn in env_fns_wrapper.var]
+    envs: list = []
+    broken: _WorkerError | None = None
+    for k, fn in enumerate(env_fns_wrapper.var):
+        try:
+            envs.append(_patch_env(fn()))
+        except Exception as e:  # reported to the parent at its first command
+            broken = _WorkerError(
+                f"creating environment {first_index + k} failed: {type(e).__name__}: {e}"
+            )
+            break
     try:
         while True:
             try:
                 cmd, data = remote.recv()
             except (EOFError, KeyboardInterrupt):
                 break
-            if cmd == "step":
-                results = []
-                for env, action in zip(envs, data, strict=True):
-                    obs, reward, terminated, truncated, info = env.step(action)
-                    done = terminated or truncated
-                    info["TimeLimit.truncated"] = truncated and not terminated
-                    reset_info: dict[str, Any] = {}
-                    if done:
-                        info["terminal_observation"] = obs
-                        obs, reset_info = env.reset()
-                    results.append((obs, reward, done, info, reset_info))
-                remote.send(results)
-            elif cmd == "reset":
-                out = []
-                for env, (seed, options) in zip(envs, data, strict=True):
-                    kw = {"options": options} if options else {}
-                    out.append(env.reset(seed=seed, **kw))
-                remote.send(out)
-            elif cmd == "close":
-                for env in envs:
-                    env.close()
-                remote.close()
-                break
-            elif cmd == "get_spaces":
-                remote.send((envs[0].observation_space, envs[0].action_space))
-            elif cmd == "env_method":
-                i, name, args, kwargs = data
-                remote.send(envs[i].get_wrapper_attr(name)(*args, **kwargs))
-            elif cmd == "get_attr":
-                i, name = data
-                remote.send(envs[i].get_wrapper_attr(name))
-            elif cmd == "has_attr":
-                try:
-                    envs[0].get_wrapper_attr(data)
-                    remote.send(True)
-                except AttributeError:
-                    remote.send(False)
-            elif cmd == "set_attr":
-                i, name, value = data
-                remote.send(setattr(envs[i], name, value))
-            elif cmd == "is_wrapped":
-                i, cls = data
-                remote.send(is_wrapped(envs[i], cls))
-            elif cmd == "render":
-                remote.send(envs[data].render())
-            else:
-                raise NotImplementedError(f"unknown command {cmd!r}")
+            if broken is not None:
+                if cmd == "close":
+                    remote.close()
+                    break
+                remote.send(broken)
+                continue
+            k = 0
+            try:
+                if cmd == "step":
+                    results = []
+                    for k in range(len(envs)):
+                        env = envs[k]
+                        obs, reward, terminated, truncated, info = env.step(data[k])
+                        done = terminated or truncated
+                        info["TimeLimit.truncated"] = truncated and not terminated
+                        reset_info: dict[str, Any] = {}
+                        if done:
+                            info["terminal_observation"] = obs
+                            obs, reset_info = env.reset()
+                        results.append((obs, reward, done, info, reset_info))
+                    remote.send(results)
+                elif cmd == "reset":
+                    out = []
+                    for k in range(len(envs)):
+                        seed, options = data[k]
+                        kw = {"options": options} if options else {}
+                        out.append(envs[k].reset(seed=seed, **kw))
+                    remote.send(out)
+                elif cmd == "close":
+                    for env in envs:
+                        env.close()
+                    remote.close()
+                    break
+                elif cmd == "get_spaces":
+                    remote.send((envs[0].observation_space, envs[0].action_space))
+                elif cmd == "env_method":
+                    k, name, args, kwargs = data
+                    remote.send(envs[k].get_wrapper_attr(name)(*args, **kwargs))
+                elif cmd == "get_attr":
+                    k, name = data
+                    remote.send(envs[k].get_wrapper_attr(name))
+                elif cmd == "has_attr":
+                    try:
+                        envs[0].get_wrapper_attr(data)
+                        remote.send(True)
+                    except AttributeError:
+                        remote.send(False)
+                elif cmd == "set_attr":
+                    k, name, value = data
+                    remote.send(setattr(envs[k], name, value))
+                elif cmd == "is_wrapped":
+                    k, cls = data
+                    remote.send(is_wrapped(envs[k], cls))
+                elif cmd == "render":
+                    k = data
+                    remote.send(envs[k].render())
+                else:
+                    remote.send(_WorkerError(f"unknown worker command {cmd!r}"))
+            except Exception as e:
+                remote.send(
+                    _WorkerError(
+                        f"{cmd} failed in environment {first_index + k}: {type(e).__name__}: {e}"
+                    )
+                )
     except KeyboardInterrupt:
         pass
 
@@ -204,15 +246,32 @@ class BatchedSubprocVecEnv(VecEnv):
         for work_remote, remote, block in zip(work_remotes, self.remotes, self.blocks, strict=True):
             fns = CloudpickleWrapper([env_fns[i] for i in block])
             process = ctx.Process(
-                target=_batched_worker, args=(work_remote, remote, fns), daemon=True
+                target=_batched_worker,
+                args=(work_remote, remote, fns, block.start),
+                daemon=True,
             )
             process.start()
             self.processes.append(process)
             work_remote.close()
         self._where = [(w, k) for w, block in enumerate(self.blocks) for k in range(len(block))]
         self._block_pending = [False] * len(self.blocks)
-        self.remotes[0].send(("get_spaces", None))
-        observation_space, action_space = self.remotes[0].recv()
+        try:  # every worker answers: a failed start is raised here, naming the environment
+            for remote in self.remotes:
+                remote.send(("get_spaces", None))
+            spaces = [remote.recv() for remote in self.remotes]
+            for answer in spaces:
+                _worker_failed(answer)
+        except (EOFError, ConnectionError) as e:
+            self._abort()
+            raise RuntimeError(
+                "an environment worker process died while starting (its traceback is printed "
+                "above; with the spawn/forkserver start method the environment factory must be "
+                "importable from a module, not defined in a script read from stdin)"
+            ) from e
+        except BaseException:
+            self._abort()
+            raise
+        observation_space, action_space = spaces[0]
         super().__init__(n_envs, observation_space, action_space)
         self.reset_infos = [{} for _ in range(n_envs)]
 
@@ -222,7 +281,7 @@ class BatchedSubprocVecEnv(VecEnv):
         self.waiting = True
 
     def step_wait(self):
-        results = [self.step_block_wait(w) for w in range(len(self.blocks))]
+        results = self._from_every_worker(self.step_block_wait)
         self.waiting = False
         obs, rews, dones, infos = zip(*results, strict=True)
         return (
@@ -246,8 +305,8 @@ class BatchedSubprocVecEnv(VecEnv):
         """``(obs, rewards, dones, infos)`` of worker ``worker``'s block, as :meth:`step_wait`
         returns them for all environments (auto-reset, ``terminal_observation`` in the info)."""
         try:
-            results = self.remotes[worker].recv()
-        except EOFError:
+            results = _worker_failed(self.remotes[worker].recv())
+        except (EOFError, ConnectionError):
             raise RuntimeError(
                 f"environment worker {worker} (environments {self.blocks[worker].start}–"
                 f"{self.blocks[worker].stop - 1}) died"
@@ -268,7 +327,8 @@ class BatchedSubprocVecEnv(VecEnv):
     def reset(self):
         for remote, block in zip(self.remotes, self.blocks, strict=True):
             remote.send(("reset", [(self._seeds[i], self._options[i]) for i in block]))
-        results = [r for remote in self.remotes for r in remote.recv()]
+        answers = self._from_every_worker(lambda w: _worker_failed(self.remotes[w].recv()))
+        results = [r for answer in answers for r in answer]
         obs, reset_infos = zip(*results, strict=True)
         self.reset_infos = list(reset_infos)
         self._reset_seeds()
@@ -290,20 +350,47 @@ class BatchedSubprocVecEnv(VecEnv):
             remote.close()
         self.closed = True
 
+    def _from_every_worker(self, receive: Callable[[int], Any]) -> list[Any]:
+        """``receive(w)`` for every worker; a worker's error is raised only after every answer
+        is read (so that no answer is left in a pipe to be mistaken for the next one)."""
+        answers, error = [], None
+        for w in range(len(self.blocks)):
+            try:
+                answers.append(receive(w))
+            except RuntimeError as e:
+                error = error or e
+        if error is not None:
+            raise error
+        return answers
+
+    def _abort(self) -> None:
+        """Stop every worker at once (construction failed)."""
+        for remote in self.remotes:
+            with contextlib.suppress(OSError):
+                remote.send(("close", None))
+        for process in self.processes:
+            process.join(timeout=5)
+            if process.is_alive():
+                process.terminate()
+                process.join()
+        for remote in self.remotes:
+            remote.close()
+        self.closed = True
+
     def _targets(self, indices) -> list[tuple[int, int]]:
         return [self._where[i] for i in self._get_indices(indices)]
 
     def _ask(self, cmd: str, targets: list[tuple[int, int]], payload) -> list[Any]:
         for w, k in targets:
             self.remotes[w].send((cmd, payload(k)))
-        return [self.remotes[w].recv() for w, _ in targets]
+        return [_worker_failed(self.remotes[w].recv()) for w, _ in targets]
 
     def get_images(self) -> Sequence[np.ndarray | None]:
         return self._ask("render", self._targets(None), lambda k: k)
 
     def has_attr(self, attr_name: str) -> bool:
         self.remotes[0].send(("has_attr", attr_name))
-        return bool(self.remotes[0].recv())
+        return bool(_worker_failed(self.remotes[0].recv()))
 
     def get_attr(self, attr_name: str, indices=None) -> list[Any]:
         return self._ask("get_attr", self._targets(indices), lambda k: (k, attr_name))

@@ -39,3 +39,32 @@ def test_batched_matches_dummy():
     finally:
         batched.close()
         dummy.close()
+
+
+def _broken_factory():
+    raise ValueError("no such robot type 9")
+
+
+def test_worker_errors_name_the_environment():
+    from robocup_gym.train.vecenv import _Monitored, env_factories
+
+    fns = [_Monitored(f) for f in env_factories("RobocupGym/VelocityKick-v0", 3, seed=0)]
+    with pytest.raises(RuntimeError, match=r"creating environment 2 failed: ValueError: no such"):
+        BatchedSubprocVecEnv([fns[0], fns[1], _broken_factory], n_workers=2)
+
+    venv = make_vec_env("RobocupGym/VelocityKick-v0", 3, n_workers=2, seed=0)
+    try:
+        venv.reset()
+        bad = np.zeros((3, *venv.action_space.shape), dtype=np.float32)
+        bad[2, 0] = np.nan
+        with pytest.raises(RuntimeError, match=r"step failed in environment 2: .*NaN|nan"):
+            venv.step(bad)
+        bad[:] = 0.0
+        bad[0, 1] = np.inf  # first worker fails: the second one's answer must not be left over
+        with pytest.raises(RuntimeError, match=r"step failed in environment 0"):
+            venv.step(bad)
+        # the workers survive: the next step works
+        obs, *_ = venv.step(np.zeros_like(bad))
+        assert obs.shape[0] == 3
+    finally:
+        venv.close()
