@@ -248,6 +248,7 @@ class World:
         """Robots that are asleep (held in place), see :meth:`place_robot`."""
         self._static_geoms = frozenset(np.flatnonzero(m.geom_bodyid == 0).tolist())
         self.reset(seed=seed)
+        self._check_motor_rows()
 
     # ------------------------------------------------------------------ construction helpers
     def _init_motor_arrays(self) -> None:
@@ -256,7 +257,8 @@ class World:
         motor work is a few vector operations whatever the number of robots.
 
         Motor rows are the dof friction-loss rows, which MuJoCo puts first in the constraint
-        list, in dof order; ``_motor_sort`` maps canonical order to dof order.
+        list, in dof order (checked at construction, :meth:`_check_motor_rows`); ``_motor_sort``
+        maps canonical order to dof order.
         """
         m = self.model
         robots = self.robots
@@ -282,6 +284,56 @@ class World:
         tc = np.maximum(m.dof_solref[dofs, 0], 2 * m.opt.timestep)
         self._motor_b = 2.0 / (m.dof_solimp[dofs, 1] * tc)
         """Damping B of each motor row, dof order (MuJoCo's aref = −B·v for friction rows)."""
+
+    def _check_motor_rows(self) -> None:
+        """Check, once per world, what the joint motors rely on in MuJoCo's constraint rows, so
+        that a MuJoCo version that lays them out differently fails here with a clear error
+        instead of silently driving the wrong rows (tested with MuJoCo 3.4 and 4.0, see
+        docs/physics.md):
+
+        * the dof friction-loss rows (the motors) are the first ``nrows`` constraint rows, one per
+          motor dof with non-zero ``dof_frictionloss``, in dof order, and no other row is one;
+        * their reference acceleration is ``efc_aref = −B·v`` with ``B`` from ``_motor_b``
+          (MuJoCo's damping of a row of impedance ``solimp[1]`` and time constant
+          ``max(solref[0], 2·timestep)``), which :meth:`step` shifts by ``B·v_cmd``.
+
+        Probes the freshly reset state with non-zero joint velocities and restores it.
+
+        Raises:
+            RuntimeError: naming the MuJoCo version and the assumption that does not hold.
+        """
+        dofs = self._motor_dofs_sorted
+        n = len(dofs)
+        if n == 0:
+            return
+        m, d = self.model, self.data
+        probe = np.where(np.arange(n) % 2 == 0, 1.0, -1.0) * (1.0 + np.arange(n) % 5)
+        d.qvel[dofs] = probe
+        mujoco.mj_forward(m, d)
+        friction = mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF
+        problem = None
+        rows = (d.efc_type == friction).nonzero()[0]
+        if len(rows) != n or not np.array_equal(rows, np.arange(n)):
+            problem = (
+                f"the {n} joint motor (dof friction-loss) rows are not the first constraint rows "
+                f"(friction-loss rows at {rows[:5].tolist()}…, {d.nefc} rows in all)"
+            )
+        elif not np.array_equal(d.efc_id[:n], dofs):
+            problem = "the joint motor (dof friction-loss) rows are not in dof order"
+        elif not np.allclose(d.efc_aref[:n], -self._motor_b * probe, rtol=1e-9, atol=0.0):
+            problem = (
+                "the motor rows' reference acceleration is not −B·v with MuJoCo's documented B "
+                f"(largest error {np.abs(d.efc_aref[:n] + self._motor_b * probe).max():.3g})"
+            )
+        d.qvel[dofs] = 0.0
+        d.qacc_warmstart[:] = 0.0
+        mujoco.mj_forward(m, d)
+        if problem is not None:
+            raise RuntimeError(
+                f"MuJoCo {mujoco.__version__}: {problem}. The World's joint motors "
+                "(robocup_gym/sim/world.py, robocup_gym/robot/mjcf.py) rely on it; "
+                "use a tested MuJoCo version (docs/physics.md, 'MuJoCo versions')."
+            )
 
     def _index_robot(self, i: int, slot: RobotSlot) -> RobotState:
         m = self.model
