@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
-import pytest
 
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import SimulationDivergedError, World
+from robocup_gym.sim.world import World
 
 STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 # the kick_D command sequence of the real-server capture (shortened rest phase)
@@ -76,8 +75,7 @@ def test_kick_over_the_network_equals_in_process(make_server, clients):
     step(zero)  # the cycle of the last command has completed
     start = snaps[t_cycle]
     end = snaps[t_cycle + len(commands)]
-    if end["divergences"] != start["divergences"]:
-        pytest.skip("the world diverged during the kick (physics being tuned)")
+    assert end["divergences"] == start["divergences"], "the served world diverged in the kick"
     net = end["ball"] - start["ball"]
 
     world = World(robot_types=[0], dead_time_cycles=0, vision=VisionConfig(noise=False))
@@ -88,14 +86,10 @@ def test_kick_over_the_network_equals_in_process(make_server, clients):
         r.q_ref[:] = start["q_ref"]
     r.prev_vel, r.accel = start["prev_vel"], start["accel"]
     mujoco.mj_forward(world.model, world.data)
-    try:
-        for cmd in commands:
-            world.step({0: cmd})
-    except SimulationDivergedError:
-        pytest.skip("the world diverged during the kick (physics being tuned)")
+    for cmd in commands:
+        world.step({0: cmd})  # a SimulationDivergedError fails the test
     local = world.ball_position() - start["ball"]
-    if np.hypot(*local[:2]) < 0.01:
-        pytest.skip("the kick misses the ball with the current physics")
+    assert np.hypot(*local[:2]) > 0.3, f"the kick should move the ball, moved {local}"
     # same to 1e-5 m, the repeatability of the real server (state restored in-process differs
     # from the served world only in the last bits of solver warm-start data)
     np.testing.assert_allclose(net, local, atol=1e-5)
