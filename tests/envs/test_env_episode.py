@@ -121,6 +121,30 @@ def test_velocity_kick_coefficients_and_options(make_env):
     assert results["field"][0] < results["plain"][0] - 1.5  # |y| ≈ 2 m from the field axis
 
 
+def test_velocity_kick_fall_penalty(make_env):
+    start, vel = (1.0, 2.0, 0.041), (2.5, 0.0, 0.0)
+    rewards = {}
+    for penalty in (0.0, 1.5):
+        for fallen in (False, True):
+            # fall_height 0.5 m: the standing robot (torso 0.384 m) counts as down
+            env = make_env(
+                VelocityKick,
+                max_episode_steps=1,
+                wait_steps=0,
+                fall_penalty=penalty,
+                fall_height=0.5 if fallen else 0.2,
+            )
+            env.reset(seed=0, options={"ball_pos": start, "ball_vel": vel})
+            _, reward, terminated, _, info = env.step(_zero(env))
+            assert info["fallen"] == fallen == terminated
+            rewards[penalty, fallen] = reward
+    assert rewards[0.0, True] == pytest.approx(rewards[0.0, False], rel=1e-9)  # the paper's
+    assert rewards[1.5, False] == pytest.approx(rewards[0.0, False], rel=1e-9)
+    assert rewards[1.5, True] == pytest.approx(rewards[0.0, True] - 1.5, rel=1e-9)
+    with pytest.raises(ValueError, match="fall_penalty"):
+        make_env(VelocityKick, fall_penalty=float("nan"))
+
+
 def test_rewards_are_zero_before_the_end(make_env):
     env = make_env(VelocityKick, max_episode_steps=5, wait_steps=3, terminate_on_fall=False)
     env.reset(seed=0, options=ROLL)

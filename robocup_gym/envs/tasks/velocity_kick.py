@@ -29,6 +29,9 @@ class VelocityKickConfig(EnvConfig):
     """Add |ball y velocity| (m/s) to the lateral penalty (paper: ``penalise_y_vel_too``)."""
     square_lateral_penalty: bool = False
     """Square the lateral penalty (paper: ``square_y``)."""
+    fall_penalty: float = 0.0
+    """d: subtracted when the robot is down at the episode's end (paper: 0, no penalty: PPO then
+    often learns a kick that throws the robot at the ball)."""
     lateral_reference: str = "spawn"
     """``"spawn"``: |y| is measured from the ball's spawn y (the kick line through the ball);
     ``"field"``: from the field's x axis y = 0 (the paper's literal ``|ball y|``; identical when
@@ -40,7 +43,7 @@ class VelocityKickConfig(EnvConfig):
             raise EnvConfigError(
                 f"lateral_reference must be 'spawn' or 'field', got {self.lateral_reference!r}"
             )
-        for name in ("displacement_weight", "speed_weight", "lateral_weight"):
+        for name in ("displacement_weight", "speed_weight", "lateral_weight", "fall_penalty"):
             v = getattr(self, name)
             if not math.isfinite(v):
                 raise EnvConfigError(f"{name} must be finite, got {v!r}")
@@ -57,6 +60,7 @@ class VelocityKick(BaseEnv):
 
         lateral = |y − y_ref|  (+ |v_y|  if penalise_y_velocity)
         reward  = a · (x − s_x)  +  b · √(v_x² + v_z²)  −  c · lateral  (or c · lateral²)
+                  −  d  (if the robot is down when the episode ends)
 
     ==========================  =======  ========  ===========================================
     option                      symbol   default   meaning
@@ -67,6 +71,7 @@ class VelocityKick(BaseEnv):
     ``penalise_y_velocity``     –        False     add |v_y| to the lateral error
     ``square_lateral_penalty``  –        False     square the lateral error
     ``lateral_reference``       y_ref    "spawn"   ``"spawn"``: s_y; ``"field"``: 0
+    ``fall_penalty``            d        0.0       paid when fallen at the end (paper: none)
     ``wait_steps``              –        20        cycles between episode end and reward
     ==========================  =======  ========  ===========================================
 
@@ -90,4 +95,7 @@ class VelocityKick(BaseEnv):
             lateral += abs(float(v[1]))
         if c.square_lateral_penalty:
             lateral = lateral * lateral
-        return c.displacement_weight * dx + c.speed_weight * speed - c.lateral_weight * lateral
+        reward = c.displacement_weight * dx + c.speed_weight * speed - c.lateral_weight * lateral
+        if self.fallen:  # as it was when the episode ended (before the wait cycles)
+            reward -= c.fall_penalty
+        return reward
