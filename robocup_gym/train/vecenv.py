@@ -144,9 +144,16 @@ def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0
                 break
             if broken is not None:
                 if cmd == "close":
+                    for env in envs:  # those created before the failure
+                        env.close()
                     remote.close()
                     break
                 remote.send(broken)
+                continue
+            if cmd in ("step", "reset") and len(data) != len(envs):
+                remote.send(
+                    _WorkerError(f"{cmd}: {len(data)} entries for {len(envs)} environments")
+                )
                 continue
             k = 0
             try:
@@ -236,7 +243,6 @@ class BatchedSubprocVecEnv(VecEnv):
     ) -> None:
         from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper
 
-        self.waiting = False
         self.closed = False
         n_envs = len(env_fns)
         self.blocks = _split(n_envs, max(1, min(n_workers, n_envs)))
@@ -273,16 +279,13 @@ class BatchedSubprocVecEnv(VecEnv):
             raise
         observation_space, action_space = spaces[0]
         super().__init__(n_envs, observation_space, action_space)
-        self.reset_infos = [{} for _ in range(n_envs)]
 
     def step_async(self, actions: np.ndarray) -> None:
         for w, block in enumerate(self.blocks):
             self.step_block_async(w, actions[block.start : block.stop])
-        self.waiting = True
 
     def step_wait(self):
         results = self._from_every_worker(self.step_block_wait)
-        self.waiting = False
         obs, rews, dones, infos = zip(*results, strict=True)
         return (
             np.concatenate(obs),

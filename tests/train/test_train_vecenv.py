@@ -63,6 +63,9 @@ def test_worker_errors_name_the_environment():
         bad[0, 1] = np.inf  # first worker fails: the second one's answer must not be left over
         with pytest.raises(RuntimeError, match=r"step failed in environment 0"):
             venv.step(bad)
+        venv.step_block_async(0, bad[:1])  # block 0 holds environments 0 and 1
+        with pytest.raises(RuntimeError, match=r"step: 1 entries for 2 environments"):
+            venv.step_block_wait(0)
         # the workers survive: the next step works
         obs, *_ = venv.step(np.zeros_like(bad))
         assert obs.shape[0] == 3
