@@ -75,10 +75,9 @@ class WorldHost:
         self.rebuilds = 0
         self.divergences = 0
         self._joint_layout: dict[str, list[tuple[str, int, int, int, int]]] = {}
-        self._geom_robot = np.zeros(0, int)
-        self._geom_robot_list: list[int] = []
+        self._geom_robot: list[int] = []
+        """Robot index of every geom of the current World's model (-1: not a robot's)."""
         self._ball_geom = 0
-        self._ball_adr_cache: tuple[object, int, int] | None = None
         self._refresh_maps()
 
     # ------------------------------------------------------------------ lookups
@@ -197,12 +196,11 @@ class WorldHost:
         m = world.model
         if not self._joint_layout:
             self._joint_layout = _joint_layout(m, world)
-        geom_robot = np.full(m.ngeom, -1, dtype=int)
+        geom_robot = [-1] * m.ngeom
         for r in world.robots:
             for g in r.robot_geoms:
                 geom_robot[g] = r.index
         self._geom_robot = geom_robot
-        self._geom_robot_list = [int(i) for i in geom_robot]
         self._ball_geom = m.geom("ball").id
 
     # ------------------------------------------------------------------ divergence
@@ -277,7 +275,7 @@ class WorldHost:
         if ncon == 0:
             return out
         ball = self._ball_geom
-        geom_robot = self._geom_robot_list
+        geom_robot = self._geom_robot
         for g1, g2 in d.contact.geom[:ncon].tolist():  # a few pairs: plain Python is fastest
             if g1 == ball:
                 i = geom_robot[g2]
@@ -289,35 +287,19 @@ class WorldHost:
                 out.add(i)
         return out
 
-    def _ball_adr(self) -> tuple[int, int]:
-        """(qpos, qvel) address of the ball's free joint in the current World's model."""
-        m = self.world.model
-        got = self._ball_adr_cache
-        if got is None or got[0] is not m:
-            j = m.joint("ball").id
-            got = self._ball_adr_cache = (m, int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j]))
-        return got[1], got[2]
-
     def ball_position(self) -> np.ndarray:
         """Ball centre (a copy) from the World's data."""
-        qa = self._ball_adr()[0]
-        return self.world.data.qpos[qa : qa + 3].copy()
+        return self.world.ball_position()
 
     def ball_pos_vel(self) -> tuple[list[float], list[float]]:
         """Ball position and linear velocity as lists of floats (cheap per-cycle checks)."""
-        d = self.world.data
-        qa, da = self._ball_adr()
-        return d.qpos[qa : qa + 3].tolist(), d.qvel[da : da + 3].tolist()
+        w = self.world
+        return w.ball_position().tolist(), w.ball_velocity().tolist()
 
     def ball_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Ball (position, linear velocity, angular velocity) from the World's data."""
-        d = self.world.data
-        qa, da = self._ball_adr()
-        return (
-            d.qpos[qa : qa + 3].copy(),
-            d.qvel[da : da + 3].copy(),
-            d.qvel[da + 3 : da + 6].copy(),
-        )
+        w = self.world
+        return w.ball_position(), w.ball_velocity(), w.ball_angular_velocity()
 
     def set_ball(
         self,

@@ -984,6 +984,10 @@ class World:
         """Ball linear velocity, world, m/s."""
         return self.data.qvel[self._ball_qvel : self._ball_qvel + 3].copy()
 
+    def ball_angular_velocity(self) -> np.ndarray:
+        """Ball angular velocity, world, rad/s."""
+        return self.data.qvel[self._ball_qvel + 3 : self._ball_qvel + 6].copy()
+
     def torso_position(self, index: int = 0) -> np.ndarray:
         """Torso centre of robot ``index``, world, m."""
         a = self.robot(index).qpos_root
