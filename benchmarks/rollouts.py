@@ -1,14 +1,18 @@
-"""Pipelined vs lock-step PPO rollouts: where a PPO run's time goes, measured in one run.
+"""Lock-step vs pipelined vs overlapped PPO: where a PPO run's time goes, measured in one run.
 
 Trains PPO (the paper's hyperparameters, 16 VelocityKick environments in one worker per core)
-for a few rollouts with each rollout loop in turn — SB3's lock-step loop (``pipeline_rollouts``
-off) and :class:`robocup_gym.train.pipelined.PipelinedPPO` — alternating A/B/A/B so that both see
-the same machine load. Prints per loop the mean wall time of a rollout (1,024 steps) and of the
-update (the gradient steps), then, as the LAST line, one JSON object with both and the ratio
-``pipelined_vs_lockstep`` of the steps per second.
+for a few rollouts with each schedule in turn — SB3's lock-step loop (``pipeline_rollouts``
+off), :class:`robocup_gym.train.pipelined.PipelinedPPO`'s pipelined rollouts, and pipelined
+rollouts with overlapped updates (``overlap_updates``, the default of ``robocup-gym train``) —
+alternating A/B/C/A/B/C so that all see the same machine load. Prints per schedule the mean wall
+time of a rollout (1,024 steps) and of the update (the gradient steps; with overlapped updates
+the update runs during the next rollout, whose time then includes any wait for it, and
+"update" is only the time to start it), then, as
+the LAST line, one JSON object with all of them and the ratios ``pipelined_vs_lockstep`` and
+``overlapped_vs_lockstep`` of the steps per second.
 
-    python benchmarks/rollouts.py            # 2 × 2 runs of 30,720 steps, ~3 minutes
-    python benchmarks/rollouts.py --quick    # 2 × 1 run of 3,072 steps (smoke test)
+    python benchmarks/rollouts.py            # 3 × 2 runs of 30,720 steps, ~4 minutes
+    python benchmarks/rollouts.py --quick    # 3 × 1 run of 3,072 steps (smoke test)
 """
 
 from __future__ import annotations
@@ -21,8 +25,14 @@ import warnings
 
 import numpy as np
 
+SCHEDULES = {
+    "lockstep": {"pipeline_rollouts": False, "overlap_updates": False},
+    "pipelined": {"pipeline_rollouts": True, "overlap_updates": False},
+    "overlapped": {"pipeline_rollouts": True, "overlap_updates": True},
+}
 
-def measure(pipelined: bool, steps: int, n_envs: int, seed: int = 0) -> dict:
+
+def measure(schedule: str, steps: int, n_envs: int, seed: int = 0) -> dict:
     """One short PPO run; mean seconds per rollout and per update, steps/s overall."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
@@ -60,7 +70,7 @@ def measure(pipelined: bool, steps: int, n_envs: int, seed: int = 0) -> dict:
             venv,
             seed=seed,
             device="cpu",
-            pipeline_rollouts=pipelined,
+            **SCHEDULES[schedule],
             **PPO_PAPER_DEFAULTS,
         )
         phases = Phases()
@@ -85,12 +95,12 @@ def main(argv: list[str] | None = None) -> dict:
     args = p.parse_args(argv)
     steps = args.steps or (3072 if args.quick else 30720)
     repeats = args.repeats or (1 if args.quick else 2)
-    results: dict[str, list[dict]] = {"lockstep": [], "pipelined": []}
+    results: dict[str, list[dict]] = {name: [] for name in SCHEDULES}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for _ in range(repeats):
-            for name in ("lockstep", "pipelined"):
-                r = measure(name == "pipelined", steps, args.n_envs)
+            for name in SCHEDULES:
+                r = measure(name, steps, args.n_envs)
                 results[name].append(r)
                 print(
                     f"{name:10s} rollout {r['rollout_s'] * 1e3:7.0f} ms  update "
@@ -101,9 +111,10 @@ def main(argv: list[str] | None = None) -> dict:
     for name, runs in results.items():
         for key in ("rollout_s", "update_s", "steps_per_s"):
             out[f"{name}_{key}"] = round(float(np.mean([r[key] for r in runs])), 4)
-    out["pipelined_vs_lockstep"] = round(
-        out["pipelined_steps_per_s"] / out["lockstep_steps_per_s"], 3
-    )
+    for name in ("pipelined", "overlapped"):
+        out[f"{name}_vs_lockstep"] = round(
+            out[f"{name}_steps_per_s"] / out["lockstep_steps_per_s"], 3
+        )
     out["rollout_time_ratio"] = round(out["pipelined_rollout_s"] / out["lockstep_rollout_s"], 3)
     out["loadavg"] = [round(x, 2) for x in os.getloadavg()]
     print(json.dumps(out))

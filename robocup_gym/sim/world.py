@@ -247,6 +247,8 @@ class World:
         self._sleepers: list[RobotState] = []
         """Robots that are asleep (held in place), see :meth:`place_robot`."""
         self._static_geoms = frozenset(np.flatnonzero(m.geom_bodyid == 0).tolist())
+        self._geom_shapes: dict[int, tuple] = {}
+        """Per robot: its collision geoms by shape with their sizes (for _lowest_point)."""
         self.reset(seed=seed)
         self._check_motor_rows()
 
@@ -576,19 +578,35 @@ class World:
             d.qvel[r.qvel_joints] = 0.0
 
     def _lowest_point(self, r: RobotState) -> float:
-        m, d = self.model, self.data
-        low = np.inf
-        for g in r.robot_geoms:
-            pos = d.geom_xpos[g]
-            mat = d.geom_xmat[g].reshape(3, 3)
-            if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX:
-                half = m.geom_size[g]
-                low = min(low, pos[2] - float(np.abs(mat[2, :]) @ half))
-            elif m.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE:
-                low = min(low, pos[2] - m.geom_size[g][0])
-            else:  # capsule along local z
-                rad, half_len = m.geom_size[g][0], m.geom_size[g][1]
-                low = min(low, pos[2] - abs(mat[2, 2]) * half_len - rad)
+        """Height of robot ``r``'s lowest collision point (m), from the current geom poses."""
+        shapes = self._geom_shapes.get(r.index)
+        if shapes is None:
+            m = self.model
+            geoms = np.array(sorted(r.robot_geoms), dtype=int)
+            kind = m.geom_type[geoms]
+            box = geoms[kind == mujoco.mjtGeom.mjGEOM_BOX]
+            sphere = geoms[kind == mujoco.mjtGeom.mjGEOM_SPHERE]
+            capsule = geoms[kind == mujoco.mjtGeom.mjGEOM_CAPSULE]  # along local z
+            if len(box) + len(sphere) + len(capsule) != len(geoms):
+                raise ValueError("robot geoms must be boxes, spheres or capsules")
+            shapes = (
+                box,
+                m.geom_size[box].copy(),
+                sphere,
+                m.geom_size[sphere, 0].copy(),
+                capsule,
+                m.geom_size[capsule, 0].copy(),
+                m.geom_size[capsule, 1].copy(),
+            )
+            self._geom_shapes[r.index] = shapes
+        box, half, sphere, radius, capsule, cap_radius, cap_half = shapes
+        pos_z, mat = self.data.geom_xpos[:, 2], self.data.geom_xmat
+        # a box reaches |R[2, :]| · half below its centre; a capsule |R[2, 2]| · half-length + r
+        low = min(
+            (pos_z[box] - (np.abs(mat[box, 6:9]) * half).sum(axis=1)).min(initial=np.inf),
+            (pos_z[sphere] - radius).min(initial=np.inf),
+            (pos_z[capsule] - np.abs(mat[capsule, 8]) * cap_half - cap_radius).min(initial=np.inf),
+        )
         return float(low)
 
     def place_ball(

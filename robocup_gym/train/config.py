@@ -6,6 +6,8 @@ clip 0.2, Adam with learning rate 1e-4, no entropy bonus, minibatch 128, a 2×25
 exploration and a value-function clip of 1.0; SAC with Stable-Baselines3's defaults. Observation
 clipping (1.0) happens inside the environment, as in the paper, so no ``VecNormalize`` is used
 unless ``normalize_obs`` is switched on (it is then folded into the exported ONNX graph).
+PPO's updates overlap the next rollout (``overlap_updates``, :data:`PPO_RUN_DEFAULTS`); that is
+not in the paper and can be switched off.
 
 A config file (YAML) holds any subset of the fields; nested ``algo_kwargs`` / ``env_kwargs`` are
 merged over the defaults::
@@ -39,9 +41,17 @@ PPO_PAPER_DEFAULTS: dict[str, Any] = {
     "clip_range_vf": 1.0,
     "ent_coef": 0.0,
     "use_sde": True,
-    "policy_kwargs": {"net_arch": [256, 256]},
+    # Adam as in the paper, in PyTorch's fused implementation (same update, one kernel per
+    # tensor: ~12 % less time per PPO update on CPU than the default per-tensor loop)
+    "policy_kwargs": {"net_arch": [256, 256], "optimizer_kwargs": {"fused": True}},
 }
 """PPO as in the paper (its public ``v0001_ppo`` script)."""
+
+PPO_RUN_DEFAULTS: dict[str, Any] = {"overlap_updates": True}
+"""How our PPO runs, beyond the paper's hyperparameters: each update overlaps the next rollout,
+which acts with the policy from before that update (a one-rollout policy lag;
+:class:`robocup_gym.train.pipelined.PipelinedPPO`). ~25 % faster on a 2-core machine. Set
+``overlap_updates: false`` for the paper's strictly alternating schedule."""
 
 SAC_PAPER_DEFAULTS: dict[str, Any] = {}
 """SAC: Stable-Baselines3's defaults, as in the paper."""
@@ -51,10 +61,11 @@ DEFAULT_N_ENVS = 16
 
 
 def algo_defaults(algo: str) -> dict[str, Any]:
-    """A fresh copy of the paper's hyperparameters for ``algo`` (``ppo`` or ``sac``)."""
+    """A fresh copy of the paper's hyperparameters for ``algo`` (``ppo`` or ``sac``), plus, for
+    PPO, :data:`PPO_RUN_DEFAULTS`."""
     algo = algo.lower()
     if algo == "ppo":
-        return copy.deepcopy(PPO_PAPER_DEFAULTS)
+        return {**copy.deepcopy(PPO_PAPER_DEFAULTS), **PPO_RUN_DEFAULTS}
     if algo == "sac":
         return copy.deepcopy(SAC_PAPER_DEFAULTS)
     raise ValueError(f"unknown algorithm {algo!r}; choose one of {', '.join(ALGOS)}")

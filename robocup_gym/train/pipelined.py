@@ -29,9 +29,22 @@ What is, and is not, the same as SB3's loop:
 
 Any other setting (one worker, a wrapped vector env such as ``VecNormalize``, a non-Box action
 space, gSDE with ``sde_sample_freq > 0``) uses SB3's own loop unchanged.
+
+**Overlapped updates** (``overlap_updates=True``, off by default): PPO's update (the gradient
+steps, ~40 % of a run's time on a 2-core machine) runs in a background thread while the workers
+already collect the next rollout, with the policy as it was *before* that update (a policy lag
+of one rollout, as in asynchronous PPO variants). The behaviour policy's log-probabilities and
+values are stored with each step, so the next update's ratio and advantages are computed against
+the policy that really acted (PPO's clipping then also bounds the one-rollout lag). This is not
+the paper's schedule, so it is an option; the update joins before the rollout's callbacks run,
+so checkpoints, evaluations and logs always see a finished update, and the last update of a run
+is never overlapped. Results stay reproducible from the seed (the join points are fixed; only
+the update thread draws the minibatch permutations).
 """
 
 from __future__ import annotations
+
+import threading
 
 import numpy as np
 import torch as th
@@ -51,12 +64,80 @@ class PipelinedPPO(PPO):
 
     Args:
         pipeline_rollouts: ``False`` collects rollouts with SB3's lock-step loop.
+        overlap_updates: run each update in the background while the next rollout is collected
+            with the previous policy (module docstring; needs pipelined rollouts, else ignored).
         *args, **kwargs: As :class:`stable_baselines3.PPO`.
     """
 
-    def __init__(self, *args, pipeline_rollouts: bool = True, **kwargs) -> None:
+    def __init__(
+        self, *args, pipeline_rollouts: bool = True, overlap_updates: bool = False, **kwargs
+    ) -> None:
         self.pipeline_rollouts = pipeline_rollouts
+        self.overlap_updates = overlap_updates
+        self._update_thread: threading.Thread | None = None
+        self._update_error: BaseException | None = None
+        self._behaviour = None
         super().__init__(*args, **kwargs)
+
+    # ------------------------------------------------------------------ overlapped updates
+    def _overlapping(self) -> bool:
+        return bool(self.overlap_updates) and self.env is not None and self.can_pipeline(self.env)
+
+    def _rollout_policy(self):
+        """The policy that acts in the rollout being collected: a frozen copy of the policy
+        from before the running update when updates overlap, else the policy itself."""
+        if not self._overlapping():
+            return self.policy
+        if self._behaviour is None:
+            # a second policy of the same architecture (its own optimizer is never used)
+            params = self.policy._get_constructor_parameters()
+            self._behaviour = type(self.policy)(**params).to(self.device)
+            self._behaviour.load_state_dict(self.policy.state_dict())
+        return self._behaviour
+
+    def join_update(self) -> None:
+        """Wait for a background update to finish; re-raise its exception, if any."""
+        thread, self._update_thread = self._update_thread, None
+        if thread is not None:
+            thread.join()
+        error, self._update_error = self._update_error, None
+        if error is not None:
+            raise RuntimeError("the background PPO update failed") from error
+
+    def _background_update(self) -> None:
+        try:
+            super().train()
+        except BaseException as e:  # re-raised by join_update in the learner's thread
+            self._update_error = e
+
+    def train(self) -> None:
+        """PPO's update; in the background when updates overlap (except a run's last one)."""
+        self.join_update()
+        last = self.num_timesteps >= getattr(self, "_total_timesteps", 0)
+        if not self._overlapping() or last:
+            super().train()
+            if self._behaviour is not None:
+                self._behaviour.load_state_dict(self.policy.state_dict())
+            return
+        # the next rollout acts with the policy as it is now, while this update runs
+        self._rollout_policy().load_state_dict(self.policy.state_dict())
+        self._update_thread = threading.Thread(
+            target=self._background_update, name="ppo-update", daemon=True
+        )
+        self._update_thread.start()
+
+    def learn(self, *args, **kwargs):
+        try:
+            return super().learn(*args, **kwargs)
+        finally:
+            self.join_update()
+
+    def _excluded_save_params(self) -> list[str]:
+        return [*super()._excluded_save_params(), "_behaviour", "_update_thread", "_update_error"]
+
+    def save(self, *args, **kwargs) -> None:
+        self.join_update()  # never save a half-applied update
+        super().save(*args, **kwargs)
 
     def can_pipeline(self, env) -> bool:
         """Whether :meth:`collect_rollouts` pipelines this vector env (else SB3's loop)."""
@@ -78,12 +159,12 @@ class PipelinedPPO(PPO):
         if not self.can_pipeline(env):
             return super().collect_rollouts(env, callback, rollout_buffer, n_rollout_steps)
         assert self._last_obs is not None, "No previous observation was provided"
-        self.policy.set_training_mode(False)
-        rollout_buffer.reset()
+        policy = self._rollout_policy()
+        policy.set_training_mode(False)
         n_envs, steps = env.num_envs, n_rollout_steps
         eps = None
         if self.use_sde:
-            self.policy.reset_noise(n_envs)
+            policy.reset_noise(n_envs)
         else:
             eps = th.randn((steps, n_envs, *self.action_space.shape), device=self.device)
         callback.on_rollout_start()
@@ -106,7 +187,10 @@ class PipelinedPPO(PPO):
             t, b = step_of[w], blocks[w]
             with th.no_grad():
                 a, v, lp = self._block_forward(
-                    obs[t, b.start : b.stop], b, None if eps is None else eps[t, b.start : b.stop]
+                    policy,
+                    obs[t, b.start : b.stop],
+                    b,
+                    None if eps is None else eps[t, b.start : b.stop],
                 )
             a = a.cpu().numpy()
             actions[t, b.start : b.stop] = a
@@ -144,10 +228,14 @@ class PipelinedPPO(PPO):
         if cut:
             terminal = np.stack([infos[t][i]["terminal_observation"] for t, i in cut])
             with th.no_grad():
-                tv = self.policy.predict_values(obs_as_tensor(terminal, self.device)).flatten()
+                tv = policy.predict_values(obs_as_tensor(terminal, self.device)).flatten()
             for (t, i), v in zip(cut, tv.cpu().numpy(), strict=True):
                 rewards[t, i] += self.gamma * v
 
+        # A background update (overlapped mode) finishes before the callbacks (checkpoints,
+        # evaluations) see the model and before its buffer is refilled.
+        self.join_update()
+        rollout_buffer.reset()
         # Replay the steps in order: callbacks, episode statistics and the buffer, as SB3 does.
         episode_starts = self._last_episode_starts
         for t in range(steps):
@@ -180,16 +268,16 @@ class PipelinedPPO(PPO):
         self._last_obs = obs[steps]
         self._last_episode_starts = dones[steps - 1]
         with th.no_grad():
-            last_values = self.policy.predict_values(obs_as_tensor(obs[steps], self.device))
+            last_values = policy.predict_values(obs_as_tensor(obs[steps], self.device))
         rollout_buffer.compute_returns_and_advantage(last_values=last_values, dones=dones[-1])
         callback.update_locals({"new_obs": obs[steps], "dones": dones[-1], "values": last_values})
         callback.on_rollout_end()
         return True
 
-    def _block_forward(self, obs: np.ndarray, block: range, eps: th.Tensor | None):
-        """``(actions, values, log_probs)`` of one worker's environments (``block``)."""
+    def _block_forward(self, policy, obs: np.ndarray, block: range, eps: th.Tensor | None):
+        """``(actions, values, log_probs)`` of one worker's environments (``block``) under
+        ``policy``."""
         obs_tensor = obs_as_tensor(obs, self.device)
-        policy = self.policy
         if eps is None:  # gSDE: this block's rows of the rollout's per-environment matrices
             dist = policy.action_dist
             full_mats, full_mat = dist.exploration_matrices, dist.exploration_mat

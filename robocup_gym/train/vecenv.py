@@ -158,18 +158,24 @@ def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0
             k = 0
             try:
                 if cmd == "step":
-                    results = []
-                    for k in range(len(envs)):
+                    # the block's answer as one array per quantity (one pickle each, not one
+                    # per environment): obs, rewards, dones, infos, reset infos
+                    n = len(envs)
+                    obs_block: list = [None] * n
+                    rewards = np.empty(n)
+                    dones = np.empty(n, dtype=bool)
+                    infos: list = [None] * n
+                    reset_infos: list = [{}] * n
+                    for k in range(n):
                         env = envs[k]
                         obs, reward, terminated, truncated, info = env.step(data[k])
                         done = terminated or truncated
                         info["TimeLimit.truncated"] = truncated and not terminated
-                        reset_info: dict[str, Any] = {}
                         if done:
                             info["terminal_observation"] = obs
-                            obs, reset_info = env.reset()
-                        results.append((obs, reward, done, info, reset_info))
-                    remote.send(results)
+                            obs, reset_infos[k] = env.reset()
+                        obs_block[k], rewards[k], dones[k], infos[k] = obs, reward, done, info
+                    remote.send((np.stack(obs_block), rewards, dones, infos, reset_infos))
                 elif cmd == "reset":
                     out = []
                     for k in range(len(envs)):
@@ -301,7 +307,7 @@ class BatchedSubprocVecEnv(VecEnv):
         :meth:`step_block_wait` (or wait for any worker with :meth:`ready_blocks`)."""
         if self._block_pending[worker]:
             raise RuntimeError(f"worker {worker} is still stepping; call step_block_wait first")
-        self.remotes[worker].send(("step", list(actions)))
+        self.remotes[worker].send(("step", np.asarray(actions)))
         self._block_pending[worker] = True
 
     def step_block_wait(self, worker: int):
@@ -316,10 +322,10 @@ class BatchedSubprocVecEnv(VecEnv):
             ) from None
         finally:
             self._block_pending[worker] = False
-        obs, rews, dones, infos, reset_infos = zip(*results, strict=True)
+        obs, rews, dones, infos, reset_infos = results
         block = self.blocks[worker]
         self.reset_infos[block.start : block.stop] = reset_infos
-        return np.stack(obs), np.stack(rews), np.stack(dones), infos
+        return obs, rews, dones, tuple(infos)
 
     def ready_blocks(self, workers: Sequence[int]) -> list[int]:
         """Block until at least one of ``workers`` (each stepping) has its result; returns those

@@ -18,6 +18,10 @@ def test_ppo_defaults_are_the_papers():
     assert hp["learning_rate"] == 1e-4
     assert hp["ent_coef"] == 0.0
     assert TrainConfig().normalize_obs is False  # observation clipping happens in the env
+    # not a hyperparameter of the paper: updates overlap the next rollout, switchable
+    assert hp["overlap_updates"] is True
+    off = TrainConfig(algo_kwargs={"overlap_updates": False}).resolved_algo_kwargs()
+    assert off["overlap_updates"] is False and off["n_steps"] == 64
 
 
 def test_sac_defaults_are_sb3s():
