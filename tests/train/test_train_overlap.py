@@ -14,10 +14,8 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 
 from robocup_gym.train.pipelined import PipelinedPPO
-from robocup_gym.train.vecenv import make_vec_env
 
-ENV = "RobocupGym/VelocityKick-v0"
-ENV_KW = {"max_episode_steps": 6, "wait_steps": 2}
+from .train_helpers import small_pipelined_ppo, small_vec_env
 
 
 def _flat(policy) -> np.ndarray:
@@ -53,21 +51,11 @@ class _Snapshots(BaseCallback):
         self.value_error.append(float(np.abs(values.flatten().numpy() - rb.values.flatten()).max()))
 
 
-def _learn(overlap: bool, rollouts: int = 4, seed: int = 1):
-    venv = make_vec_env(ENV, 4, n_workers=2, env_kwargs=ENV_KW, seed=5)
+def _learn(overlap: bool, rollouts: int = 4):
+    venv = small_vec_env()
     try:
-        model = PipelinedPPO(
-            "MlpPolicy",
-            venv,
-            n_steps=16,
-            batch_size=32,
-            n_epochs=2,
-            learning_rate=1e-3,
-            use_sde=True,
-            seed=seed,
-            device="cpu",
-            overlap_updates=overlap,
-            policy_kwargs={"net_arch": [32, 32]},
+        model = small_pipelined_ppo(
+            venv, n_epochs=2, learning_rate=1e-3, use_sde=True, overlap_updates=overlap
         )
         cb = _Snapshots()
         model.learn(16 * 4 * rollouts, callback=cb)

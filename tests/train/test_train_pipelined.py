@@ -10,11 +10,9 @@ pytest.importorskip("stable_baselines3")
 from stable_baselines3.common.callbacks import BaseCallback
 
 from robocup_gym.train.pipelined import PipelinedPPO
-from robocup_gym.train.vecenv import make_vec_env
 
-ENV = "RobocupGym/VelocityKick-v0"
-# short episodes so that a rollout crosses falls, time limits (bootstrapped) and auto-resets
-ENV_KW = {"max_episode_steps": 6, "wait_steps": 2}
+# short episodes, so that a rollout crosses falls, time limits (bootstrapped) and auto-resets
+from .train_helpers import small_pipelined_ppo, small_vec_env
 
 
 class _Record(BaseCallback):
@@ -37,19 +35,9 @@ class _Record(BaseCallback):
 
 
 def _collect(pipelined: bool, use_sde: bool, rollouts: int = 2):
-    venv = make_vec_env(ENV, 4, n_workers=2, env_kwargs=ENV_KW, seed=5)
+    venv = small_vec_env()
     try:
-        model = PipelinedPPO(
-            "MlpPolicy",
-            venv,
-            n_steps=16,
-            batch_size=32,
-            use_sde=use_sde,
-            seed=1,
-            device="cpu",
-            pipeline_rollouts=pipelined,
-            policy_kwargs={"net_arch": [32, 32]},
-        )
+        model = small_pipelined_ppo(venv, use_sde=use_sde, pipeline_rollouts=pipelined)
         assert model.can_pipeline(venv) == pipelined
         cb = _Record()
         model._setup_learn(16 * 4 * rollouts, cb)
@@ -112,7 +100,7 @@ def test_callback_can_stop_a_pipelined_rollout():
         def _on_step(self) -> bool:
             return self.num_timesteps < 12
 
-    venv = make_vec_env(ENV, 4, n_workers=2, env_kwargs=ENV_KW, seed=5)
+    venv = small_vec_env()
     try:
         model = PipelinedPPO("MlpPolicy", venv, n_steps=8, batch_size=16, seed=1, device="cpu")
         model.learn(64, callback=_Stop())
