@@ -103,6 +103,9 @@ class RobotState:
     foot_bodies: dict[str, int] = field(default_factory=dict)
     robot_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     robot_geoms: frozenset = frozenset()
+    shapes: tuple = ()
+    """Collision geoms by shape: (boxes, their half sizes, spheres, radii, capsules, radii,
+    half lengths), for the lowest point of the robot."""
     range_rad: tuple = (np.zeros(0), np.zeros(0))
     """(lower, upper) joint limits in rad, canonical order."""
     max_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -247,8 +250,6 @@ class World:
         self._sleepers: list[RobotState] = []
         """Robots that are asleep (held in place), see :meth:`place_robot`."""
         self._static_geoms = frozenset(np.flatnonzero(m.geom_bodyid == 0).tolist())
-        self._geom_shapes: dict[int, tuple] = {}
-        """Per robot: its collision geoms by shape with their sizes (for _lowest_point)."""
         self.reset(seed=seed)
         self._check_motor_rows()
 
@@ -359,6 +360,22 @@ class World:
         r.foot_bodies = {name: m.body(p + body).id for name, body in feet.items()}
         r.range_rad = tuple(np.radians(model.ranges_deg).T.copy())
         r.max_speeds = model.max_speeds
+        geoms = np.array(sorted(r.robot_geoms), dtype=int)
+        kind = m.geom_type[geoms]
+        box = geoms[kind == mujoco.mjtGeom.mjGEOM_BOX]
+        sphere = geoms[kind == mujoco.mjtGeom.mjGEOM_SPHERE]
+        capsule = geoms[kind == mujoco.mjtGeom.mjGEOM_CAPSULE]  # along local z
+        if len(box) + len(sphere) + len(capsule) != len(geoms):
+            raise ValueError("robot geoms must be boxes, spheres or capsules")
+        r.shapes = (
+            box,
+            m.geom_size[box].copy(),
+            sphere,
+            m.geom_size[sphere, 0].copy(),
+            capsule,
+            m.geom_size[capsule, 0].copy(),
+            m.geom_size[capsule, 1].copy(),
+        )
         return r
 
     # ------------------------------------------------------------------ robot state transfer
@@ -551,12 +568,12 @@ class World:
         d = self.data
         if d.ncon == 0:
             return
-        pairs = d.contact.geom[: d.ncon]
+        pairs = d.contact.geom[: d.ncon].tolist()
         static = self._static_geoms
         woke = False
         for r in self._sleepers:
             own = r.robot_geoms
-            for g1, g2 in pairs.tolist():
+            for g1, g2 in pairs:
                 if (g1 in own and g2 not in own and g2 not in static) or (
                     g2 in own and g1 not in own and g1 not in static
                 ):
@@ -579,27 +596,7 @@ class World:
 
     def _lowest_point(self, r: RobotState) -> float:
         """Height of robot ``r``'s lowest collision point (m), from the current geom poses."""
-        shapes = self._geom_shapes.get(r.index)
-        if shapes is None:
-            m = self.model
-            geoms = np.array(sorted(r.robot_geoms), dtype=int)
-            kind = m.geom_type[geoms]
-            box = geoms[kind == mujoco.mjtGeom.mjGEOM_BOX]
-            sphere = geoms[kind == mujoco.mjtGeom.mjGEOM_SPHERE]
-            capsule = geoms[kind == mujoco.mjtGeom.mjGEOM_CAPSULE]  # along local z
-            if len(box) + len(sphere) + len(capsule) != len(geoms):
-                raise ValueError("robot geoms must be boxes, spheres or capsules")
-            shapes = (
-                box,
-                m.geom_size[box].copy(),
-                sphere,
-                m.geom_size[sphere, 0].copy(),
-                capsule,
-                m.geom_size[capsule, 0].copy(),
-                m.geom_size[capsule, 1].copy(),
-            )
-            self._geom_shapes[r.index] = shapes
-        box, half, sphere, radius, capsule, cap_radius, cap_half = shapes
+        box, half, sphere, radius, capsule, cap_radius, cap_half = r.shapes
         pos_z, mat = self.data.geom_xpos[:, 2], self.data.geom_xmat
         # a box reaches |R[2, :]| · half below its centre; a capsule |R[2, 2]| · half-length + r
         low = min(

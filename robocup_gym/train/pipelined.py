@@ -30,16 +30,18 @@ What is, and is not, the same as SB3's loop:
 Any other setting (one worker, a wrapped vector env such as ``VecNormalize``, a non-Box action
 space, gSDE with ``sde_sample_freq > 0``) uses SB3's own loop unchanged.
 
-**Overlapped updates** (``overlap_updates=True``, off by default): PPO's update (the gradient
-steps, ~40 % of a run's time on a 2-core machine) runs in a background thread while the workers
-already collect the next rollout, with the policy as it was *before* that update (a policy lag
-of one rollout, as in asynchronous PPO variants). The behaviour policy's log-probabilities and
-values are stored with each step, so the next update's ratio and advantages are computed against
-the policy that really acted (PPO's clipping then also bounds the one-rollout lag). This is not
-the paper's schedule, so it is an option; the update joins before the rollout's callbacks run,
-so checkpoints, evaluations and logs always see a finished update, and the last update of a run
-is never overlapped. Results stay reproducible from the seed (the join points are fixed; only
-the update thread draws the minibatch permutations).
+**Overlapped updates** (``overlap_updates=True``; off by default in this class, on by default
+in ``robocup-gym train``, see :data:`robocup_gym.train.config.PPO_RUN_DEFAULTS`): PPO's update
+(the gradient steps, ~40 % of a run's time on a 2-core machine) runs in a background thread while
+the workers already collect the next rollout, with the policy as it was *before* that update (a
+policy lag of one rollout, as in asynchronous PPO variants). The behaviour policy's
+log-probabilities and values are stored with each step, so the next update's ratio and
+advantages are computed against the policy that really acted (PPO's clipping then also bounds
+the one-rollout lag). This is not the paper's schedule (``overlap_updates=False`` keeps that).
+The update joins before the rollout's callbacks run, so checkpoints, evaluations and logs
+always see a finished update, and the last update of a run is never overlapped. Results stay
+reproducible from the seed (the join points are fixed; only the update thread draws the
+minibatch permutations).
 """
 
 from __future__ import annotations

@@ -165,7 +165,7 @@ def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0
                     rewards = np.empty(n)
                     dones = np.empty(n, dtype=bool)
                     infos: list = [None] * n
-                    reset_infos: list = [{}] * n
+                    reset_infos: list = [{} for _ in range(n)]
                     for k in range(n):
                         env = envs[k]
                         obs, reward, terminated, truncated, info = env.step(data[k])
