@@ -75,12 +75,13 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
     d_stop = ph.impedance(stop_cfm, 1.0)
     limit_ref = " ".join(f"{v:.6g}" for v in ph.solref(stop_erp, d_stop))
     dm = ph.motor_impedance
-    bodies, excludes, pairs = [], [], []
+    bodies, excludes, pairs, sensors = [], [], [], []
     for slot in robots:
         bodies.append(
             robot_xml(slot.prefix, slot.type_index, accent=TEAM_COLOURS.get(slot.team, ""))
         )
         excludes.append(self_collision_excludes(slot.prefix, nao_model(slot.type_index)))
+        sensors.extend(_drag_sensors(slot))
     walls = [
         _box("wall_left", (-24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
         _box("wall_right", (24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
@@ -149,8 +150,24 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
 {chr(10).join(pairs)}
 {chr(10).join(excludes)}
   </contact>
+  <sensor>
+{chr(10).join(sensors)}
+  </sensor>
 </mujoco>
 """
+
+
+def _drag_sensors(slot: RobotSlot) -> list[str]:
+    """Velocity sensors the body drag is computed from (spec §7.5): per robot body, in body
+    order, the linear then the angular velocity of its centre of mass in world coordinates
+    (``objtype="body"`` is the body's inertial frame). MuJoCo evaluates them in ``mj_step1``,
+    so the drag of a cycle costs the world one vector operation."""
+    out = []
+    for b in nao_model(slot.type_index).bodies:
+        name = slot.prefix + b.name
+        out.append(f'    <framelinvel name="{name}_v" objtype="body" objname="{name}"/>')
+        out.append(f'    <frameangvel name="{name}_w" objtype="body" objname="{name}"/>')
+    return out
 
 
 def _solref_str(

@@ -52,17 +52,12 @@ PAUSED_MODES = ("BeforeKickOff", "GameOver")
 CREEP_WINDOW_RAD = math.radians(0.5)
 """Largest position error the motor creep compensation corrects (anti-windup), rad."""
 SAY_MAX_CHARS = 20
-_LEVI_CIVITA = np.zeros((3, 3, 3))
-_LEVI_CIVITA[0, 1, 2] = _LEVI_CIVITA[1, 2, 0] = _LEVI_CIVITA[2, 0, 1] = 1.0
-_LEVI_CIVITA[0, 2, 1] = _LEVI_CIVITA[2, 1, 0] = _LEVI_CIVITA[1, 0, 2] = -1.0
-_CROSS = _LEVI_CIVITA.transpose(1, 2, 0).reshape(9, 3).copy()
-"""ε_jk,i as a (9, 3) matrix: row-wise cross products a × b = (a ⊗ b).reshape(n, 9) @ _CROSS
-(one outer product and one matrix product: cheaper than an einsum or np.cross on a few rows)."""
 DIVERGED_QVEL_SQ = 1e10
 """Squared norm of the velocity vector above which the world counts as diverged (no Nao or
 ball gets near 1e5 rad/s or m/s)."""
 _DRAG = np.array([-phys.BODY_LINEAR_DRAG] * 3 + [-phys.BODY_ANGULAR_DRAG] * 3)
 """Drag coefficients per xfrc_applied component (force, torque)."""
+_INV_CYCLE = 1.0 / CYCLE_S
 
 _DIVERGENCE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQACC),
@@ -71,8 +66,9 @@ _DIVERGENCE_WARNINGS = (
 )
 HEARING_RANGE_M = 50.0
 _XYZ = (0, 1, 2)
-_any = np.logical_or.reduce
-"""``a.any()`` for a 1-d bool array without the method's Python wrapper (hot path)."""
+_any = np.count_nonzero
+"""``a.any()`` for a 1-d bool array (hot path: counting is several times cheaper than the
+method's or ``np.logical_or.reduce``'s reduction machinery on a few values)."""
 
 
 class SimulationDivergedError(RuntimeError):
@@ -109,6 +105,8 @@ class RobotState:
     range_rad: tuple = (np.zeros(0), np.zeros(0))
     """(lower, upper) joint limits in rad, canonical order."""
     max_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    min_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """``-max_speeds`` (the lower clip of commands), rad/s."""
     targets: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Active motor targets, rad/s, canonical order."""
     q_ref: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -116,7 +114,8 @@ class RobotState:
     joint_slice: slice = field(default_factory=lambda: slice(0, 0))
     """This robot's joints in the world-level joint arrays."""
     pending: list = field(default_factory=list)
-    """Commands waiting out the dead time: list of (due_cycle, velocities array or None mask)."""
+    """Commands waiting out the dead time: ``(due cycle, velocities in rad/s with NaN for "no
+    command", whether every joint has a command)``."""
     accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
     prev_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
     perception_counter: int = 0
@@ -195,7 +194,11 @@ class World:
         self.xml = scene_xml(slots, self.physics)
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         apply_ode_softness(self.model, self.physics)
-        self.data = mujoco.MjData(self.model)
+        self._data = mujoco.MjData(self.model)
+        self._poses_stale = False
+        """Body poses (``xpos``, ``xmat``, geom poses) lag ``qpos`` by the last step."""
+        self._com_stale = False
+        """Centre-of-mass quantities (``subtree_com``, ``cvel``) lag the last step."""
         m = self.model
         self._ball_body = m.body("ball").id
         self._ball_qpos = int(m.jnt_qposadr[m.joint("ball").id])
@@ -225,20 +228,8 @@ class World:
         self._init_motor_arrays()
         self._motors_relaxed = False
         self._inv_timestep = 1.0 / m.opt.timestep
-        self._drag_bodies = np.array(drag_bodies, dtype=int)
-        self._drag_roots = (
-            m.body_rootid[self._drag_bodies] if len(drag_bodies) else np.zeros(0, int)
-        )
-        nd = len(self._drag_bodies)
-        self._drag_arm = np.zeros((nd, 3))
-        self._drag_outer = np.zeros((nd, 3, 3))
-        db = self._drag_bodies
-        self._drag_slice = (
-            slice(int(db[0]), int(db[-1]) + 1)
-            if len(db) and np.array_equal(db, np.arange(db[0], db[-1] + 1))
-            else db
-        )
-        """Robot bodies as one slice when they are contiguous (always, in our scenes)."""
+        self._init_drag(drag_bodies)
+        self._init_views()
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self.cycle = 0
@@ -254,6 +245,51 @@ class World:
         self._check_motor_rows()
 
     # ------------------------------------------------------------------ construction helpers
+    def _init_drag(self, drag_bodies: list[int]) -> None:
+        """Map the scene's drag sensors (:func:`robocup_gym.sim.scene._drag_sensors`: per robot
+        body its centre-of-mass linear and angular velocity) onto ``xfrc_applied``."""
+        m, d = self.model, self._data
+        kinds = m.sensor_type
+        lin, ang = mujoco.mjtSensor.mjSENS_FRAMELINVEL, mujoco.mjtSensor.mjSENS_FRAMEANGVEL
+        bodies = m.sensor_objid[0::2]
+        if (
+            m.nsensor != 2 * len(drag_bodies)
+            or not np.array_equal(bodies, drag_bodies)
+            or not np.array_equal(m.sensor_objid[1::2], bodies)
+            or not (np.all(kinds[0::2] == lin) and np.all(kinds[1::2] == ang))
+            or not np.array_equal(m.sensor_adr, 3 * np.arange(m.nsensor))
+        ):
+            raise RuntimeError("the scene's drag sensors do not match the robot bodies")
+        self._drag_vel = d.sensordata.reshape(-1, 6)
+        """Per robot body: centre-of-mass velocity (m/s) and angular velocity (rad/s), world."""
+        nb = len(bodies)
+        contiguous = nb > 0 and np.array_equal(bodies, np.arange(bodies[0], bodies[0] + nb))
+        self._drag_index = None if contiguous or nb == 0 else bodies
+        self._drag_force = d.xfrc_applied[bodies[0] : bodies[0] + nb] if contiguous else None
+        """The robot bodies' rows of ``xfrc_applied`` (a view) when they are contiguous (always,
+        in our scenes); otherwise ``_drag_index`` lists them."""
+
+    def _init_views(self) -> None:
+        """Views into MjData's fixed buffers (they never move) for the per-cycle work."""
+        d = self._data
+        self._qpos = d.qpos
+        self._qvel = d.qvel
+        self._accel_io = [
+            (
+                r,
+                d.qvel[r.qvel_root : r.qvel_root + 3],
+                d.xmat[r.torso_body].reshape(3, 3),
+                np.zeros(3),
+            )
+            for r in self.robots
+        ]
+        """Per robot: state, torso velocity (world), torso rotation, scratch (accelerometer)."""
+        dofs = self._motor_dofs_sorted
+        n = len(dofs)
+        contiguous = n > 0 and np.array_equal(dofs, np.arange(dofs[0], dofs[0] + n))
+        self._motor_slice = slice(int(dofs[0]), int(dofs[0]) + n) if contiguous else None
+        """The motor dofs as one slice when they are contiguous (one robot), else ``None``."""
+
     def _init_motor_arrays(self) -> None:
         """World-level arrays over every robot's joints (robot after robot, canonical order);
         each robot's ``targets`` and ``q_ref`` are views into them (created here), so one cycle's
@@ -360,6 +396,7 @@ class World:
         r.foot_bodies = {name: m.body(p + body).id for name, body in feet.items()}
         r.range_rad = tuple(np.radians(model.ranges_deg).T.copy())
         r.max_speeds = model.max_speeds
+        r.min_speeds = -model.max_speeds
         geoms = np.array(sorted(r.robot_geoms), dtype=int)
         kind = m.geom_type[geoms]
         box = geoms[kind == mujoco.mjtGeom.mjGEOM_BOX]
@@ -402,7 +439,7 @@ class World:
         r = self.robot(index)
         out = {name: copy.deepcopy(getattr(r, name)) for name in self._AGENT_STATE}
         out.update({name: getattr(r, name).copy() for name in self._ARRAY_STATE})
-        out["pending"] = [(due, vel.copy()) for due, vel in r.pending]
+        out["pending"] = [(due, vel.copy()) for due, vel, _ in r.pending]
         return out
 
     def import_robot_state(self, index: int, state: Mapping) -> None:
@@ -416,10 +453,43 @@ class World:
             if name in state:
                 getattr(r, name)[:] = state[name]
         if "pending" in state:
-            r.pending = [(due, np.array(vel, float)) for due, vel in state["pending"]]
+            r.pending = []
+            for due, vel in state["pending"]:
+                vel = np.array(vel, float)
+                r.pending.append((due, vel, not np.isnan(vel).any()))
         self._update_sleepers()
 
     # ------------------------------------------------------------------ properties
+    @property
+    def data(self) -> mujoco.MjData:
+        """The MuJoCo data, with every derived quantity (body poses, centres of mass, body
+        velocities) up to date with the state.
+
+        :meth:`step` leaves them one step behind (MuJoCo derives them at the start of a step,
+        SimSpark senses after it) and they are brought up to date here, on first use, so that
+        cycles nobody looks at cost no kinematics.
+        """
+        if self._com_stale:
+            self._sync()
+        return self._data
+
+    def _sync(self) -> None:
+        """Bring body poses, centres of mass and body velocities up to the current state."""
+        m, d = self.model, self._data
+        if self._poses_stale:
+            mujoco.mj_kinematics(m, d)
+            self._poses_stale = False
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_comVel(m, d)
+        self._com_stale = False
+
+    def _posed(self) -> mujoco.MjData:
+        """The MuJoCo data with body and geom poses up to date (all perception needs)."""
+        if self._poses_stale:
+            mujoco.mj_kinematics(self.model, self._data)
+            self._poses_stale = False
+        return self._data
+
     @property
     def n_robots(self) -> int:
         """Number of robots in the world."""
@@ -702,7 +772,12 @@ class World:
             ValueError: NaN/inf value (names the joint) or wrong array shape.
         """
         r = self.robot(index)
-        n = len(r.model.joints)
+        n = len(r.max_speeds)
+        if type(velocities) is np.ndarray and velocities.shape == (n,):  # the hot path
+            out = velocities.astype(float)  # a copy: the caller may reuse its array
+            if not math.isfinite(out.dot(out)):  # one check for any NaN/inf (or a huge value)
+                self._raise_not_finite(r, out)
+            return out
         if isinstance(velocities, Mapping):
             out = np.full(n, np.nan)
             for name, v in velocities.items():
@@ -718,42 +793,54 @@ class World:
                 f"velocity array must have shape ({n},) in effector order "
                 f"{', '.join(r.effector_names)}; got {out.shape}"
             )
-        if not math.isfinite(out @ out):  # one check for any NaN/inf (or a huge value)
-            bad = ~np.isfinite(out)
-            if bad.any():
-                i = int(np.argmax(bad))
-                raise ValueError(f"velocity command for joint {r.effector_names[i]} is {out[i]}")
+        if not math.isfinite(out.dot(out)):
+            self._raise_not_finite(r, out)
         return out
+
+    @staticmethod
+    def _raise_not_finite(r: RobotState, velocities: np.ndarray) -> None:
+        """Raise ``ValueError`` naming the first joint whose command is NaN/inf (if any: a
+        finite command whose squares overflow is left alone)."""
+        bad = ~np.isfinite(velocities)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ValueError(f"velocity command for joint {r.effector_names[i]} is {velocities[i]}")
 
     def command(self, index: int, command: AgentCommand | Mapping[str, float] | np.ndarray) -> None:
         """Queue one cycle's command for robot ``index`` (it acts after the dead time)."""
         r = self.robot(index)
         if isinstance(command, AgentCommand):
-            vel = self.command_array(index, command.joint_velocities)
+            velocities = command.joint_velocities
+            vel = self.command_array(index, velocities)
             if command.beam is not None:
                 self.beam(index, *command.beam)
             if command.say is not None:
                 self.say(index, command.say)
         else:
-            vel = self.command_array(index, command)
-        r.pending.append((self.cycle + self.dead_time_cycles, vel))
+            velocities = command
+            vel = self.command_array(index, velocities)
+        # only a mapping can leave joints without a command (NaN): an array names them all
+        full = type(velocities) is np.ndarray or not np.isnan(vel).any()
+        r.pending.append((self.cycle + self.dead_time_cycles, vel, full))
 
     def _realise_commands(self, r: RobotState, inside: np.ndarray | None) -> None:
         """Write robot ``r``'s due commands into its motors (SimSpark's hinge effector, spec
         §8.3): a command is taken only by joints strictly inside their limits (``inside``, this
         robot's slice, ``None`` when all are); the others keep their previous target. Commands
         are clipped to each joint's maximum speed."""
-        vmax = r.max_speeds
         while r.pending and r.pending[0][0] <= self.cycle:
-            _, vel = r.pending.pop(0)
-            if inside is None and not np.isnan(vel.sum()):
-                _clip(vel, -vmax, vmax, out=r.targets)  # every joint takes its command
+            _, vel, full = r.pending.pop(0)
+            if inside is None and full:
+                _clip(vel, r.min_speeds, r.max_speeds, out=r.targets)  # every joint takes it
                 continue
-            clipped = _clip(vel, -vmax, vmax)
-            # NaN (no command for that joint) compares False: the old target stays
-            take = vel == vel
-            if inside is not None:
-                take &= inside
+            clipped = _clip(vel, r.min_speeds, r.max_speeds)
+            if full:
+                take = inside
+            else:
+                # NaN (no command for that joint) compares False: the old target stays
+                take = vel == vel
+                if inside is not None:
+                    take &= inside
             np.copyto(r.targets, clipped, where=take)
 
     def beam(self, index: int, x: float, y: float, rot_deg: float) -> bool:
@@ -787,14 +874,14 @@ class World:
             return
         if any(not (0x21 <= ord(c) <= 0x7E) or c in "()" for c in message):
             return
-        src = self.data.xpos[r.torso_body]
+        src = self._posed().xpos[r.torso_body]
         for other in self.robots:
             if other.team is None:
                 continue
             if other is r:
                 other.heard.append(HeardMessage(r.team_name, self.game.game_time, None, message))
                 continue
-            dst = self.data.xpos[other.torso_body]
+            dst = self._data.xpos[other.torso_body]
             delta = src[:2] - dst[:2]
             if float(np.hypot(*delta)) > HEARING_RANGE_M:
                 continue
@@ -830,13 +917,13 @@ class World:
             else:
                 for i, c in commands.items():
                     self.command(i, c)
-        d = self.data
+        d = self._data
         m = self.model
-        q = d.qpos[self._qpos_j]
+        q = self._qpos[self._qpos_j]
         at_lo = q <= self._lo
         at_hi = q >= self._hi
         limited = at_lo | at_hi
-        any_limited = bool(_any(limited))
+        any_limited = _any(limited) > 0
         due = self.cycle
         for r in self.robots:
             if r.pending and r.pending[0][0] <= due:
@@ -872,30 +959,35 @@ class World:
         shift = self._motor_b * motor_target
         # ODE's motor "fudge factor" (spec §2.4): at a stop the motor barely acts unless it pulls
         # the joint away from the stop; modelled by removing that motor row this cycle.
+        dofs = self._motor_dofs_sorted
+        ms = self._motor_slice
         if at_stop is not None:
             rows = ~(at_stop if sort is None else at_stop[sort])
-            m.dof_frictionloss[self._motor_dofs_sorted] = np.where(rows, phys.MOTOR_MAX_TORQUE, 0.0)
+            if ms is not None:
+                np.multiply(rows, phys.MOTOR_MAX_TORQUE, out=m.dof_frictionloss[ms])
+            else:
+                m.dof_frictionloss[dofs] = np.where(rows, phys.MOTOR_MAX_TORQUE, 0.0)
             shift = shift[rows]
             self._motors_relaxed = True
         elif self._motors_relaxed:
-            m.dof_frictionloss[self._motor_dofs_sorted] = phys.MOTOR_MAX_TORQUE
+            m.dof_frictionloss[dofs] = phys.MOTOR_MAX_TORQUE
             self._motors_relaxed = False
         nrows = len(shift)
         # Warm start: every motor reaches its target (the solver corrects saturated ones).
-        dofs = self._motor_dofs_sorted
-        d.qacc_warmstart[dofs] = (motor_target - d.qvel[dofs]) * self._inv_timestep
-        # accelerometer, sampled before the physics step (spec §4.5)
-        qvel, xmat = d.qvel, d.xmat
-        for r in self.robots:
-            v = qvel[r.qvel_root : r.qvel_root + 3]
-            a_world = (v - r.prev_vel) * (1.0 / CYCLE_S)
-            a_world[2] += phys.GRAVITY
-            r.prev_vel[:] = v
-            np.matmul(a_world, xmat[r.torso_body].reshape(3, 3), out=r.accel)
-        self._apply_drag()
+        if ms is not None:
+            warm = d.qacc_warmstart[ms]
+            np.subtract(motor_target, self._qvel[ms], out=warm)
+            warm *= self._inv_timestep
+        else:
+            d.qacc_warmstart[dofs] = (motor_target - self._qvel[dofs]) * self._inv_timestep
         self._ball_ground_contact_mode()
-        for _ in range(self._substeps):
+        for sub in range(self._substeps):
             mujoco.mj_step1(m, d)
+            if sub == 0:
+                # mj_step1 brought poses and velocities up to the state before this cycle's
+                # physics: sample the accelerometer (spec §4.5) and set the cycle's drag
+                self._sense_accelerometers()
+                self._apply_drag()
             # The motor rows' reference acceleration −B·v becomes −B·(v − target): MuJoCo's
             # friction-loss row turned into ODE's velocity motor (see robocup_gym/robot/mjcf.py).
             if nrows:
@@ -905,27 +997,24 @@ class World:
             mujoco.mj_step2(m, d)
             if self._sleepers:
                 self._hold_sleepers()
-        # MuJoCo computes positions at the start of a step; SimSpark senses after it. Bring the
-        # body poses (vision, monitor, referee, fall checks) and body velocities (next cycle's
-        # drag) up to the new state.
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        mujoco.mj_comVel(m, d)
+        # MuJoCo computes positions at the start of a step; SimSpark senses after it. Body poses
+        # and velocities are brought up to the new state when first used (see ``data``).
+        self._poses_stale = self._com_stale = True
         self.cycle += 1
         self.time = round(self.time + CYCLE_S, 10)
         if self.game.play_mode not in PAUSED_MODES:
             self.game.game_time = round(self.game.game_time + CYCLE_S, 10)
         for r in self.robots:
             r.perception_counter += 1
-        qvel = d.qvel
-        if not qvel @ qvel < DIVERGED_QVEL_SQ:  # also True for NaN
+        qvel = self._qvel
+        if not qvel.dot(qvel) < DIVERGED_QVEL_SQ:  # also True for NaN
             self._raise_diverged()
 
     def _ball_ground_contact_mode(self) -> None:
         """Bouncy ball-ground contact only if the ball will hit the ground this cycle faster than
         0.8 m/s (ODE's bounce threshold, spec §5); otherwise ODE's over-damped soft contact."""
-        z = self.data.qpos[self._ball_qpos + 2]
-        vz = self.data.qvel[self._ball_qvel + 2]
+        z = self._qpos[self._ball_qpos + 2]
+        vz = self._qvel[self._ball_qvel + 2]
         bouncy = bool(
             vz < -phys.BALL_BOUNCE_MIN_SPEED
             and z - phys.BALL_RADIUS - phys.GROUND_PLANE_Z + vz * CYCLE_S < 0.0
@@ -934,33 +1023,29 @@ class World:
             self.model.pair_solref[self._ball_ground_pair] = self._ball_ground_solref[bouncy]
             self._ball_bouncy = bouncy
 
+    def _sense_accelerometers(self) -> None:
+        """Each robot's accelerometer (spec §4.5): the torso's change of velocity over the last
+        cycle plus gravity, in the torso frame, m/s²; called once the poses are current."""
+        for r, v, rot, a_world in self._accel_io:
+            np.subtract(v, r.prev_vel, out=a_world)
+            a_world *= _INV_CYCLE
+            a_world[2] += phys.GRAVITY
+            r.prev_vel[:] = v
+            a_world.dot(rot, out=r.accel)
+
     def _apply_drag(self) -> None:
-        """Drag F = −0.01 v, τ = −0.01 ω on every robot body (spec §7.5), held over the cycle."""
-        if len(self._drag_bodies) == 0:
-            return
-        d = self.data
-        b = self._drag_slice
-        cvel = d.cvel[b]
-        w = cvel[:, :3]
-        # velocity of each body's centre of mass: v_origin + ω × (com − subtree com of the root)
-        arm = self._drag_arm
-        np.subtract(d.xipos[b], d.subtree_com[self._drag_roots], out=arm)
-        outer = self._drag_outer
-        np.multiply(w[:, :, None], arm[:, None, :], out=outer)
-        xf = d.xfrc_applied[b]  # a view when b is a slice (always, in our scenes)
-        lin = xf[:, :3]
-        np.matmul(outer.reshape(-1, 9), _CROSS, out=lin)
-        lin += cvel[:, 3:]
-        xf[:, 3:] = w
-        xf *= _DRAG
-        if not isinstance(b, slice):
-            d.xfrc_applied[b] = xf
+        """Drag F = −0.01 v at each robot body's centre of mass and τ = −0.01 ω (spec §7.5),
+        held over the cycle; from the drag sensors, which ``mj_step1`` has just evaluated."""
+        if self._drag_force is not None:
+            np.multiply(self._drag_vel, _DRAG, out=self._drag_force)
+        elif self._drag_index is not None:
+            self._data.xfrc_applied[self._drag_index] = self._drag_vel * _DRAG
 
     def _raise_diverged(self) -> None:
         """Raise :class:`SimulationDivergedError`: the last step blew up (a NaN/inf or absurd
         velocity, |qvel| > 1e5; MuJoCo's automatic reset is disabled so that the blow-up stays
         visible). The MuJoCo warnings of the step name the cause."""
-        d = self.data
+        d = self._data
         counts = [d.warning[i].number for i in _DIVERGENCE_WARNINGS]
         names = [
             mujoco.mjtWarning(i).name
@@ -978,7 +1063,7 @@ class World:
     def ground_truth(self, index: int = 0) -> GroundTruth:
         """Exact ball and torso state of robot ``index`` (world frame)."""
         r = self.robot(index)
-        d = self.data
+        d = self._posed()
         a, b = r.qpos_root, r.qvel_root
         rot = d.xmat[r.torso_body].reshape(3, 3)
         bq, bv = self._ball_qpos, self._ball_qvel
@@ -993,43 +1078,43 @@ class World:
 
     def ball_position(self) -> np.ndarray:
         """Ball centre, world, m."""
-        return self.data.qpos[self._ball_qpos : self._ball_qpos + 3].copy()
+        return self._data.qpos[self._ball_qpos : self._ball_qpos + 3].copy()
 
     def ball_velocity(self) -> np.ndarray:
         """Ball linear velocity, world, m/s."""
-        return self.data.qvel[self._ball_qvel : self._ball_qvel + 3].copy()
+        return self._data.qvel[self._ball_qvel : self._ball_qvel + 3].copy()
 
     def ball_angular_velocity(self) -> np.ndarray:
         """Ball angular velocity, world, rad/s."""
-        return self.data.qvel[self._ball_qvel + 3 : self._ball_qvel + 6].copy()
+        return self._data.qvel[self._ball_qvel + 3 : self._ball_qvel + 6].copy()
 
     def torso_position(self, index: int = 0) -> np.ndarray:
         """Torso centre of robot ``index``, world, m."""
         a = self.robot(index).qpos_root
-        return self.data.qpos[a : a + 3].copy()
+        return self._data.qpos[a : a + 3].copy()
 
     def torso_up(self, index: int = 0) -> np.ndarray:
         """The torso's up axis (+z of the torso frame) in world coordinates."""
-        return self.data.xmat[self.robot(index).torso_body].reshape(3, 3)[:, 2].copy()
+        return self._posed().xmat[self.robot(index).torso_body].reshape(3, 3)[:, 2].copy()
 
     def joint_angles_deg(self, index: int = 0) -> np.ndarray:
         """Joint angles of robot ``index`` in degrees, canonical order."""
-        return np.degrees(self.data.qpos[self.robot(index).qpos_joints])
+        return np.degrees(self._data.qpos[self.robot(index).qpos_joints])
 
     def joint_velocities(self, index: int = 0) -> np.ndarray:
         """Joint angular velocities of robot ``index`` in rad/s, canonical order."""
-        return self.data.qvel[self.robot(index).qvel_joints].copy()
+        return self._data.qvel[self.robot(index).qvel_joints].copy()
 
     def gyro(self, index: int = 0) -> np.ndarray:
         """Torso angular velocity in the torso frame, deg/s (``GYR``)."""
         b = self.robot(index).qvel_root
-        return np.degrees(self.data.qvel[b + 3 : b + 6])
+        return np.degrees(self._data.qvel[b + 3 : b + 6])
 
     def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
         """``FRP`` readings of robot ``index`` from the contacts of the last physics step: force
         (N) and force-weighted centre of pressure (m), both in the foot's own frame."""
         r = self.robot(index)
-        d = self.data
+        d = self._posed()
         out: dict[str, ForceResistance] = {}
         ncon = d.ncon
         if ncon == 0:
@@ -1101,7 +1186,7 @@ class World:
         is False (the server, which does not send it, saves the work).
         """
         r = self.robot(index)
-        d = self.data
+        d = self._posed()
         game = GameState(
             play_mode=self.game.play_mode,
             game_time=self.game.game_time,
@@ -1135,7 +1220,7 @@ class World:
     def vision(self, index: int = 0):
         """The ``See`` percept of robot ``index`` for the current state (ignores the interval)."""
         r = self.robot(index)
-        d = self.data
+        d = self._posed()
         players = [
             (o.team_name, o.unum, d.xpos[o.part_bodies])
             for o in self.robots

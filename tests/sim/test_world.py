@@ -278,3 +278,93 @@ def test_several_robots_of_both_teams_stand():
         w.step()
     for i in range(4):
         assert w.torso_up(i)[2] > 0.99
+
+
+def _body_velocities(w: World) -> dict[int, np.ndarray]:
+    """Every robot body's (linear velocity of its centre of mass, angular velocity), world frame,
+    from MuJoCo's own mj_objectVelocity on the current state."""
+    import mujoco
+
+    d = w.data  # brings poses and velocities up to the state
+    out = {}
+    for b in w.robots[0].robot_bodies:
+        v = np.zeros(6)
+        mujoco.mj_objectVelocity(w.model, d, mujoco.mjtObj.mjOBJ_BODY, int(b), v, 0)
+        out[int(b)] = np.concatenate([v[3:], v[:3]])
+    return out
+
+
+def test_drag_on_every_robot_body_from_the_velocities_at_the_start_of_the_cycle(world):
+    w = fresh(world)
+    rng = np.random.default_rng(0)
+    vmax = w.robots[0].max_speeds
+    for _ in range(10):
+        w.step({0: rng.uniform(-1, 1, len(vmax)) * vmax})
+    before = _body_velocities(w)
+    assert max(np.abs(v).max() for v in before.values()) > 0.1  # the robot is moving
+    # the forces in effect while MuJoCo integrates this cycle (spy on mj_step2)
+    import mujoco
+
+    import robocup_gym.sim.world as world_module
+
+    seen = []
+
+    class Spy:
+        def __getattr__(self, name):
+            return getattr(mujoco, name)
+
+        def mj_step2(self, m, d):
+            seen.append(d.xfrc_applied.copy())
+            mujoco.mj_step2(m, d)
+
+    world_module.mujoco = Spy()
+    try:
+        w.step({0: rng.uniform(-1, 1, len(vmax)) * vmax})
+    finally:
+        world_module.mujoco = mujoco
+    assert len(seen) == w.substeps
+    for b, v in before.items():
+        # F = −0.01 v at the centre of mass, τ = −0.01 ω (spec §7.5), held over the cycle
+        np.testing.assert_allclose(seen[0][b], -0.01 * v, rtol=1e-9, atol=1e-15)
+
+
+def test_body_poses_are_up_to_date_after_a_step(world):
+    import mujoco
+
+    w = fresh(world)
+    vmax = w.robots[0].max_speeds
+    for _ in range(5):
+        w.step({0: vmax})
+    d = w.data
+    # MuJoCo derives poses at the start of a step; the world's data must show the new state
+    ref = mujoco.MjData(w.model)
+    ref.qpos[:], ref.qvel[:] = d.qpos, d.qvel
+    mujoco.mj_kinematics(w.model, ref)
+    mujoco.mj_comPos(w.model, ref)
+    mujoco.mj_comVel(w.model, ref)
+    np.testing.assert_array_equal(d.xpos, ref.xpos)
+    np.testing.assert_array_equal(d.xmat, ref.xmat)
+    np.testing.assert_array_equal(d.cvel, ref.cvel)
+    np.testing.assert_array_equal(d.subtree_com, ref.subtree_com)
+    # perception reads the new poses too (the torso's up axis from the new orientation)
+    w.step({0: vmax})
+    up = w.torso_up(0)
+    ref.qpos[:] = w.data.qpos
+    mujoco.mj_kinematics(w.model, ref)
+    np.testing.assert_array_equal(up, ref.xmat[w.robots[0].torso_body].reshape(3, 3)[:, 2])
+
+
+def test_accelerometer_is_the_torso_velocity_change_of_the_previous_cycle(world):
+    """SimSpark samples the accelerometer before the physics step: the reading after step k is
+    (v_k − v_{k−1})/0.02 + g in the torso frame, v_k the torso velocity at the start of step k."""
+    w = fresh(world)
+    vmax = w.robots[0].max_speeds
+    r = w.robots[0]
+    vel, rot = [], []
+    for k in range(4):
+        vel.append(w.data.qvel[r.qvel_root : r.qvel_root + 3].copy())
+        rot.append(w.data.xmat[r.torso_body].reshape(3, 3).copy())
+        w.step({0: (-1) ** k * vmax})
+    a_world = (vel[3] - vel[2]) / 0.02 + np.array([0.0, 0.0, 9.81])
+    np.testing.assert_allclose(w.perceive(0).accel, rot[3].T @ a_world, rtol=1e-9, atol=1e-9)
+    assert np.abs(w.perceive(0).accel - [0, 0, 9.81]).max() > 0.1  # the flailing robot moved
