@@ -354,15 +354,27 @@ class _MonitorTracker:
             torso_vel = np.zeros(3)
         self.snapshots.append(GroundTruthSnapshot(t, ball, torso, ball_vel, torso_vel))
 
-    def restart_velocities(self, ball_vel: Sequence[float]) -> None:
-        """After a reset: forget the motion history; the ball moves at ``ball_vel``."""
-        s = self.newest()
-        if s is None:
+    def restart_velocities(
+        self, ball_vel: Sequence[float], first: GroundTruthSnapshot | None = None
+    ) -> None:
+        """After a reset: forget the motion history; the ball moves at ``ball_vel`` in ``first``
+        (the snapshot the reset's percept is matched with; default the newest). Snapshots after
+        it (a frame may run one cycle ahead) get velocities estimated from there on."""
+        snaps = list(self.snapshots)
+        if not snaps:
             return
+        start = len(snaps) - 1
+        if first is not None:
+            start = next((k for k, x in enumerate(snaps) if x is first), start)
+        s = snaps[start]
         s.ball_vel = np.asarray(ball_vel, dtype=float).copy()
         s.torso_vel = np.zeros(3)
         self._ball.restart(s.game_time, s.ball_pos, s.ball_vel)
         self._torso.restart(s.game_time, None if s.torso is None else s.torso[:3, 3], np.zeros(3))
+        for x in snaps[start + 1 :]:
+            x.ball_vel = self._ball.update(x.game_time, x.ball_pos).copy()
+            if x.torso is not None:
+                x.torso_vel = self._torso.update(x.game_time, x.torso[:3, 3].copy()).copy()
 
     def select(self, game_time: float, clock_running: bool) -> GroundTruthSnapshot | None:
         """The snapshot describing the same cycle as a percept with ``game_time``: the newest
@@ -926,7 +938,8 @@ class Rcssserver3dBackend(Backend):
                 )
             p = self._exchange(zero, wait=False)
             settle += 1
-        self._tracker.restart_velocities(bvel)
+        matched = self._tracker.select(p.game.game_time, p.game.play_mode not in FROZEN_CLOCK_MODES)
+        self._tracker.restart_velocities(bvel, first=matched)
         p.ground_truth = self._ground_truth(p)
         self._last = p
         ms = (time.perf_counter() - t0) * 1e3
