@@ -355,18 +355,16 @@ class _MonitorTracker:
         self.snapshots.append(GroundTruthSnapshot(t, ball, torso, ball_vel, torso_vel))
 
     def restart_velocities(
-        self, ball_vel: Sequence[float], first: GroundTruthSnapshot | None = None
+        self, ball_vel: Sequence[float], game_time: float, clock_running: bool
     ) -> None:
-        """After a reset: forget the motion history; the ball moves at ``ball_vel`` in ``first``
-        (the snapshot the reset's percept is matched with; default the newest). Snapshots after
-        it (a frame may run one cycle ahead) get velocities estimated from there on."""
-        snaps = list(self.snapshots)
-        if not snaps:
+        """After a reset: forget the motion history; the ball moves at ``ball_vel`` in the
+        snapshot the reset's percept (``game_time``) is matched with (:meth:`select`). Snapshots
+        after it (a frame may run one cycle ahead) get velocities estimated from there on."""
+        s = self.select(game_time, clock_running)
+        if s is None:
             return
-        start = len(snaps) - 1
-        if first is not None:
-            start = next((k for k, x in enumerate(snaps) if x is first), start)
-        s = snaps[start]
+        snaps = list(self.snapshots)
+        start = next(k for k, x in enumerate(snaps) if x is s)
         s.ball_vel = np.asarray(ball_vel, dtype=float).copy()
         s.torso_vel = np.zeros(3)
         self._ball.restart(s.game_time, s.ball_pos, s.ball_vel)
@@ -938,8 +936,9 @@ class Rcssserver3dBackend(Backend):
                 )
             p = self._exchange(zero, wait=False)
             settle += 1
-        matched = self._tracker.select(p.game.game_time, p.game.play_mode not in FROZEN_CLOCK_MODES)
-        self._tracker.restart_velocities(bvel, first=matched)
+        self._tracker.restart_velocities(
+            bvel, p.game.game_time, p.game.play_mode not in FROZEN_CLOCK_MODES
+        )
         p.ground_truth = self._ground_truth(p)
         self._last = p
         ms = (time.perf_counter() - t0) * 1e3

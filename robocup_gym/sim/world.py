@@ -71,6 +71,15 @@ _any = np.count_nonzero
 method's or ``np.logical_or.reduce``'s reduction machinery on a few values)."""
 
 
+def _contiguous(ids: np.ndarray) -> slice | None:
+    """``ids`` as a slice when they are consecutive ascending indices (views instead of
+    gathers on the hot path), else ``None`` (also when empty)."""
+    n = len(ids)
+    if n and np.array_equal(ids, np.arange(ids[0], ids[0] + n)):
+        return slice(int(ids[0]), int(ids[0]) + n)
+    return None
+
+
 class SimulationDivergedError(RuntimeError):
     """The physics produced NaN/inf or MuJoCo reported an instability; call :meth:`World.reset`."""
 
@@ -262,10 +271,9 @@ class World:
             raise RuntimeError("the scene's drag sensors do not match the robot bodies")
         self._drag_vel = d.sensordata.reshape(-1, 6)
         """Per robot body: centre-of-mass velocity (m/s) and angular velocity (rad/s), world."""
-        nb = len(bodies)
-        contiguous = nb > 0 and np.array_equal(bodies, np.arange(bodies[0], bodies[0] + nb))
-        self._drag_index = None if contiguous or nb == 0 else bodies
-        self._drag_force = d.xfrc_applied[bodies[0] : bodies[0] + nb] if contiguous else None
+        rows = _contiguous(bodies)
+        self._drag_index = None if rows is not None or len(bodies) == 0 else bodies
+        self._drag_force = d.xfrc_applied[rows] if rows is not None else None
         """The robot bodies' rows of ``xfrc_applied`` (a view) when they are contiguous (always,
         in our scenes); otherwise ``_drag_index`` lists them."""
 
@@ -284,10 +292,7 @@ class World:
             for r in self.robots
         ]
         """Per robot: state, torso velocity (world), torso rotation, scratch (accelerometer)."""
-        dofs = self._motor_dofs_sorted
-        n = len(dofs)
-        contiguous = n > 0 and np.array_equal(dofs, np.arange(dofs[0], dofs[0] + n))
-        self._motor_slice = slice(int(dofs[0]), int(dofs[0]) + n) if contiguous else None
+        self._motor_slice = _contiguous(self._motor_dofs_sorted)
         """The motor dofs as one slice when they are contiguous (one robot), else ``None``."""
 
     def _init_motor_arrays(self) -> None:
@@ -475,12 +480,9 @@ class World:
 
     def _sync(self) -> None:
         """Bring body poses, centres of mass and body velocities up to the current state."""
-        m, d = self.model, self._data
-        if self._poses_stale:
-            mujoco.mj_kinematics(m, d)
-            self._poses_stale = False
-        mujoco.mj_comPos(m, d)
-        mujoco.mj_comVel(m, d)
+        d = self._posed()
+        mujoco.mj_comPos(self.model, d)
+        mujoco.mj_comVel(self.model, d)
         self._com_stale = False
 
     def _posed(self) -> mujoco.MjData:
@@ -635,7 +637,7 @@ class World:
         """Wake every sleeping robot one of whose parts touches a moving body (the ball or
         another robot) in this step's contacts: in ODE the contact joint joins it to that body's
         island, which is enabled as a whole."""
-        d = self.data
+        d = self._data  # inside step(): the contacts are this step's
         if d.ncon == 0:
             return
         pairs = d.contact.geom[: d.ncon].tolist()
@@ -656,7 +658,7 @@ class World:
     def _hold_sleepers(self) -> None:
         """Put every sleeping robot back into its held pose with zero velocity (a disabled ODE
         body is not integrated)."""
-        d = self.data
+        d = self._data  # inside step(): only the state is written
         for r in self._sleepers:
             a = r.qpos_root
             d.qpos[a : a + 7] = r.sleep_qpos[:7]
