@@ -75,13 +75,15 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
     d_stop = ph.impedance(stop_cfm, 1.0)
     limit_ref = " ".join(f"{v:.6g}" for v in ph.solref(stop_erp, d_stop))
     dm = ph.motor_impedance
-    bodies, excludes, pairs, sensors = [], [], [], []
+    bodies, excludes, pairs, sensors, frp = [], [], [], [], []
     for slot in robots:
         bodies.append(
             robot_xml(slot.prefix, slot.type_index, accent=TEAM_COLOURS.get(slot.team, ""))
         )
         excludes.append(self_collision_excludes(slot.prefix, nao_model(slot.type_index)))
         sensors.extend(_drag_sensors(slot))
+        frp.extend(_frp_sensors(slot))
+    sensors.extend(frp)  # after every robot's drag sensors (World reads those as one block)
     walls = [
         _box("wall_left", (-24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
         _box("wall_right", (24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
@@ -155,6 +157,31 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
   </sensor>
 </mujoco>
 """
+
+
+FRP_GEOMS = {"rf": "rfoot", "lf": "lfoot", "rf1": "rtoe", "lf1": "ltoe"}
+"""Force resistance perceptor name → the robot geom (= body) it measures (spec §4.6)."""
+
+
+def frp_sensor_name(prefix: str, perceptor: str) -> str:
+    """Name of the MuJoCo contact sensor behind a robot's ``FRP`` perceptor."""
+    return f"{prefix}frp_{perceptor}"
+
+
+def _frp_sensors(slot: RobotSlot) -> list[str]:
+    """The force resistance perceptors (spec §4.6) as MuJoCo contact sensors, one per foot (and
+    toe, type 4): ``reduce="netforce"`` sums the forces of all the geom's contacts of the step
+    and reports them at the force-magnitude-weighted mean of the contact points, which is
+    exactly SimSpark's ``FRP`` (``f`` and ``c``, world frame here; the world turns them into the
+    foot frame). The foot is ``geom2``, so the force is the one acting on the foot. MuJoCo
+    evaluates them after the constraint solve in ``mj_step2``, in C."""
+    feet = ["rf", "lf"] + (["rf1", "lf1"] if nao_model(slot.type_index).robot_type.has_toes else [])
+    p = slot.prefix
+    return [
+        f'    <contact name="{frp_sensor_name(p, f)}" geom2="{p}{FRP_GEOMS[f]}" '
+        f'data="found force pos" reduce="netforce" num="1"/>'
+        for f in feet
+    ]
 
 
 def _drag_sensors(slot: RobotSlot) -> list[str]:

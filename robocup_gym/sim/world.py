@@ -36,7 +36,13 @@ except ImportError:  # numpy < 2
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
-from robocup_gym.sim.scene import RobotSlot, apply_ode_softness, scene_xml
+from robocup_gym.sim.scene import (
+    FRP_GEOMS,
+    RobotSlot,
+    apply_ode_softness,
+    frp_sensor_name,
+    scene_xml,
+)
 from robocup_gym.sim.vision import CALIBRATION_ERROR_M, PLAYER_PARTS, VisionConfig, see
 from robocup_gym.types import (
     AgentCommand,
@@ -104,8 +110,9 @@ class RobotState:
     torso_body: int = 0
     head_body: int = 0
     part_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    foot_geoms: dict[int, str] = field(default_factory=dict)
-    foot_bodies: dict[str, int] = field(default_factory=dict)
+    frp_sensors: list[tuple[str, int, int]] = field(default_factory=list)
+    """Per force resistance perceptor: name, address of its contact sensor's data
+    (contact count, force, point; world frame), foot/toe body."""
     robot_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     robot_geoms: frozenset = frozenset()
     shapes: tuple = ()
@@ -258,18 +265,19 @@ class World:
         """Map the scene's drag sensors (:func:`robocup_gym.sim.scene._drag_sensors`: per robot
         body its centre-of-mass linear and angular velocity) onto ``xfrc_applied``."""
         m, d = self.model, self._data
-        kinds = m.sensor_type
+        n = 2 * len(drag_bodies)  # the drag sensors come first; the FRP contact sensors follow
+        kinds = m.sensor_type[:n]
         lin, ang = mujoco.mjtSensor.mjSENS_FRAMELINVEL, mujoco.mjtSensor.mjSENS_FRAMEANGVEL
-        bodies = m.sensor_objid[0::2]
+        bodies = m.sensor_objid[0:n:2]
         if (
-            m.nsensor != 2 * len(drag_bodies)
+            m.nsensor < n
             or not np.array_equal(bodies, drag_bodies)
-            or not np.array_equal(m.sensor_objid[1::2], bodies)
+            or not np.array_equal(m.sensor_objid[1:n:2], bodies)
             or not (np.all(kinds[0::2] == lin) and np.all(kinds[1::2] == ang))
-            or not np.array_equal(m.sensor_adr, 3 * np.arange(m.nsensor))
+            or not np.array_equal(m.sensor_adr[:n], 3 * np.arange(n))
         ):
             raise RuntimeError("the scene's drag sensors do not match the robot bodies")
-        self._drag_vel = d.sensordata.reshape(-1, 6)
+        self._drag_vel = d.sensordata[: 3 * n].reshape(-1, 6)
         """Per robot body: centre-of-mass velocity (m/s) and angular velocity (rad/s), world."""
         rows = _contiguous(bodies)
         self._drag_index = None if rows is not None or len(bodies) == 0 else bodies
@@ -282,6 +290,7 @@ class World:
         d = self._data
         self._qpos = d.qpos
         self._qvel = d.qvel
+        self._sensordata = d.sensordata
         self._accel_io = [
             (
                 r,
@@ -292,8 +301,16 @@ class World:
             for r in self.robots
         ]
         """Per robot: state, torso velocity (world), torso rotation, scratch (accelerometer)."""
-        self._motor_slice = _contiguous(self._motor_dofs_sorted)
+        ms = self._motor_slice = _contiguous(self._motor_dofs_sorted)
         """The motor dofs as one slice when they are contiguous (one robot), else ``None``."""
+        if ms is not None:
+            self._motor_views = (
+                self.model.dof_frictionloss[ms],
+                d.qacc_warmstart[ms],
+                d.qvel[ms],
+            )
+            """The motor dofs' friction loss (the motor rows' force bound), warm start and
+            velocity: views, so that the per-cycle work needs no MjModel/MjData lookups."""
 
     def _init_motor_arrays(self) -> None:
         """World-level arrays over every robot's joints (robot after robot, canonical order);
@@ -394,11 +411,11 @@ class World:
         r.part_bodies = np.array([m.body(p + part).id for part in PLAYER_PARTS])
         r.robot_bodies = np.array([m.body(p + b.name).id for b in model.bodies])
         r.robot_geoms = frozenset(m.geom(p + b.name).id for b in model.bodies if b.collides)
-        feet = {"rf": "rfoot", "lf": "lfoot"}
-        if model.robot_type.has_toes:
-            feet.update({"rf1": "rtoe", "lf1": "ltoe"})
-        r.foot_geoms = {m.geom(p + body).id: name for name, body in feet.items()}
-        r.foot_bodies = {name: m.body(p + body).id for name, body in feet.items()}
+        feet = ["rf", "lf"] + (["rf1", "lf1"] if model.robot_type.has_toes else [])
+        r.frp_sensors = [
+            (f, int(m.sensor_adr[m.sensor(frp_sensor_name(p, f)).id]), m.body(p + FRP_GEOMS[f]).id)
+            for f in feet
+        ]
         r.range_rad = tuple(np.radians(model.ranges_deg).T.copy())
         r.max_speeds = model.max_speeds
         r.min_speeds = -model.max_speeds
@@ -966,7 +983,7 @@ class World:
         if at_stop is not None:
             rows = ~(at_stop if sort is None else at_stop[sort])
             if ms is not None:
-                np.multiply(rows, phys.MOTOR_MAX_TORQUE, out=m.dof_frictionloss[ms])
+                np.multiply(rows, phys.MOTOR_MAX_TORQUE, out=self._motor_views[0])
             else:
                 m.dof_frictionloss[dofs] = np.where(rows, phys.MOTOR_MAX_TORQUE, 0.0)
             shift = shift[rows]
@@ -977,8 +994,8 @@ class World:
         nrows = len(shift)
         # Warm start: every motor reaches its target (the solver corrects saturated ones).
         if ms is not None:
-            warm = d.qacc_warmstart[ms]
-            np.subtract(motor_target, self._qvel[ms], out=warm)
+            _, warm, qvel_motors = self._motor_views
+            np.subtract(motor_target, qvel_motors, out=warm)
             warm *= self._inv_timestep
         else:
             d.qacc_warmstart[dofs] = (motor_target - self._qvel[dofs]) * self._inv_timestep
@@ -1114,66 +1131,27 @@ class World:
 
     def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
         """``FRP`` readings of robot ``index`` from the contacts of the last physics step: force
-        (N) and force-weighted centre of pressure (m), both in the foot's own frame."""
+        (N) and force-weighted centre of pressure (m), both in the foot's own frame (spec §4.6).
+        A foot without contact is omitted; one whose contacts carry no force repeats its last
+        reading (as SimSpark does for a disabled body)."""
         r = self.robot(index)
         d = self._posed()
+        data = self._sensordata
         out: dict[str, ForceResistance] = {}
-        ncon = d.ncon
-        if ncon == 0:
-            r.last_frp = out
-            return out
-        con = d.contact
-        # the few contacts are sorted out in plain Python: which foot, which side (sign)
-        foot_geoms = r.foot_geoms
-        groups: dict[str, list[int]] = {}  # foot → contacts, feet in order of first contact
-        signs: dict[int, float] = {}
-        pairs = con.geom[:ncon].tolist()
-        efc = con.efc_address[:ncon].tolist()
-        for i, e in enumerate(efc):
-            g1, g2 = pairs[i]
-            name = foot_geoms.get(g1)
-            if name is not None:
-                sign = -1.0
-            else:
-                name = foot_geoms.get(g2)
-                if name is None:
-                    continue
-                sign = 1.0
-            if e < 0:
+        last = r.last_frp
+        for name, adr, body in r.frp_sensors:
+            if data[adr] == 0.0:  # number of contacts of this foot in the last step
                 continue
-            signs[i] = sign
-            groups.setdefault(name, []).append(i)
-        if not groups:
-            r.last_frp = out
-            return out
-        rows = [i for idx in groups.values() for i in idx]  # grouped by foot, contact order kept
-        sel = np.array(rows)
-        # contact-frame forces: with the scene's elliptic cones and condim 3 these are the
-        # contact's efc_force rows as they are (what mj_contactForce returns)
-        f_con = d.efc_force[[efc[i] + k for i in rows for k in _XYZ]].reshape(-1, 3)
-        frames = con.frame[sel].reshape(-1, 3, 3)
-        sign = np.array([signs[i] for i in rows])
-        f_world = (f_con[:, None, :] @ frames)[:, 0, :]  # frame.T @ f of every contact
-        f_world *= sign[:, None]
-        # |f| per contact as np.linalg.norm(axis=1), and |f|-weighted contact points
-        mags = np.sqrt(np.add.reduce(f_world * f_world, axis=1))
-        weighted = mags[:, None] * con.pos[sel]
-        add = np.add.reduce
-        start = 0
-        for name, idx in groups.items():
-            end = start + len(idx)
-            msum = add(mags[start:end])
-            if msum <= 0:
-                if name in r.last_frp:
-                    out[name] = r.last_frp[name]
-                start = end
+            force = data[adr + 1 : adr + 4]
+            if not force.any():
+                if name in last:
+                    out[name] = last[name]
                 continue
-            total = add(f_world[start:end], axis=0)
-            cop = add(weighted[start:end], axis=0) / msum
-            body = r.foot_bodies[name]
-            rot_t = d.xmat[body].reshape(3, 3).T
-            out[name] = ForceResistance(point=rot_t @ (cop - d.xpos[body]), force=rot_t @ total)
-            start = end
+            # world → foot frame: v @ R = Rᵀ v
+            rot = d.xmat[body].reshape(3, 3)
+            out[name] = ForceResistance(
+                point=(data[adr + 4 : adr + 7] - d.xpos[body]) @ rot, force=force @ rot
+            )
         r.last_frp = out
         return out
 

@@ -2,6 +2,7 @@
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -106,6 +107,75 @@ def test_perception_units_and_frames(world):
     assert p.time == pytest.approx(w.time)
     gt = p.ground_truth
     assert gt.torso_pos[:2] == pytest.approx([-1.0, 0.0], abs=0.01)
+
+
+def _frp_from_contacts(w: World, index: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """FRP (spec §4.6) computed independently from MuJoCo's contact list: per foot/toe geom the
+    sum of the contact forces acting on it and the force-magnitude-weighted mean contact point,
+    in the foot frame (``None`` where contacts exist but carry no force)."""
+    m, d = w.model, w.data
+    r = w.robots[index]
+    feet = {"rf": "rfoot", "lf": "lfoot", "rf1": "rtoe", "lf1": "ltoe"}
+    geoms = {}
+    for name, geom in feet.items():
+        try:
+            geoms[m.geom(r.prefix + geom).id] = name
+        except KeyError:
+            continue
+    forces: dict[str, list] = {}
+    for i in range(d.ncon):
+        g1, g2 = d.contact.geom[i]
+        if g1 not in geoms and g2 not in geoms:
+            continue
+        f6 = np.zeros(6)
+        mujoco.mj_contactForce(m, d, i, f6)  # on geom2, contact frame
+        f = d.contact.frame[i].reshape(3, 3).T @ f6[:3]
+        name, sign = (geoms[g2], 1.0) if g2 in geoms else (geoms[g1], -1.0)
+        forces.setdefault(name, []).append((sign * f, d.contact.pos[i].copy()))
+    out = {}
+    for name, items in forces.items():
+        f = np.array([x[0] for x in items])
+        p = np.array([x[1] for x in items])
+        mag = np.linalg.norm(f, axis=1)
+        if mag.sum() == 0:
+            out[name] = None
+            continue
+        body = m.body(r.prefix + feet[name]).id
+        rot = d.xmat[body].reshape(3, 3)
+        cop = (mag[:, None] * p).sum(0) / mag.sum()
+        out[name] = (rot.T @ (cop - d.xpos[body]), rot.T @ f.sum(0))
+    return out
+
+
+@pytest.mark.parametrize("types", [[0], [4, 2]])
+def test_force_sensors_match_the_contacts_of_the_step(types):
+    """FRP of flailing robots (feet and type-4 toes on the ground, in the air, on the ball):
+    the same as summing MuJoCo's contact forces per foot geom and weighting the contact points
+    by force magnitude."""
+    w = World(types, seed=3)
+    for i in range(len(types)):
+        w.place_robot(i, -1.0 + 0.6 * i, 0.0, heading_deg=0.0)
+    w.place_ball((-0.82, -0.055))
+    rng = np.random.default_rng(0)
+    seen = set()
+    for c in range(150):
+        cmds = {
+            i: rng.uniform(-1, 1, len(r.max_speeds)) * r.max_speeds * (0.3 if c < 60 else 1.0)
+            for i, r in enumerate(w.robots)
+        }
+        w.step(cmds)
+        for i in range(len(types)):
+            got = w.force_sensors(i)
+            want = _frp_from_contacts(w, i)
+            # a foot without contact is omitted; one whose contacts carry no force may repeat
+            assert {k for k, v in want.items() if v is not None} <= set(got) <= set(want)
+            for name, v in want.items():
+                if v is None:
+                    continue
+                np.testing.assert_allclose(got[name].point, v[0], atol=1e-12)
+                np.testing.assert_allclose(got[name].force, v[1], rtol=1e-12, atol=1e-9)
+                seen.add(name)
+    assert {"lf", "rf"} <= seen and (4 not in types or {"lf1", "rf1"} & seen)
 
 
 def test_gyro_in_deg_per_s_torso_frame(world):
