@@ -3,7 +3,9 @@
 Prints a table and, as its LAST line, one JSON object with ``total_mass_kg``, ``stand_fell``,
 ``stand_torso_z_m`` (mean over the last second of standing with zero joint velocities),
 ``kick_D_ball_m`` (ball displacement of the scripted kick ``kick_D.json``), the first-move and
-peak-speed cycles, the real server's figures and pass/fail per target.
+peak-speed cycles, the real server's figures and pass/fail per target. Where ODE (``libode``) is
+installed, the same kick replayed on ``robocup_gym.sim.ode.OdeWorld`` (SimSpark's physics on ODE
+itself) is reported beside it as ``ode_kick_D_ball_m`` (``null`` without ODE).
 
     python benchmarks/fidelity.py            # full: 60 s stand
     python benchmarks/fidelity.py --quick    # short stand (for the test suite)
@@ -17,6 +19,7 @@ import time
 
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim.fidelity import load_data, scripted_kick, stand
+from robocup_gym.sim.ode import OdeWorld, available
 
 
 def main() -> None:
@@ -28,6 +31,7 @@ def main() -> None:
     mass = nao_model(0).total_mass
     st = stand(2.0 if args.quick else 60.0)
     kick = scripted_kick()
+    ode_kick = scripted_kick(world=OdeWorld([0])) if available() else None
     out = {
         "total_mass_kg": round(mass, 5),
         "stand_seconds": 2.0 if args.quick else 60.0,
@@ -40,6 +44,8 @@ def main() -> None:
         "kick_D_peak_speed_mps": round(kick.peak_speed_mps, 3),
         "kick_D_peak_speed_cycle": kick.peak_speed_cycle,
         "kick_D_robot_fell": kick.robot_fell,
+        "ode_kick_D_ball_m": round(ode_kick.ball_displacement_m, 4) if ode_kick else None,
+        "ode_kick_D_first_move_cycle": ode_kick.first_move_cycle if ode_kick else None,
         "real": {k: v for k, v in real.items() if k != "source"},
     }
     first = kick.first_move_cycle
@@ -63,6 +69,8 @@ def main() -> None:
         ("kick D peak speed (m/s)", kick.peak_speed_mps, real["kick_D_peak_speed_mps"]),
     ):
         print(f"{name:32s} {ours:12.4f} {theirs:12.4f}")
+    if ode_kick is not None:
+        print(f"{'kick D on the ODE reference (m)':32s} {ode_kick.ball_displacement_m:12.4f}")
     print(json.dumps(out))
 
 

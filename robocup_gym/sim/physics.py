@@ -17,17 +17,22 @@ CYCLE_S = 0.02
 GRAVITY = 9.81
 """m/s² (spec §7.1)."""
 SURFACE_LAYER = 0.001
-"""ODE contact surface layer (m): resting bodies sink this deep into the ground (spec §7.1)."""
-CONTACT_HEADROOM = 1e-4
-"""How much less than the surface layer the ground's collision plane lies below z = 0, m.
+"""ODE contact surface layer (m): resting bodies sink this deep into the ground (spec §7.1).
 
-ODE's contact exists as soon as a body touches the real ground (z = 0) and pushes back only
-beyond the 1 mm layer; a MuJoCo contact exists only once the geoms overlap. With the plane 1 mm
-down, a body placed at ODE's resting depth would just touch it, get no contact in its first step
-and fall freely for 20 ms (3.9 mm). 0.9 mm keeps resting heights within 0.1 mm of ODE's and
-gives such a body its contact from the first step."""
-GROUND_PLANE_Z = -(SURFACE_LAYER - CONTACT_HEADROOM)
-"""Height of the ground's collision plane, m."""
+ODE makes a contact as soon as two geoms overlap, but its normal row pushes them apart only by
+what exceeds this layer (target separation speed ``erp·max(depth − layer, 0)/h``); within the
+layer the contact still stops further approach and, with SimSpark's μ = ∞, its friction rows
+hold at full strength. The world reproduces this by shifting each contact row's reference
+acceleration every step (``World._surface_layer``)."""
+GROUND_PLANE_Z = 0.0
+"""Height of the ground's collision plane, m (z = 0, as in SimSpark)."""
+UNBOUNDED_FRICTION = 1e4
+"""Coulomb μ that stands for SimSpark's μ = ∞ (every contact handler keeps ODE's ``dInfinity``,
+spec §7.3): ODE's friction rows are then unbounded and act whatever the normal force, even on a
+contact that carries none (a toe resting within the surface layer). MuJoCo bounds friction by
+μ times the normal force; with this μ its elliptic cone still transmits the full viscous
+friction of a contact with a near-zero normal force (μ = 10 let a hopping robot's toe slide
+where ODE's stays put)."""
 
 BALL_RADIUS = 0.042
 BALL_MASS = 0.026
@@ -41,6 +46,12 @@ BODY_ANGULAR_DRAG = 0.01
 """Angular drag on every robot body, N·m·s/rad (spec §7.5)."""
 MOTOR_MAX_TORQUE = 10.0
 """ODE motor FMax of every hinge, N·m (spec §2.4)."""
+MOTOR_FUDGE_FACTOR = 1e-5
+"""ODE's hinge fudge factor (spec §2.4): at a stop the motor row gives way to a constant torque,
+the full FMax into the stop, or this fraction of it when the target pulls away from the stop."""
+JOINT_STOP_BOUNCE = 1.0
+"""Restitution of the hinge stops (spec §2.4): a joint that runs into a stop leaves it with the
+speed it arrived at."""
 
 BALL_RESTITUTION = 0.8
 """Ball contact bounce (spec §5); ODE applies it above 0.8 m/s approach speed."""
@@ -109,7 +120,7 @@ class PhysicsConfig:
             one non-zero).
         robot_friction: Coulomb μ of robot contacts. ODE uses μ = ∞ with force-dependent slip;
             the slip is modelled by the friction rows' regulariser (``impratio``), the cone is
-            only there for MuJoCo and wide enough never to bind.
+            only there for MuJoCo and so wide that it never binds (:data:`UNBOUNDED_FRICTION`).
         ball_friction: Coulomb μ ball–anything (ODE μ = ∞ + slip 0.30, see ``robot_friction``).
         impratio: MuJoCo's frictional-to-normal regulariser ratio; ``cfm/slip`` of the
             robot contacts (1e-4 / 0.005) gives ODE's force-dependent slip for them.
@@ -122,8 +133,8 @@ class PhysicsConfig:
     tolerance: float = 1e-8
     ls_tolerance: float = 0.01
     motor_impedance: float = MAX_IMPEDANCE
-    robot_friction: float = 10.0
-    ball_friction: float = 10.0
+    robot_friction: float = UNBOUNDED_FRICTION
+    ball_friction: float = UNBOUNDED_FRICTION
     impratio: float = ROBOT_GROUND_ERP_CFM[1] / ROBOT_SLIP
     jacobian: str = "sparse"
 

@@ -72,6 +72,8 @@ _DIVERGENCE_WARNINGS = (
 )
 HEARING_RANGE_M = 50.0
 _XYZ = (0, 1, 2)
+_QUADRATIC = int(mujoco.mjtConstraintState.mjCNSTRSTATE_QUADRATIC)
+"""Solver state of a motor row that reached its target (not saturated at ±FMax)."""
 _any = np.count_nonzero
 """``a.any()`` for a 1-d bool array (hot path: counting is several times cheaper than the
 method's or ``np.logical_or.reduce``'s reduction machinery on a few values)."""
@@ -259,6 +261,7 @@ class World:
         self._static_geoms = frozenset(np.flatnonzero(m.geom_bodyid == 0).tolist())
         self.reset(seed=seed)
         self._check_motor_rows()
+        self._check_contact_rows()
 
     # ------------------------------------------------------------------ construction helpers
     def _init_drag(self, drag_bodies: list[int]) -> None:
@@ -331,6 +334,9 @@ class World:
         n = len(self._qvel_j)
         self._targets = np.zeros(n)
         self._q_ref = np.zeros(n)
+        self._motor_lost = np.zeros(n, dtype=bool)
+        """Joints whose motor saturated or was replaced by a stop in the last step: the creep
+        compensation restarts from where they are (motion lost there is never caught up)."""
         off = 0
         for r in robots:
             k = len(r.qvel_joints)
@@ -394,6 +400,25 @@ class World:
                 f"MuJoCo {mujoco.__version__}: {problem}. The World's joint motors "
                 "(robocup_gym/sim/world.py, robocup_gym/robot/mjcf.py) rely on it; "
                 "use a tested MuJoCo version (docs/physics.md, 'MuJoCo versions')."
+            )
+
+    def _check_contact_rows(self) -> None:
+        """Check that every contact has three constraint rows (condim 3, elliptic cones), which
+        :meth:`_surface_layer` relies on to find the normal rows without a per-contact lookup.
+
+        Raises:
+            RuntimeError: naming the geom or pair that would make contacts of another shape.
+        """
+        m = self.model
+        if m.opt.cone != mujoco.mjtCone.mjCONE_ELLIPTIC:
+            raise RuntimeError("the world's contact model needs elliptic friction cones")
+        colliding = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
+        odd = np.flatnonzero(colliding & (m.geom_condim != 3))
+        if len(odd) or np.any(m.pair_dim != 3):
+            name = m.geom(int(odd[0])).name if len(odd) else "a contact pair"
+            raise RuntimeError(
+                f"{name} has condim ≠ 3: every contact must have three rows (see "
+                "World._surface_layer)"
             )
 
     def _index_robot(self, i: int, slot: RobotSlot) -> RobotState:
@@ -634,6 +659,7 @@ class World:
         self.model.dof_frictionloss[r.qvel_joints] = phys.MOTOR_MAX_TORQUE
         d.qacc_warmstart[:] = 0.0
         r.q_ref[:] = d.qpos[r.qpos_joints]
+        self._motor_lost[r.joint_slice] = False
         r.prev_vel[:] = 0.0
         r.accel[:] = (0.0, 0.0, phys.GRAVITY)
         if z is None:
@@ -954,30 +980,35 @@ class World:
                     r.asleep = False
             self._update_sleepers()
         targets = self._targets
+        # ODE at a stop (spec §2.4, ODE's addLimot): the motor row gives way to the stop row
+        # (fully elastic, ``_bounce_stops``) and a constant torque, FMax into the stop when the
+        # target pushes into it or is 0, fudge·FMax away from it when the target pulls away.
+        # FMax into a stop that the stop row holds only caps how fast the joint may leave it:
+        # the joint's velocity becomes max(stop row's target, free velocity − FMax·h/I). The
+        # motor row, kept with the stop row's target as its own, does exactly that without an
+        # explicit 10 N·m on light joints. Pulling away, the row goes (``_fudge_torques``).
         at_stop = None
         if any_limited:
-            # joints resting at a stop whose target does not pull them away from it
-            at_stop = (at_lo & (targets <= 0.0)) | (at_hi & (targets >= 0.0))
-            if not _any(at_stop):
-                at_stop = None
+            away = (at_lo & (targets > 0.0)) | (at_hi & (targets < 0.0))
+            at_stop = away if _any(away) else None
         # Creep compensation: MuJoCo regularises the motor rows, so a held joint creeps slowly
         # under load where ODE's rigid motor row does not. Each motor follows the integral of its
-        # commanded velocity; the small difference is corrected within a cycle. Anti-windup
-        # keeps saturated motors ODE-like (motion lost while saturated is never caught up).
+        # commanded velocity; the small difference is corrected within a cycle. A motor that
+        # saturated or sat at a stop restarts from where its joint is: motion lost there is
+        # never caught up, as in ODE.
         q_ref = self._q_ref
+        np.copyto(q_ref, q, where=self._motor_lost)
         _clip(q_ref, q - CREEP_WINDOW_RAD, q + CREEP_WINDOW_RAD, out=q_ref)
-        if at_stop is not None:
-            np.copyto(q_ref, q, where=at_stop)
         motor_target = q_ref - q
         motor_target *= 1.0 / CYCLE_S
         motor_target += targets
         q_ref += targets * CYCLE_S
+        if any_limited:
+            np.copyto(motor_target, self._stop_speeds(q, at_lo, at_hi), where=limited)
         sort = self._motor_sort
         if sort is not None:
             motor_target = motor_target[sort]
         shift = self._motor_b * motor_target
-        # ODE's motor "fudge factor" (spec §2.4): at a stop the motor barely acts unless it pulls
-        # the joint away from the stop; modelled by removing that motor row this cycle.
         dofs = self._motor_dofs_sorted
         ms = self._motor_slice
         if at_stop is not None:
@@ -987,9 +1018,11 @@ class World:
             else:
                 m.dof_frictionloss[dofs] = np.where(rows, phys.MOTOR_MAX_TORQUE, 0.0)
             shift = shift[rows]
+            self._fudge_torques(at_lo, at_hi, targets)
             self._motors_relaxed = True
         elif self._motors_relaxed:
             m.dof_frictionloss[dofs] = phys.MOTOR_MAX_TORQUE
+            d.qfrc_applied[self._qvel_j] = 0.0
             self._motors_relaxed = False
         nrows = len(shift)
         # Warm start: every motor reaches its target (the solver corrects saturated ones).
@@ -1011,11 +1044,27 @@ class World:
             # friction-loss row turned into ODE's velocity motor (see robocup_gym/robot/mjcf.py).
             if nrows:
                 d.efc_aref[:nrows] += shift
+            if d.ncon:
+                self._surface_layer()
+            if d.nl:
+                self._bounce_stops()
             if self._sleepers:
                 self._wake_touched()
             mujoco.mj_step2(m, d)
             if self._sleepers:
                 self._hold_sleepers()
+        # which motors could not hold their target this step (saturated, or absent at a stop)
+        moving = d.efc_state[:nrows] == _QUADRATIC
+        if at_stop is not None:
+            held = np.zeros(len(dofs), dtype=bool)
+            held[rows] = moving
+            moving = held
+        if sort is None:
+            np.logical_not(moving, out=self._motor_lost)
+        else:
+            self._motor_lost[sort] = ~moving
+        if any_limited:
+            self._motor_lost |= limited
         # MuJoCo computes positions at the start of a step; SimSpark senses after it. Body poses
         # and velocities are brought up to the new state when first used (see ``data``).
         self._poses_stale = self._com_stale = True
@@ -1028,6 +1077,67 @@ class World:
         qvel = self._qvel
         if not qvel.dot(qvel) < DIVERGED_QVEL_SQ:  # also True for NaN
             self._raise_diverged()
+
+    def _stop_speeds(self, q: np.ndarray, at_lo: np.ndarray, at_hi: np.ndarray) -> np.ndarray:
+        """Per joint, the velocity (rad/s) the stop row of a joint at a stop asks for: its ERP
+        correction back into the range or, for a joint running into the stop, the reflected
+        speed if larger (ODE: ``c = max(−erp·err/h, −bounce·v)``); meaningful where
+        ``at_lo``/``at_hi``."""
+        v = self._qvel[self._qvel_j]
+        erp_speed = phys.JOINT_STOP_ERP_CFM[0] * self._inv_timestep
+        into = np.maximum(v, 0.0)
+        into *= phys.JOINT_STOP_BOUNCE
+        speed_hi = np.maximum((q - self._hi) * erp_speed, into)
+        into = np.maximum(-v, 0.0)
+        into *= phys.JOINT_STOP_BOUNCE
+        speed_lo = np.maximum((self._lo - q) * erp_speed, into)
+        return np.where(at_hi, -speed_hi, speed_lo)
+
+    def _fudge_torques(self, at_lo: np.ndarray, at_hi: np.ndarray, targets: np.ndarray) -> None:
+        """ODE's torque on a joint at a stop whose target pulls it away (spec §2.4): only
+        fudge factor × FMax (1e-4 N·m), in the target's direction; 0 for every other joint."""
+        away = phys.MOTOR_FUDGE_FACTOR * phys.MOTOR_MAX_TORQUE
+        torque = (at_lo & (targets > 0.0)) * away
+        torque -= (at_hi & (targets < 0.0)) * away
+        self._data.qfrc_applied[self._qvel_j] = torque
+
+    def _bounce_stops(self) -> None:
+        """Fully elastic joint stops (spec §2.4, ODE bounce 1): a stop row whose joint runs
+        into the stop asks for the larger of its ERP correction and the reflected speed
+        (ODE: ``c = max(−erp·err/h, −bounce·v)``), as a shift of its reference acceleration.
+        Called between ``mj_step1`` and ``mj_step2``; the stop rows follow the friction rows."""
+        d = self._data
+        start = d.ne + d.nf
+        rows = slice(start, start + d.nl)
+        v = d.efc_vel[rows]
+        aref = d.efc_aref[rows]
+        # the row velocity after the step that the reference asks for, and the bounce's
+        implied = aref / self._inv_timestep
+        implied += v
+        bounce = v * -phys.JOINT_STOP_BOUNCE
+        np.maximum(bounce, implied, out=bounce)
+        bounce -= implied
+        bounce *= v < 0.0  # only a joint running into its stop bounces
+        bounce *= self._inv_timestep
+        aref += bounce
+
+    def _surface_layer(self) -> None:
+        """ODE's contact surface layer (spec §7.1) on this step's contacts: the normal row pushes
+        only by the depth beyond the 1 mm layer (reference acceleration ``−B·v − K·I·min(pos +
+        layer, 0)`` instead of MuJoCo's ``−B·v − K·I·pos``, i.e. a shift of
+        ``K·I·max(pos, −layer)``), so a contact within the layer still stops further approach
+        and carries friction but does not push out. Called between ``mj_step1`` (which made
+        the rows) and ``mj_step2`` (which solves them). Every contact here has three rows
+        (condim 3, elliptic cones; checked when the world is built), normal row first, and the
+        contacts' rows come last."""
+        d = self._data
+        start = d.ne + d.nf + d.nl
+        rows = slice(start, start + 3 * d.ncon, 3)
+        shift = np.maximum(d.efc_pos[rows], -phys.SURFACE_LAYER)
+        kbip = d.efc_KBIP[rows]
+        shift *= kbip[:, 0]
+        shift *= kbip[:, 2]
+        d.efc_aref[rows] += shift
 
     def _ball_ground_contact_mode(self) -> None:
         """Bouncy ball-ground contact only if the ball will hit the ground this cycle faster than

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import torch as th
 
 pytest.importorskip("stable_baselines3")
 
@@ -34,10 +35,38 @@ class _Record(BaseCallback):
         self.rollouts += 1
 
 
+def _row_by_row(policy) -> None:
+    """Make ``policy``'s forward pass evaluate one observation at a time (gSDE: with that
+    environment's exploration matrix), so that its float32 results do not depend on how many
+    environments are stepped together: the lock-step loop evaluates all four, the pipelined one
+    each worker's two. Rounding differences of ~1e-6 in the actions would otherwise be amplified
+    by the physics (ODE-like contacts switch on sub-micrometre depths) and hide what this test
+    compares: which step, environment and policy each buffer row comes from."""
+    forward = policy.forward
+    dist = policy.action_dist
+
+    def rows(obs, deterministic=False):
+        mats = getattr(dist, "exploration_matrices", None)
+        mat = getattr(dist, "exploration_mat", None)
+        out = []
+        try:
+            for k in range(len(obs)):
+                if mats is not None and len(obs) > 1:
+                    dist.exploration_mat = mats[k] if len(mats) == len(obs) else mat
+                out.append(forward(obs[k : k + 1], deterministic))
+        finally:
+            if mats is not None:
+                dist.exploration_matrices, dist.exploration_mat = mats, mat
+        return tuple(th.cat(parts) for parts in zip(*out, strict=True))
+
+    policy.forward = rows
+
+
 def _collect(pipelined: bool, use_sde: bool, rollouts: int = 2):
     venv = small_vec_env()
     try:
         model = small_pipelined_ppo(venv, use_sde=use_sde, pipeline_rollouts=pipelined)
+        _row_by_row(model._rollout_policy())
         assert model.can_pipeline(venv) == pipelined
         cb = _Record()
         model._setup_learn(16 * 4 * rollouts, cb)

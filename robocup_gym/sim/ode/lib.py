@@ -1,0 +1,186 @@
+"""A small ctypes binding of the Open Dynamics Engine (ODE), the engine rcssserver3d runs on.
+
+Only what :mod:`robocup_gym.sim.ode.world` needs: a world, bodies with masses, hinge joints with
+their motor/stop parameters, box/sphere/capsule/plane geoms, ``dCollide`` and contact joints. ODE
+is not a Python package: it is the system library ``libode`` (Debian/Ubuntu: ``apt-get install
+libode8``; rcssserver3d 0.7.3 was measured on ODE 0.16.2 in double precision, which is what
+Debian 12 ships). ``ROBOCUP_GYM_LIBODE`` may name the library file explicitly.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import os
+from functools import cache
+
+dReal = ctypes.c_double  # noqa: N816 (ODE's own type names)
+dID = ctypes.c_void_p  # noqa: N816
+Vec4 = dReal * 4
+Mat3 = dReal * 12
+"""ODE's 3×3 rotation matrix, stored row by row with 4 entries per row."""
+
+# dSurfaceParameters.mode flags (ode/contact.h)
+CONTACT_BOUNCE = 0x004
+CONTACT_SOFT_ERP = 0x008
+CONTACT_SOFT_CFM = 0x010
+CONTACT_SLIP1 = 0x100
+CONTACT_SLIP2 = 0x200
+
+# joint parameters (ode/common.h, ODE 0.16: LoVel/HiVel sit between Vel and FMax)
+PARAM_LO_STOP = 0
+PARAM_HI_STOP = 1
+PARAM_VEL = 2
+PARAM_FMAX = 5
+PARAM_FUDGE_FACTOR = 6
+PARAM_BOUNCE = 7
+PARAM_CFM = 8
+PARAM_STOP_ERP = 9
+PARAM_STOP_CFM = 10
+
+INFINITY = float("inf")
+"""ODE's ``dInfinity`` (IEEE infinity in this build)."""
+
+
+class OdeUnavailableError(RuntimeError):
+    """ODE (``libode``) is not installed, or is not the double-precision build SimSpark uses."""
+
+
+class Mass(ctypes.Structure):
+    """``dMass``: total mass, centre of mass and inertia tensor (3×4 rows)."""
+
+    _fields_ = [("mass", dReal), ("c", Vec4), ("I", Mat3)]
+
+
+class SurfaceParameters(ctypes.Structure):
+    """``dSurfaceParameters`` (ODE 0.16 layout, with the rolling-friction fields)."""
+
+    _fields_ = [
+        ("mode", ctypes.c_int),
+        ("mu", dReal),
+        ("mu2", dReal),
+        ("rho", dReal),
+        ("rho2", dReal),
+        ("rhoN", dReal),
+        ("bounce", dReal),
+        ("bounce_vel", dReal),
+        ("soft_erp", dReal),
+        ("soft_cfm", dReal),
+        ("motion1", dReal),
+        ("motion2", dReal),
+        ("motionN", dReal),
+        ("slip1", dReal),
+        ("slip2", dReal),
+    ]
+
+
+class ContactGeom(ctypes.Structure):
+    """``dContactGeom``: one contact point; the normal points into the first geom."""
+
+    _fields_ = [
+        ("pos", Vec4),
+        ("normal", Vec4),
+        ("depth", dReal),
+        ("g1", dID),
+        ("g2", dID),
+        ("side1", ctypes.c_int),
+        ("side2", ctypes.c_int),
+    ]
+
+
+class Contact(ctypes.Structure):
+    """``dContact``: surface parameters + contact point, what a contact joint is made from."""
+
+    _fields_ = [("surface", SurfaceParameters), ("geom", ContactGeom), ("fdir1", Vec4)]
+
+
+_SIGNATURES: dict[str, tuple] = {
+    # name: (restype, argtypes)
+    "dInitODE2": (ctypes.c_int, [ctypes.c_uint]),
+    "dGetConfiguration": (ctypes.c_char_p, []),
+    "dWorldCreate": (dID, []),
+    "dWorldDestroy": (None, [dID]),
+    "dWorldSetGravity": (None, [dID, dReal, dReal, dReal]),
+    "dWorldSetERP": (None, [dID, dReal]),
+    "dWorldSetCFM": (None, [dID, dReal]),
+    "dWorldSetContactSurfaceLayer": (None, [dID, dReal]),
+    "dWorldSetAutoDisableFlag": (None, [dID, ctypes.c_int]),
+    "dWorldStep": (ctypes.c_int, [dID, dReal]),
+    "dBodyCreate": (dID, [dID]),
+    "dBodySetPosition": (None, [dID, dReal, dReal, dReal]),
+    "dBodySetRotation": (None, [dID, Mat3]),
+    "dBodySetLinearVel": (None, [dID, dReal, dReal, dReal]),
+    "dBodySetAngularVel": (None, [dID, dReal, dReal, dReal]),
+    "dBodyGetPosition": (ctypes.POINTER(dReal), [dID]),
+    "dBodyGetRotation": (ctypes.POINTER(dReal), [dID]),
+    "dBodyGetLinearVel": (ctypes.POINTER(dReal), [dID]),
+    "dBodyGetAngularVel": (ctypes.POINTER(dReal), [dID]),
+    "dBodySetMass": (None, [dID, ctypes.POINTER(Mass)]),
+    "dBodyAddForce": (None, [dID, dReal, dReal, dReal]),
+    "dBodyAddTorque": (None, [dID, dReal, dReal, dReal]),
+    "dBodyEnable": (None, [dID]),
+    "dBodyDisable": (None, [dID]),
+    "dBodyIsEnabled": (ctypes.c_int, [dID]),
+    "dMassSetZero": (None, [ctypes.POINTER(Mass)]),
+    "dMassSetBoxTotal": (None, [ctypes.POINTER(Mass), dReal, dReal, dReal, dReal]),
+    "dMassSetSphereTotal": (None, [ctypes.POINTER(Mass), dReal, dReal]),
+    "dMassSetCapsuleTotal": (None, [ctypes.POINTER(Mass), dReal, ctypes.c_int, dReal, dReal]),
+    "dJointCreateHinge": (dID, [dID, dID]),
+    "dJointCreateContact": (dID, [dID, dID, ctypes.POINTER(Contact)]),
+    "dJointAttach": (None, [dID, dID, dID]),
+    "dJointSetHingeAnchor": (None, [dID, dReal, dReal, dReal]),
+    "dJointSetHingeAxis": (None, [dID, dReal, dReal, dReal]),
+    "dJointSetHingeParam": (None, [dID, ctypes.c_int, dReal]),
+    "dJointGetHingeParam": (dReal, [dID, ctypes.c_int]),
+    "dJointGetHingeAngle": (dReal, [dID]),
+    "dJointGetHingeAngleRate": (dReal, [dID]),
+    "dJointGroupCreate": (dID, [ctypes.c_int]),
+    "dJointGroupEmpty": (None, [dID]),
+    "dCreateBox": (dID, [dID, dReal, dReal, dReal]),
+    "dCreateSphere": (dID, [dID, dReal]),
+    "dCreateCapsule": (dID, [dID, dReal, dReal]),
+    "dCreatePlane": (dID, [dID, dReal, dReal, dReal, dReal]),
+    "dGeomSetBody": (None, [dID, dID]),
+    "dGeomGetBody": (dID, [dID]),
+    "dGeomDestroy": (None, [dID]),
+    "dCollide": (ctypes.c_int, [dID, dID, ctypes.c_int, ctypes.POINTER(ContactGeom), ctypes.c_int]),
+}
+
+
+@cache
+def load() -> ctypes.CDLL:
+    """The initialised ODE library.
+
+    Raises:
+        OdeUnavailableError: when ``libode`` cannot be found or loaded, or is a single-precision
+            build (SimSpark's results are for double precision).
+    """
+    path = os.environ.get("ROBOCUP_GYM_LIBODE") or ctypes.util.find_library("ode") or "libode.so.8"
+    try:
+        lib = ctypes.CDLL(path)
+    except OSError as e:
+        raise OdeUnavailableError(
+            f"the Open Dynamics Engine library could not be loaded ({path}: {e}); install it "
+            "(Debian/Ubuntu: apt-get install libode8) or point ROBOCUP_GYM_LIBODE at libode.so"
+        ) from e
+    for name, (restype, argtypes) in _SIGNATURES.items():
+        fn = getattr(lib, name)
+        fn.restype = restype
+        fn.argtypes = argtypes
+    config = lib.dGetConfiguration().decode()
+    if "ODE_double_precision" not in config.split():
+        raise OdeUnavailableError(
+            f"{path} is not a double-precision ODE build (configuration: {config}); "
+            "rcssserver3d's figures are for ODE in double precision"
+        )
+    lib.dInitODE2(0)
+    return lib
+
+
+def available() -> bool:
+    """Whether a double-precision ODE can be loaded here."""
+    try:
+        load()
+    except OdeUnavailableError:
+        return False
+    return True

@@ -1,0 +1,490 @@
+"""SimSpark's physics step re-created on ODE itself: the reference the MuJoCo world is checked
+against.
+
+rcssserver3d advances the Open Dynamics Engine once per 20 ms cycle (``dWorldStep``, ODE 0.16,
+double precision). :class:`OdeWorld` builds the same robot (from the same tables,
+:func:`robocup_gym.robot.nao.nao_model`), ball and ground on that engine, with the parameters of
+``shared/spec/simspark-model.md``: world CFM 1e-5, surface layer 1 mm, auto-disable on; hinge
+motors with FMax 10 N·m, CFM 1e-8, stop ERP 0.8 / CFM 1e-8, fudge factor 1e-5 and bounce 1;
+contact surfaces mixed from each side's handler as SimSpark does (§7.3); drag before each step
+(§7.5); the hinge effector's rules (clip to the joint's max speed, ignore commands while the
+joint is not strictly inside its limits, wake the body on a non-zero command, §8.3).
+
+It is a yardstick, not a second simulator: no perception, no referee, no walls or goals (the
+motions it compares happen near the centre of the field). What it settles is how ODE's own
+solver, contact generation, joint stops and motor-at-stop rules behave for a given motion,
+which the MuJoCo translation (:mod:`robocup_gym.sim.world`) can then be compared with
+(``benchmarks/ode_compare.py``). It needs the system library ``libode``
+(:mod:`robocup_gym.sim.ode.lib`).
+
+It offers the part of :class:`robocup_gym.sim.world.World`'s interface that scripted motions
+use (``place_robot``, ``place_ball``, ``step``, ``ball_position``, ``torso_position``, …), so
+:func:`robocup_gym.sim.fidelity.scripted_kick` runs on either.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim import physics as phys
+from robocup_gym.sim.ode import lib as ode
+from robocup_gym.sim.world import heading_to_quat
+
+WORLD_CFM = 1e-5
+"""SimSpark's world CFM (spec §7.1); the world ERP stays ODE's default 0.2."""
+WORLD_ERP = 0.2
+HINGE_CFM = 1e-8
+HINGE_STOP_ERP, HINGE_STOP_CFM = phys.JOINT_STOP_ERP_CFM
+HINGE_FUDGE_FACTOR = 1e-5
+HINGE_STOP_BOUNCE = 1.0
+MAX_CONTACTS = 4
+"""Contact points per geom pair (spec §7.3)."""
+
+
+@dataclass(frozen=True)
+class Surface:
+    """One contact handler's surface settings (spec §7.3); ``None`` = that mode is off."""
+
+    bounce: tuple[float, float] | None
+    """(restitution, minimum approach speed m/s)."""
+    soft_erp: float | None
+    soft_cfm: float | None
+    slip: float | None
+    """Force-dependent slip, m/s per N (both friction directions)."""
+
+
+ROBOT_SURFACE = Surface(bounce=None, soft_erp=0.6, soft_cfm=1e-4, slip=0.005)
+"""Every robot part and foot (contact-joint and touch-perceptor handlers)."""
+BALL_SURFACE = Surface(bounce=(0.8, 0.8), soft_erp=0.5, soft_cfm=0.05, slip=0.6)
+GROUND_SURFACE = Surface(bounce=None, soft_erp=0.2, soft_cfm=None, slip=0.005)
+WALL_SURFACE = Surface(bounce=(0.8, 2.0), soft_erp=None, soft_cfm=None, slip=None)
+"""The default handler of walls and goals (not built here; kept for the mixing table)."""
+
+
+def _mix(a, b):
+    if a is None:
+        return b
+    if b is None:
+        return a
+    if isinstance(a, tuple):
+        return tuple((x + y) / 2 for x, y in zip(a, b, strict=True))
+    return (a + b) / 2
+
+
+def mix_surfaces(a: Surface, b: Surface) -> Surface:
+    """The contact parameters SimSpark gives a pair: a mode enabled on both sides averages the
+    two values, on one side takes that side's value, on neither stays off (spec §7.3)."""
+    return Surface(
+        bounce=_mix(a.bounce, b.bounce),
+        soft_erp=_mix(a.soft_erp, b.soft_erp),
+        soft_cfm=_mix(a.soft_cfm, b.soft_cfm),
+        slip=_mix(a.slip, b.slip),
+    )
+
+
+def _surface_parameters(s: Surface) -> ode.SurfaceParameters:
+    p = ode.SurfaceParameters()
+    p.mu = ode.INFINITY
+    mode = 0
+    if s.bounce is not None:
+        mode |= ode.CONTACT_BOUNCE
+        p.bounce, p.bounce_vel = s.bounce
+    if s.soft_erp is not None:
+        mode |= ode.CONTACT_SOFT_ERP
+        p.soft_erp = s.soft_erp
+    if s.soft_cfm is not None:
+        mode |= ode.CONTACT_SOFT_CFM
+        p.soft_cfm = s.soft_cfm
+    if s.slip is not None:
+        mode |= ode.CONTACT_SLIP1 | ode.CONTACT_SLIP2
+        p.slip1 = p.slip2 = s.slip
+    p.mode = mode
+    return p
+
+
+def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix by ``angle`` (rad) about the unit vector ``axis``."""
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    t = 1.0 - c
+    return np.array(
+        [
+            [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+        ]
+    )
+
+
+def _quat_matrix(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _mat3(r: np.ndarray) -> ode.Mat3:
+    m = ode.Mat3()
+    for i in range(3):
+        for j in range(3):
+            m[4 * i + j] = float(r[i, j])
+    return m
+
+
+@dataclass
+class OdeRobot:
+    """One Nao in the ODE world: body and joint handles in the model's order."""
+
+    model: NaoModel
+    bodies: list[int]
+    """ODE body handles, in ``model.bodies`` order (torso first)."""
+    joints: list[int]
+    """ODE hinge handles, canonical joint order."""
+    geoms: list[int]
+    child_body: list[int]
+    """Handle of each joint's child body (woken by a non-zero command)."""
+    limits: np.ndarray
+    """(n, 2) stops in rad."""
+    pending: list = field(default_factory=list)
+    """Commands given but not yet realised (dead time)."""
+
+
+class OdeWorld:
+    """The SimSpark Nao world stepped by ODE 0.16 exactly as rcssserver3d steps it.
+
+    Args:
+        robot_types: One entry per robot (types 0–4).
+        dead_time_cycles: Cycles between a command given to :meth:`step` and the step it first
+            acts in, as :class:`robocup_gym.sim.world.World` (1 = SimSpark's sync-mode latency).
+
+    Raises:
+        robocup_gym.sim.ode.lib.OdeUnavailableError: when ``libode`` is missing.
+    """
+
+    def __init__(self, robot_types: Sequence[int] = (0,), *, dead_time_cycles: int = 1) -> None:
+        self._lib = lib = ode.load()
+        self.dead_time_cycles = int(dead_time_cycles)
+        self.time = 0.0
+        self._world = lib.dWorldCreate()
+        lib.dWorldSetGravity(self._world, 0.0, 0.0, -phys.GRAVITY)
+        lib.dWorldSetERP(self._world, WORLD_ERP)
+        lib.dWorldSetCFM(self._world, WORLD_CFM)
+        lib.dWorldSetContactSurfaceLayer(self._world, phys.SURFACE_LAYER)
+        lib.dWorldSetAutoDisableFlag(self._world, 1)  # before bodies: they copy the setting
+        self._contacts = lib.dJointGroupCreate(0)
+        self._ground = lib.dCreatePlane(None, 0.0, 0.0, 1.0, 0.0)
+        self._ball = lib.dBodyCreate(self._world)
+        mass = ode.Mass()
+        lib.dMassSetSphereTotal(ctypes.byref(mass), phys.BALL_MASS, phys.BALL_RADIUS)
+        lib.dBodySetMass(self._ball, ctypes.byref(mass))
+        self._ball_geom = lib.dCreateSphere(None, phys.BALL_RADIUS)
+        lib.dGeomSetBody(self._ball_geom, self._ball)
+        self.robots = [self._build_robot(int(t), i) for i, t in enumerate(robot_types)]
+        self._contact_buf = (ode.ContactGeom * MAX_CONTACTS)()
+        self._contact = ode.Contact()
+        self._pairs = self._collision_pairs()
+        self.place_ball((0.0, 0.0))
+        for i in range(len(self.robots)):
+            self.place_robot(i, -1.0 - 1.0 * i, 0.0)
+
+    # ------------------------------------------------------------------ construction
+    def _build_robot(self, type_index: int, index: int) -> OdeRobot:
+        lib = self._lib
+        model = nao_model(type_index)
+        names = [b.name for b in model.bodies]
+        bodies, geoms = [], []
+        for b in model.bodies:
+            body = lib.dBodyCreate(self._world)
+            lib.dBodySetPosition(body, *b.pos)
+            mass = ode.Mass()
+            if b.shape == "box":
+                lib.dMassSetBoxTotal(ctypes.byref(mass), b.mass, *b.size)
+            elif b.shape == "sphere":
+                lib.dMassSetSphereTotal(ctypes.byref(mass), b.mass, b.size[0])
+            else:  # capsule along local z (ODE direction 3)
+                lib.dMassSetCapsuleTotal(ctypes.byref(mass), b.mass, 3, b.size[0], b.size[1])
+            lib.dBodySetMass(body, ctypes.byref(mass))
+            bodies.append(body)
+            if b.collides:
+                if b.shape == "box":
+                    g = lib.dCreateBox(None, *b.size)
+                elif b.shape == "sphere":
+                    g = lib.dCreateSphere(None, b.size[0])
+                else:
+                    g = lib.dCreateCapsule(None, b.size[0], b.size[1])
+                lib.dGeomSetBody(g, body)
+                geoms.append(g)
+        joints, child = [], []
+        for j in model.joints:
+            h = lib.dJointCreateHinge(self._world, None)
+            c, p = bodies[names.index(j.child)], bodies[names.index(j.parent)]
+            lib.dJointAttach(h, c, p)  # body 1 = child, body 2 = parent (spec §1.5)
+            lib.dJointSetHingeAnchor(h, *j.anchor)
+            lib.dJointSetHingeAxis(h, *j.axis)  # the angle is 0 in this (zero) pose
+            lo, hi = j.range_rad
+            for param, value in (
+                (ode.PARAM_LO_STOP, lo),
+                (ode.PARAM_HI_STOP, hi),
+                (ode.PARAM_FMAX, j.max_torque),
+                (ode.PARAM_CFM, HINGE_CFM),
+                (ode.PARAM_STOP_ERP, HINGE_STOP_ERP),
+                (ode.PARAM_STOP_CFM, HINGE_STOP_CFM),
+                (ode.PARAM_FUDGE_FACTOR, HINGE_FUDGE_FACTOR),
+                (ode.PARAM_BOUNCE, HINGE_STOP_BOUNCE),
+                (ode.PARAM_VEL, 0.0),
+            ):
+                lib.dJointSetHingeParam(h, param, value)
+            joints.append(h)
+            child.append(c)
+        limits = np.array([j.range_rad for j in model.joints])
+        return OdeRobot(model, bodies, joints, geoms, child, limits)
+
+    def _collision_pairs(self) -> list[tuple]:
+        """Every geom pair that can touch, as ``(geom1, geom2, body1, body2, surface)`` (body
+        ``None`` for the static ground) with its mixed surface: robot parts with the ground,
+        the ball and other robots' parts (never with their own robot: inner collision is
+        disabled, spec §1.1); the ball with the ground."""
+        robot_ground = _surface_parameters(mix_surfaces(ROBOT_SURFACE, GROUND_SURFACE))
+        robot_ball = _surface_parameters(mix_surfaces(ROBOT_SURFACE, BALL_SURFACE))
+        robot_robot = _surface_parameters(mix_surfaces(ROBOT_SURFACE, ROBOT_SURFACE))
+        ball_ground = _surface_parameters(mix_surfaces(BALL_SURFACE, GROUND_SURFACE))
+        pairs = [(self._ball_geom, self._ground, ball_ground)]
+        for i, r in enumerate(self.robots):
+            for g in r.geoms:
+                pairs.append((g, self._ground, robot_ground))
+                pairs.append((g, self._ball_geom, robot_ball))
+                for other in self.robots[i + 1 :]:
+                    pairs.extend((g, g2, robot_robot) for g2 in other.geoms)
+        body = self._lib.dGeomGetBody
+        return [(g1, g2, body(g1), body(g2), s) for g1, g2, s in pairs]
+
+    # ------------------------------------------------------------------ placement
+    def place_robot(
+        self,
+        index: int,
+        x: float,
+        y: float,
+        *,
+        heading_deg: float = 0.0,
+        z: float | None = None,
+        joint_angles_deg: Mapping[str, float] | np.ndarray | None = None,
+        asleep: bool = False,
+    ) -> None:
+        """Teleport robot ``index`` with zero velocities and motor targets, as the trainer's
+        ``move`` does; ``z`` = torso centre height (``None``: lowest point 1 mm deep, ODE's
+        resting depth, as :meth:`robocup_gym.sim.world.World.place_robot` puts it),
+        ``joint_angles_deg`` in canonical order or by name (others 0). ``asleep`` leaves every
+        body disabled, as ODE's auto-disable leaves a robot that was resting when moved."""
+        lib = self._lib
+        r = self.robots[index]
+        model = r.model
+        angles = np.zeros(len(model.joints))
+        if isinstance(joint_angles_deg, Mapping):
+            for name, v in joint_angles_deg.items():
+                angles[model.joint_index[name]] = v
+        elif joint_angles_deg is not None:
+            angles[:] = joint_angles_deg
+        rot, trans = self._forward_kinematics(model, np.radians(angles), heading_deg)
+        centres = [rot[i] @ np.array(b.pos) + trans[i] for i, b in enumerate(model.bodies)]
+        if z is None:
+            shift = -phys.SURFACE_LAYER - min(
+                c[2] - np.abs(rot[i][2]) @ (np.array(b.size) / 2)
+                for i, (b, c) in enumerate(zip(model.bodies, centres, strict=True))
+                if b.collides and b.shape == "box"
+            )
+        else:
+            shift = z - centres[0][2]
+        for i, body in enumerate(r.bodies):
+            c = centres[i]
+            lib.dBodySetPosition(body, x + c[0], y + c[1], c[2] + shift)
+            lib.dBodySetRotation(body, _mat3(rot[i]))
+            lib.dBodySetLinearVel(body, 0.0, 0.0, 0.0)
+            lib.dBodySetAngularVel(body, 0.0, 0.0, 0.0)
+            (lib.dBodyDisable if asleep else lib.dBodyEnable)(body)
+        for h in r.joints:
+            lib.dJointSetHingeParam(h, ode.PARAM_VEL, 0.0)
+        r.pending.clear()
+
+    @staticmethod
+    def _forward_kinematics(
+        model: NaoModel, angles: np.ndarray, heading_deg: float
+    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """Per body, the rotation and translation that take zero-pose torso-frame points to
+        world points (relative to the torso's x, y; torso centre at height 0)."""
+        root = _quat_matrix(heading_to_quat(heading_deg))
+        index = {b.name: i for i, b in enumerate(model.bodies)}
+        joint_of = {j.child: (k, j) for k, j in enumerate(model.joints)}
+        rot: list = [None] * len(model.bodies)
+        trans: list = [None] * len(model.bodies)
+        for i, b in enumerate(model.bodies):  # parents come before their children
+            if b.parent is None:
+                rot[i], trans[i] = root, np.zeros(3)
+                continue
+            p = index[b.parent]
+            k, j = joint_of[b.name]
+            turn = _axis_rotation(np.array(j.axis, float) / np.linalg.norm(j.axis), angles[k])
+            a = np.array(j.anchor)
+            rot[i] = rot[p] @ turn
+            trans[i] = rot[p] @ (a - turn @ a) + trans[p]
+        return rot, trans
+
+    def place_ball(
+        self,
+        pos: Sequence[float],
+        vel: Sequence[float] = (0.0, 0.0, 0.0),
+        angular_vel: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        """Put the ball at ``pos`` (x, y[, z]; z defaults to 1 mm into the ground, as the MuJoCo
+        world's default) with velocity ``vel`` (m/s) and ``angular_vel`` (rad/s)."""
+        lib = self._lib
+        z = pos[2] if len(pos) > 2 else phys.BALL_RADIUS - phys.SURFACE_LAYER
+        lib.dBodySetPosition(self._ball, float(pos[0]), float(pos[1]), float(z))
+        lib.dBodySetRotation(self._ball, _mat3(np.eye(3)))
+        lib.dBodySetLinearVel(self._ball, *map(float, vel))
+        lib.dBodySetAngularVel(self._ball, *map(float, angular_vel))
+        lib.dBodyEnable(self._ball)
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, commands: Mapping[int, Mapping[str, float] | np.ndarray] | None = None) -> None:
+        """Advance one 20 ms cycle: realise due commands (target rad/s, clipped to the joint's
+        max speed, ignored for a joint not strictly inside its limits, a non-zero one wakes the
+        joint's child body), drag on every body, collisions, one ``dWorldStep(0.02)``."""
+        lib = self._lib
+        for i, r in enumerate(self.robots):
+            cmd = (commands or {}).get(i)
+            r.pending.append(None if cmd is None else self._command_array(r, cmd))
+            if len(r.pending) > self.dead_time_cycles:
+                due = r.pending.pop(0)
+                if due is not None:
+                    self._realise(r, due)
+        self._apply_drag()
+        buf, contact = self._contact_buf, self._contact
+        size = ctypes.sizeof(ode.ContactGeom)
+        for g1, g2, b1, b2, surface in self._pairs:
+            n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
+            if n:
+                contact.surface = surface
+                for k in range(n):
+                    contact.geom = buf[k]
+                    joint = lib.dJointCreateContact(self._world, self._contacts, contact)
+                    lib.dJointAttach(joint, b1, b2)
+        lib.dWorldStep(self._world, phys.CYCLE_S)
+        lib.dJointGroupEmpty(self._contacts)
+        self.time += phys.CYCLE_S
+
+    def _command_array(self, r: OdeRobot, cmd: Mapping[str, float] | np.ndarray) -> np.ndarray:
+        """Targets in canonical order; NaN = joint not commanded (keeps its target)."""
+        out = np.full(len(r.model.joints), np.nan)
+        if isinstance(cmd, Mapping):
+            for name, v in cmd.items():
+                out[r.model.joint_index[name]] = v
+        else:
+            out[:] = cmd
+        return out
+
+    def _realise(self, r: OdeRobot, targets: np.ndarray) -> None:
+        lib = self._lib
+        vmax = r.model.max_speeds
+        for k, h in enumerate(r.joints):
+            v = targets[k]
+            if math.isnan(v):
+                continue
+            angle = lib.dJointGetHingeAngle(h)
+            lo, hi = r.limits[k]
+            if not lo < angle < hi:
+                continue  # SimSpark's hinge effector: the previous target stays
+            v = min(max(float(v), -vmax[k]), vmax[k])
+            lib.dJointSetHingeParam(h, ode.PARAM_VEL, v)
+            if v != 0.0:
+                lib.dBodyEnable(r.child_body[k])
+
+    def _apply_drag(self) -> None:
+        lib = self._lib
+        lin, ang = phys.BODY_LINEAR_DRAG, phys.BODY_ANGULAR_DRAG
+        for r in self.robots:
+            for b in r.bodies:
+                v = lib.dBodyGetLinearVel(b)
+                w = lib.dBodyGetAngularVel(b)
+                lib.dBodyAddForce(b, -lin * v[0], -lin * v[1], -lin * v[2])
+                lib.dBodyAddTorque(b, -ang * w[0], -ang * w[1], -ang * w[2])
+        v = lib.dBodyGetLinearVel(self._ball)
+        w = lib.dBodyGetAngularVel(self._ball)
+        c, a = phys.BALL_LINEAR_DRAG, phys.BALL_ANGULAR_DRAG
+        lib.dBodyAddForce(self._ball, -c * v[0], -c * v[1], -c * v[2])
+        lib.dBodyAddTorque(self._ball, -a * w[0], -a * w[1], -a * w[2])
+
+    # ------------------------------------------------------------------ state
+    def _vec(self, ptr) -> np.ndarray:
+        return np.array([ptr[0], ptr[1], ptr[2]])
+
+    def ball_position(self) -> np.ndarray:
+        """Ball centre, world, m."""
+        return self._vec(self._lib.dBodyGetPosition(self._ball))
+
+    def ball_velocity(self) -> np.ndarray:
+        """Ball linear velocity, world, m/s."""
+        return self._vec(self._lib.dBodyGetLinearVel(self._ball))
+
+    def body_position(self, index: int, name: str) -> np.ndarray:
+        """Centre of robot ``index``'s body ``name`` (e.g. ``rfoot``), world, m."""
+        r = self.robots[index]
+        k = [b.name for b in r.model.bodies].index(name)
+        return self._vec(self._lib.dBodyGetPosition(r.bodies[k]))
+
+    def body_rotation(self, index: int, name: str) -> np.ndarray:
+        """Orientation of robot ``index``'s body ``name`` as a 3×3 matrix (torso-frame axes in
+        world coordinates)."""
+        r = self.robots[index]
+        k = [b.name for b in r.model.bodies].index(name)
+        m = self._lib.dBodyGetRotation(r.bodies[k])
+        return np.array([[m[4 * i + j] for j in range(3)] for i in range(3)])
+
+    def torso_position(self, index: int = 0) -> np.ndarray:
+        """Torso centre of robot ``index``, world, m."""
+        return self._vec(self._lib.dBodyGetPosition(self.robots[index].bodies[0]))
+
+    def torso_up(self, index: int = 0) -> np.ndarray:
+        """The torso's up axis (+z of the torso frame) in world coordinates."""
+        m = self._lib.dBodyGetRotation(self.robots[index].bodies[0])
+        return np.array([m[2], m[6], m[10]])
+
+    def joint_angles_deg(self, index: int = 0) -> np.ndarray:
+        """Joint angles of robot ``index`` in degrees, canonical order."""
+        lib = self._lib
+        return np.degrees([lib.dJointGetHingeAngle(h) for h in self.robots[index].joints])
+
+    def joint_velocities(self, index: int = 0) -> np.ndarray:
+        """Joint angular velocities of robot ``index`` in rad/s, canonical order."""
+        lib = self._lib
+        return np.array([lib.dJointGetHingeAngleRate(h) for h in self.robots[index].joints])
+
+    def asleep(self, index: int = 0) -> bool:
+        """Whether every body of robot ``index`` is disabled by ODE's auto-disable."""
+        lib = self._lib
+        return not any(lib.dBodyIsEnabled(b) for b in self.robots[index].bodies)
+
+    def close(self) -> None:
+        """Free the ODE world (bodies, joints) and geoms."""
+        if self._world is None:
+            return
+        lib = self._lib
+        lib.dJointGroupEmpty(self._contacts)
+        for g in [self._ground, self._ball_geom, *(g for r in self.robots for g in r.geoms)]:
+            lib.dGeomDestroy(g)
+        lib.dWorldDestroy(self._world)
+        self._world = None
+
+    def __del__(self) -> None:
+        with contextlib.suppress(Exception):  # at interpreter shutdown ctypes may be gone
+            self.close()
