@@ -110,7 +110,7 @@ class PhysicsConfig:
         solver: MuJoCo solver. ``"Newton"`` solves the regularised problem exactly (as ODE's
             big-matrix LCP solver does) in a few iterations.
         iterations, ls_iterations, tolerance: Newton solver limits. A random-flailing robot
-            needs 14 iterations on average and up to ~45; an unconverged solve can diverge, so
+            needs 6 iterations on average and up to ~40; an unconverged solve can diverge, so
             the cap is well above that (it costs nothing when not reached).
         motor_impedance: impedance of the velocity-motor rows: ODE's motor row has CFM 1e-8,
             i.e. MuJoCo's hardest row (0.9999). Softer rows solve faster (0.99: half the

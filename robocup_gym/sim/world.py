@@ -129,6 +129,9 @@ class RobotState:
     """Active motor targets, rad/s, canonical order."""
     q_ref: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Integral of the commanded velocities (rad) used for creep compensation."""
+    motor_lost: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    """Joints whose motor saturated or sat at a stop in the last step: their creep compensation
+    restarts from where they are (motion lost there is never caught up, as in ODE)."""
     joint_slice: slice = field(default_factory=lambda: slice(0, 0))
     """This robot's joints in the world-level joint arrays."""
     pending: list = field(default_factory=list)
@@ -335,13 +338,12 @@ class World:
         self._targets = np.zeros(n)
         self._q_ref = np.zeros(n)
         self._motor_lost = np.zeros(n, dtype=bool)
-        """Joints whose motor saturated or was replaced by a stop in the last step: the creep
-        compensation restarts from where they are (motion lost there is never caught up)."""
         off = 0
         for r in robots:
             k = len(r.qvel_joints)
             r.targets = self._targets[off : off + k]
             r.q_ref = self._q_ref[off : off + k]
+            r.motor_lost = self._motor_lost[off : off + k]
             r.joint_slice = slice(off, off + k)
             off += k
         sort = np.argsort(self._qvel_j, kind="stable")
@@ -403,13 +405,17 @@ class World:
             )
 
     def _check_contact_rows(self) -> None:
-        """Check that every contact has three constraint rows (condim 3, elliptic cones), which
-        :meth:`_surface_layer` relies on to find the normal rows without a per-contact lookup.
+        """Check the row layout that :meth:`_surface_layer` and :meth:`_bounce_stops` rely on
+        to find their rows without a per-row lookup: every contact has three constraint rows
+        (condim 3, elliptic cones), and the only limit rows are the joints' stops (no limited
+        tendon).
 
         Raises:
             RuntimeError: naming the geom or pair that would make contacts of another shape.
         """
         m = self.model
+        if m.ntendon and np.any(m.tendon_limited):
+            raise RuntimeError("the world's joint stops assume no limited tendons")
         if m.opt.cone != mujoco.mjtCone.mjCONE_ELLIPTIC:
             raise RuntimeError("the world's contact model needs elliptic friction cones")
         colliding = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
@@ -476,13 +482,13 @@ class World:
         "asleep",
         "sleep_qpos",
     )
-    _ARRAY_STATE = ("targets", "q_ref", "accel", "prev_vel")
+    _ARRAY_STATE = ("targets", "q_ref", "motor_lost", "accel", "prev_vel")
 
     def export_robot_state(self, index: int) -> dict:
         """Robot ``index``'s simulation and agent state other than its MuJoCo pose: motor targets,
-        creep reference, accelerometer history, pending commands, team/uniform, hearing, FRP
-        memory. With :meth:`import_robot_state` it moves a robot into a rebuilt world (the
-        ``serve`` server rebuilds its world when robots join)."""
+        creep reference and which motors lost motion, accelerometer history, pending commands,
+        team/uniform, hearing, FRP memory. With :meth:`import_robot_state` it moves a robot into
+        a rebuilt world (the ``serve`` server rebuilds its world when robots join)."""
         r = self.robot(index)
         out = {name: copy.deepcopy(getattr(r, name)) for name in self._AGENT_STATE}
         out.update({name: getattr(r, name).copy() for name in self._ARRAY_STATE})
@@ -659,7 +665,7 @@ class World:
         self.model.dof_frictionloss[r.qvel_joints] = phys.MOTOR_MAX_TORQUE
         d.qacc_warmstart[:] = 0.0
         r.q_ref[:] = d.qpos[r.qpos_joints]
-        self._motor_lost[r.joint_slice] = False
+        r.motor_lost[:] = False
         r.prev_vel[:] = 0.0
         r.accel[:] = (0.0, 0.0, phys.GRAVITY)
         if z is None:
@@ -1111,13 +1117,14 @@ class World:
         rows = slice(start, start + d.nl)
         v = d.efc_vel[rows]
         aref = d.efc_aref[rows]
-        # the row velocity after the step that the reference asks for, and the bounce's
+        # the row velocity after the step that the reference asks for (≥ 0 for a row that is
+        # not moving into its stop: its ERP correction), and the bounce's, which wins only for a
+        # row moving into the stop (v < 0)
         implied = aref / self._inv_timestep
         implied += v
         bounce = v * -phys.JOINT_STOP_BOUNCE
         np.maximum(bounce, implied, out=bounce)
         bounce -= implied
-        bounce *= v < 0.0  # only a joint running into its stop bounces
         bounce *= self._inv_timestep
         aref += bounce
 
