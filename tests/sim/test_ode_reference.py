@@ -145,3 +145,20 @@ def test_world_kick_is_close_to_the_reference():
     mj, ref = c.ball_travel_m
     assert mj == pytest.approx(ref, rel=0.15)
     assert c.fell == (True, True)
+
+
+@needs_ode
+def test_reference_bad_commands_are_clear_errors():
+    from robocup_gym.sim.ode import OdeWorld
+
+    w = OdeWorld([0])
+    with pytest.raises(ValueError, match="he1"):
+        w.step({0: {"he1": float("nan")}})
+    arr = np.zeros(22)
+    arr[3] = np.inf
+    with pytest.raises(ValueError, match="lae2"):
+        w.step({0: arr})
+    with pytest.raises(ValueError, match="shape"):
+        w.step({0: np.zeros(5)})
+    with pytest.raises(KeyError, match="rle1"):
+        w.step({0: {"rle9": 1.0}})

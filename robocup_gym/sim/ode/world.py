@@ -361,9 +361,13 @@ class OdeWorld:
         max speed, ignored for a joint not strictly inside its limits, a non-zero one wakes the
         joint's child body), drag on every body, collisions, one ``dWorldStep(0.02)``."""
         lib = self._lib
-        for i, r in enumerate(self.robots):
-            cmd = (commands or {}).get(i)
-            r.pending.append(None if cmd is None else self._command_array(r, cmd))
+        commands = commands or {}
+        arrays = [  # all validated before any is queued
+            None if commands.get(i) is None else self._command_array(r, commands[i])
+            for i, r in enumerate(self.robots)
+        ]
+        for r, cmd in zip(self.robots, arrays, strict=True):
+            r.pending.append(cmd)
             if len(r.pending) > self.dead_time_cycles:
                 due = r.pending.pop(0)
                 if due is not None:
@@ -384,13 +388,30 @@ class OdeWorld:
         self.time += phys.CYCLE_S
 
     def _command_array(self, r: OdeRobot, cmd: Mapping[str, float] | np.ndarray) -> np.ndarray:
-        """Targets in canonical order; NaN = joint not commanded (keeps its target)."""
-        out = np.full(len(r.model.joints), np.nan)
+        """Targets in canonical order, rad/s; NaN marks a joint the command leaves alone.
+
+        Raises:
+            KeyError: an unknown joint name (listing the valid ones).
+            ValueError: a NaN/inf velocity (naming the joint) or an array of the wrong shape.
+        """
+        names = r.model.effector_names
+        out = np.full(len(names), np.nan)
         if isinstance(cmd, Mapping):
+            given = np.zeros(len(names), dtype=bool)
             for name, v in cmd.items():
-                out[r.model.joint_index[name]] = v
+                k = names.index(r.model.joint(name).effector)
+                out[k] = float(v)
+                given[k] = True
         else:
-            out[:] = cmd
+            arr = np.asarray(cmd, dtype=float)
+            if arr.shape != out.shape:
+                raise ValueError(f"command array must have shape {out.shape}, got {arr.shape}")
+            out[:] = arr
+            given = np.ones(len(names), dtype=bool)
+        bad = given & ~np.isfinite(out)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"velocity command for joint {names[k]} is {out[k]}")
         return out
 
     def _realise(self, r: OdeRobot, targets: np.ndarray) -> None:
