@@ -5,6 +5,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+from robocup_gym.sim.ode import available
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -24,3 +28,23 @@ def test_fidelity_quick_reports_targets():
     assert met["mass_within_1pct"] and met["stand_no_fall"] and met["stand_z_within_5mm"]
     assert met["kick_within_25pct"], res["kick_D_ball_m"]
     assert met["kick_first_move_within_2_cycles"], res["kick_D_first_move_cycle"]
+
+
+def test_ode_compare_quick_reports_the_motions():
+    """``benchmarks/ode_compare.py --quick`` (needs libode): the JSON names each motion with its
+    distances, and the reference's own kick is the real server's."""
+    if not available():
+        pytest.skip("no double-precision libode here (apt-get install libode8)")
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "ode_compare.py"), "--quick"],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=300,
+    ).stdout
+    res = json.loads(out.strip().splitlines()[-1])
+    assert abs(res["ode_kick_D_ball_m"] - 2.307) < 0.05
+    rows = {r["motion"]: r for r in res["motions"]}
+    assert set(rows) == {"stand", "kick_D", "ball_roll"}
+    assert rows["stand"]["torso_final_m"] < 0.002
+    assert rows["kick_D"]["ball_travel_m"][1] == pytest.approx(res["ode_kick_D_ball_m"], abs=1e-3)
