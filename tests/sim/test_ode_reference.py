@@ -162,3 +162,21 @@ def test_reference_bad_commands_are_clear_errors():
         w.step({0: np.zeros(5)})
     with pytest.raises(KeyError, match="rle1"):
         w.step({0: {"rle9": 1.0}})
+
+
+@needs_ode
+@pytest.mark.parametrize("robot_type", [1, 2, 3, 4])
+def test_every_robot_type_follows_the_reference(robot_type):
+    """Longer legs and arms (1, 3), other ankle speeds (2), toes (4): squatting and driving
+    joints into their stops end within millimetres and a fraction of a degree of ODE."""
+    import dataclasses
+
+    from robocup_gym.sim.ode.compare import compare, motions
+
+    for name in ("squat", "stops"):
+        motion = dataclasses.replace(
+            next(m for m in motions() if m.name == name), robot_type=robot_type
+        )
+        c = compare(motion)
+        assert c.torso_final_m < 0.005, (name, c)
+        assert c.joints_rms_deg < 0.2, (name, c)
