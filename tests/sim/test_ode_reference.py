@@ -180,3 +180,27 @@ def test_every_robot_type_follows_the_reference(robot_type):
         c = compare(motion)
         assert c.torso_final_m < 0.005, (name, c)
         assert c.joints_rms_deg < 0.2, (name, c)
+
+
+@needs_ode
+def test_reference_placement_matches_the_world():
+    """Placed with a heading, a height and joint angles, every body of the ODE robot is where
+    the MuJoCo world's is (the reference's own forward kinematics from the spec tables) and its
+    hinges read the angles back."""
+    import mujoco
+
+    from robocup_gym.sim.ode import OdeWorld
+    from robocup_gym.sim.world import World
+
+    angles = {"rle4": -30.0, "rle3": 15.0, "lae1": -90.0, "he1": 40.0, "lle2": 10.0}
+    ref = OdeWorld([0])
+    ref.place_robot(0, 1.0, 2.0, heading_deg=30.0, z=0.5, joint_angles_deg=angles)
+    w = World([0])
+    w.place_robot(0, 1.0, 2.0, heading_deg=30.0, z=0.5, joint_angles_deg=angles)
+    np.testing.assert_allclose(ref.joint_angles_deg(0), w.joint_angles_deg(0), atol=1e-9)
+    for body in ("rfoot", "lfoot", "llowerarm", "head", "rshank"):
+        b = mujoco.mj_name2id(w.model, mujoco.mjtObj.mjOBJ_BODY, "r0_" + body)
+        np.testing.assert_allclose(ref.body_position(0, body), w.data.xipos[b], atol=1e-9)
+        np.testing.assert_allclose(
+            ref.body_rotation(0, body), w.data.xmat[b].reshape(3, 3), atol=1e-9
+        )

@@ -190,7 +190,7 @@ class OdeWorld:
         lib.dBodySetMass(self._ball, ctypes.byref(mass))
         self._ball_geom = lib.dCreateSphere(None, phys.BALL_RADIUS)
         lib.dGeomSetBody(self._ball_geom, self._ball)
-        self.robots = [self._build_robot(int(t), i) for i, t in enumerate(robot_types)]
+        self.robots = [self._build_robot(int(t)) for t in robot_types]
         self._contact_buf = (ode.ContactGeom * MAX_CONTACTS)()
         self._contact = ode.Contact()
         self._pairs = self._collision_pairs()
@@ -199,7 +199,9 @@ class OdeWorld:
             self.place_robot(i, -1.0 - 1.0 * i, 0.0)
 
     # ------------------------------------------------------------------ construction
-    def _build_robot(self, type_index: int, index: int) -> OdeRobot:
+    def _build_robot(self, type_index: int) -> OdeRobot:
+        """One robot of type ``type_index`` in the zero pose at the origin (torso frame = world
+        frame, so the spec's anchors and axes apply as they are); :meth:`place_robot` moves it."""
         lib = self._lib
         model = nao_model(type_index)
         names = [b.name for b in model.bodies]
