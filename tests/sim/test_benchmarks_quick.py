@@ -12,15 +12,20 @@ from robocup_gym.sim.ode import available
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_fidelity_quick_reports_targets():
+def run_quick(script: str) -> dict:
+    """Run ``benchmarks/<script> --quick`` and return the JSON object of its last line."""
     out = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "fidelity.py"), "--quick"],
+        [sys.executable, str(ROOT / "benchmarks" / script), "--quick"],
         capture_output=True,
         text=True,
         check=True,
         timeout=300,
     ).stdout
-    res = json.loads(out.strip().splitlines()[-1])
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def test_fidelity_quick_reports_targets():
+    res = run_quick("fidelity.py")
     assert res["total_mass_kg"] == 4.6071
     assert res["stand_fell"] is False
     assert abs(res["stand_torso_z_m"] - 0.384) < 0.005
@@ -35,14 +40,7 @@ def test_ode_compare_quick_reports_the_motions():
     distances, and the reference's own kick is the real server's."""
     if not available():
         pytest.skip("no double-precision libode here (apt-get install libode8)")
-    out = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "ode_compare.py"), "--quick"],
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=300,
-    ).stdout
-    res = json.loads(out.strip().splitlines()[-1])
+    res = run_quick("ode_compare.py")
     assert abs(res["ode_kick_D_ball_m"] - 2.307) < 0.05
     rows = {r["motion"]: r for r in res["motions"]}
     assert set(rows) == {"stand", "kick_D", "ball_roll"}
