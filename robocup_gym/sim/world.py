@@ -172,6 +172,45 @@ def heading_to_quat(heading_deg: float) -> np.ndarray:
     return yaw_quat(math.radians(heading_deg - 90.0))
 
 
+def joint_index(model: NaoModel, name: str) -> int:
+    """Canonical index of the joint called ``name`` (effector, perceptor or Nao-style name).
+
+    Raises:
+        KeyError: naming the robot type and listing the valid effector names.
+    """
+    try:
+        return model.joint_index[name]
+    except KeyError:
+        raise KeyError(
+            f"unknown joint {name!r} for robot type {model.robot_type.index}; valid effector "
+            f"names: {', '.join(model.effector_names)}"
+        ) from None
+
+
+def joint_angles_array(model: NaoModel, angles: Mapping[str, float] | np.ndarray) -> np.ndarray:
+    """Joint angles (degrees) in canonical order, from ``{name: deg}`` (others 0) or an array.
+
+    Raises:
+        KeyError: an unknown joint name.
+        ValueError: an array of the wrong shape or an angle that is not finite (naming it).
+    """
+    n = len(model.joints)
+    if isinstance(angles, Mapping):
+        out = np.zeros(n)
+        for name, v in angles.items():
+            out[joint_index(model, name)] = float(v)
+    else:
+        out = np.asarray(angles, float)
+        if out.shape != (n,):
+            raise ValueError(f"joint angle array must have shape ({n},), got {out.shape}")
+    bad = ~np.isfinite(out)
+    if bad.any():
+        raise ValueError(
+            f"joint angle of {model.effector_names[int(np.argmax(bad))]} is not finite"
+        )
+    return out
+
+
 class World:
     """The SimSpark Nao world on MuJoCo.
 
@@ -788,31 +827,10 @@ class World:
 
     # ------------------------------------------------------------------ commands
     def _angles_array(self, r: RobotState, angles) -> np.ndarray:
-        if isinstance(angles, Mapping):
-            out = np.zeros(len(r.model.joints))
-            for name, v in angles.items():
-                out[self._joint_index(r, name)] = float(v)
-        else:
-            out = np.asarray(angles, float)
-            if out.shape != (len(r.model.joints),):
-                raise ValueError(
-                    f"joint angle array must have shape ({len(r.model.joints)},), got {out.shape}"
-                )
-        bad = ~np.isfinite(out)
-        if bad.any():
-            raise ValueError(
-                f"joint angle of {r.effector_names[int(np.argmax(bad))]} is not finite"
-            )
-        return out
+        return joint_angles_array(r.model, angles)
 
     def _joint_index(self, r: RobotState, name: str) -> int:
-        try:
-            return r.model.joint_index[name]
-        except KeyError:
-            raise KeyError(
-                f"unknown joint {name!r} for robot type {r.model.robot_type.index}; valid effector "
-                f"names: {', '.join(r.effector_names)}"
-            ) from None
+        return joint_index(r.model, name)
 
     def command_array(self, index: int, velocities: Mapping[str, float] | np.ndarray) -> np.ndarray:
         """Validate a joint-velocity command (rad/s) and return it as a canonical-order array in

@@ -35,7 +35,7 @@ import numpy as np
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.ode import lib as ode
-from robocup_gym.sim.world import heading_to_quat
+from robocup_gym.sim.world import heading_to_quat, joint_angles_array, joint_index
 
 WORLD_CFM = 1e-5
 """SimSpark's world CFM (spec §7.1); the world ERP stays ODE's default 0.2."""
@@ -291,12 +291,11 @@ class OdeWorld:
         lib = self._lib
         r = self.robots[index]
         model = r.model
-        angles = np.zeros(len(model.joints))
-        if isinstance(joint_angles_deg, Mapping):
-            for name, v in joint_angles_deg.items():
-                angles[model.joint_index[name]] = v
-        elif joint_angles_deg is not None:
-            angles[:] = joint_angles_deg
+        angles = (
+            np.zeros(len(model.joints))
+            if joint_angles_deg is None
+            else joint_angles_array(model, joint_angles_deg)
+        )
         rot, trans = self._forward_kinematics(model, np.radians(angles), heading_deg)
         centres = [rot[i] @ np.array(b.pos) + trans[i] for i, b in enumerate(model.bodies)]
         if z is None:
@@ -401,7 +400,7 @@ class OdeWorld:
         if isinstance(cmd, Mapping):
             given = np.zeros(len(names), dtype=bool)
             for name, v in cmd.items():
-                k = names.index(r.model.joint(name).effector)
+                k = joint_index(r.model, name)
                 out[k] = float(v)
                 given[k] = True
         else:
