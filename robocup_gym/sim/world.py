@@ -72,8 +72,8 @@ _DIVERGENCE_WARNINGS = (
 )
 HEARING_RANGE_M = 50.0
 _XYZ = (0, 1, 2)
-_QUADRATIC = int(mujoco.mjtConstraintState.mjCNSTRSTATE_QUADRATIC)
-"""Solver state of a motor row that reached its target (not saturated at ±FMax)."""
+_SATURATED = phys.MOTOR_MAX_TORQUE * (1.0 - 1e-9)
+"""Force (N·m) from which a motor row counts as saturated: it could not reach its target."""
 _any = np.count_nonzero
 """``a.any()`` for a 1-d bool array (hot path: counting is several times cheaper than the
 method's or ``np.logical_or.reduce``'s reduction machinery on a few values)."""
@@ -1077,8 +1077,10 @@ class World:
             mujoco.mj_step2(m, d)
             if self._sleepers:
                 self._hold_sleepers()
-        # which motors could not hold their target this step (saturated, or absent at a stop)
-        moving = d.efc_state[:nrows] == _QUADRATIC
+        # which motors could not hold their target this step: saturated at ±FMax (read from the
+        # forces: with islands, MuJoCo 4 leaves ``efc_state`` at the solver's first guess), or
+        # absent at a stop
+        moving = np.abs(d.efc_force[:nrows]) < _SATURATED
         if at_stop is not None:
             held = np.zeros(len(dofs), dtype=bool)
             held[rows] = moving
