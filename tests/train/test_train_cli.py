@@ -310,3 +310,24 @@ def test_normalized_observations_are_folded_into_the_onnx_graph(tmp_path):
     assert meta["verification"]["max_abs_diff"] <= 1e-5
     summary = last_json(invoke(["eval", run, "--episodes", 1]).stdout)
     assert summary["episodes"] == 1
+
+
+def test_ode_transfer_replays_a_trained_policy_on_the_reference(ppo_run):
+    """``benchmarks/ode_transfer.py`` on a trained run: the MuJoCo replay reproduces the
+    environment's own episode exactly (the recording is complete), the ODE replay reports."""
+    import importlib.util
+    from pathlib import Path
+
+    from robocup_gym.sim.ode import available
+
+    if not available():
+        pytest.skip("no double-precision libode here (apt-get install libode8)")
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "ode_transfer.py"
+    spec = importlib.util.spec_from_file_location("ode_transfer", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    res = module.main([str(ppo_run), "--episodes", "1"])
+    (ep,) = res["episodes"]
+    assert ep["cycles"] > 0
+    assert ep["mujoco_replay_ball_dx_m"] == ep["env_ball_dx_m"]
+    assert isinstance(ep["ode_replay_ball_dx_m"], float)

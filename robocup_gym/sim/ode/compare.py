@@ -6,7 +6,8 @@ it on :class:`robocup_gym.sim.world.World` and on :class:`robocup_gym.sim.ode.Od
 measures how far the two drift apart (torso, joints, ball, cycle by cycle). ``MOTIONS`` covers
 what the real server's fixtures do not: standing, squatting, arm swings, joints driven into their
 stops, the kick, falls, a rolling ball and random flailing. ``benchmarks/ode_compare.py`` prints
-the table.
+the table. :class:`record_world` and :func:`replay_recording` do the same for any episode of an
+environment (a trained policy's, ``benchmarks/ode_transfer.py``).
 """
 
 from __future__ import annotations
@@ -254,3 +255,81 @@ def compare(
     finally:
         reference.close()
     return compare_traces(motion, mj, ref)
+
+
+# ------------------------------------------------------------------ recorded episodes
+@dataclass
+class WorldRecording:
+    """Everything a ``World`` was told during an episode, in order: placements and per-cycle
+    joint commands (canonical arrays, rad/s, NaN = joint not commanded), so that the same
+    episode can be replayed open-loop on another world (:func:`replay_recording`)."""
+
+    calls: list = field(default_factory=list)
+
+    @property
+    def cycles(self) -> int:
+        """Number of 20 ms cycles recorded."""
+        return sum(1 for kind, _ in self.calls if kind == "step")
+
+
+class record_world:  # noqa: N801 (used as a context manager, like contextlib's helpers)
+    """Record what ``world`` is told while the ``with`` block runs (the world behaves exactly as
+    without the recording)::
+
+        with record_world(env.unwrapped.backend.world) as rec:
+            ...  # run an episode
+        replay_recording(rec, OdeWorld([0]))
+    """
+
+    def __init__(self, world) -> None:
+        self.world = world
+        self.recording = WorldRecording()
+
+    def __enter__(self) -> WorldRecording:
+        w, calls = self.world, self.recording.calls
+        step, place_robot, place_ball = w.step, w.place_robot, w.place_ball
+
+        def recording_step(commands=None):
+            arrays = {}
+            for i, c in (commands or {}).items():
+                if c is not None:
+                    velocities = getattr(c, "joint_velocities", c)
+                    arrays[i] = w.command_array(i, velocities).copy()
+            calls.append(("step", arrays))
+            return step(commands)
+
+        def recording_place_robot(index, x, y, **kwargs):
+            keep = ("heading_deg", "z", "joint_angles_deg", "asleep")
+            calls.append(("robot", (index, x, y, {k: v for k, v in kwargs.items() if k in keep})))
+            return place_robot(index, x, y, **kwargs)
+
+        def recording_place_ball(pos, vel=(0.0, 0.0, 0.0), angular_vel=(0.0, 0.0, 0.0)):
+            calls.append(("ball", (tuple(pos), tuple(vel))))
+            return place_ball(pos, vel, angular_vel)
+
+        w.step, w.place_robot, w.place_ball = (
+            recording_step,
+            recording_place_robot,
+            recording_place_ball,
+        )
+        return self.recording
+
+    def __exit__(self, *exc) -> None:
+        for name in ("step", "place_robot", "place_ball"):
+            del self.world.__dict__[name]
+
+
+def replay_recording(recording: WorldRecording, world, on_cycle: Callable | None = None) -> None:
+    """Replay ``recording`` open-loop on ``world`` (a ``World`` or ``OdeWorld``): the same
+    placements and the same commands in the same cycles. ``on_cycle(world)`` after each."""
+    for kind, arg in recording.calls:
+        if kind == "robot":
+            index, x, y, kwargs = arg
+            world.place_robot(index, x, y, **kwargs)
+        elif kind == "ball":
+            pos, vel = arg
+            world.place_ball(pos, vel=vel)
+        else:
+            world.step(arg)
+            if on_cycle is not None:
+                on_cycle(world)
