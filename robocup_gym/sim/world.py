@@ -685,7 +685,7 @@ class World:
         r = self.robot(index)
         d = self.data
         if joint_angles_deg is not None:
-            angles = self._angles_array(r, joint_angles_deg)
+            angles = joint_angles_array(r.model, joint_angles_deg)
             d.qpos[r.qpos_joints] = np.radians(angles)
         q = np.asarray(quat, float) if quat is not None else heading_to_quat(heading_deg)
         if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
@@ -826,12 +826,6 @@ class World:
         r.announce_team = True
 
     # ------------------------------------------------------------------ commands
-    def _angles_array(self, r: RobotState, angles) -> np.ndarray:
-        return joint_angles_array(r.model, angles)
-
-    def _joint_index(self, r: RobotState, name: str) -> int:
-        return joint_index(r.model, name)
-
     def command_array(self, index: int, velocities: Mapping[str, float] | np.ndarray) -> np.ndarray:
         """Validate a joint-velocity command (rad/s) and return it as a canonical-order array in
         which NaN marks "no command for this joint" (targets are sticky).
@@ -850,7 +844,7 @@ class World:
         if isinstance(velocities, Mapping):
             out = np.full(n, np.nan)
             for name, v in velocities.items():
-                i = self._joint_index(r, name)
+                i = joint_index(r.model, name)
                 v = float(v)
                 if not math.isfinite(v):
                     raise ValueError(f"velocity command for joint {r.effector_names[i]} is {v}")
@@ -1042,7 +1036,7 @@ class World:
             else:
                 m.dof_frictionloss[dofs] = np.where(rows, phys.MOTOR_MAX_TORQUE, 0.0)
             shift = shift[rows]
-            self._fudge_torques(at_lo, at_hi, targets)
+            self._fudge_torques(at_stop, at_lo)
             self._motors_relaxed = True
         elif self._motors_relaxed:
             m.dof_frictionloss[dofs] = phys.MOTOR_MAX_TORQUE
@@ -1119,13 +1113,12 @@ class World:
         speed_lo = np.maximum((self._lo - q) * erp_speed, into)
         return np.where(at_hi, -speed_hi, speed_lo)
 
-    def _fudge_torques(self, at_lo: np.ndarray, at_hi: np.ndarray, targets: np.ndarray) -> None:
-        """ODE's torque on a joint at a stop whose target pulls it away (spec §2.4): only
-        fudge factor × FMax (1e-4 N·m), in the target's direction; 0 for every other joint."""
-        away = phys.MOTOR_FUDGE_FACTOR * phys.MOTOR_MAX_TORQUE
-        torque = (at_lo & (targets > 0.0)) * away
-        torque -= (at_hi & (targets < 0.0)) * away
-        self._data.qfrc_applied[self._qvel_j] = torque
+    def _fudge_torques(self, away: np.ndarray, at_lo: np.ndarray) -> None:
+        """ODE's torque on a joint at a stop whose target pulls it ``away`` (spec §2.4): only
+        fudge factor × FMax (1e-4 N·m), out of the stop (positive at the lower stop); 0 for
+        every other joint."""
+        fudge = phys.MOTOR_FUDGE_FACTOR * phys.MOTOR_MAX_TORQUE
+        self._data.qfrc_applied[self._qvel_j] = np.where(at_lo, fudge, -fudge) * away
 
     def _bounce_stops(self) -> None:
         """Fully elastic joint stops (spec §2.4, ODE bounce 1): a stop row whose joint runs

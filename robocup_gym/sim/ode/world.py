@@ -30,6 +30,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+import mujoco
 import numpy as np
 
 from robocup_gym.robot.nao import NaoModel, nao_model
@@ -109,29 +110,18 @@ def _surface_parameters(s: Surface) -> ode.SurfaceParameters:
     return p
 
 
+def _rotation(quat: np.ndarray) -> np.ndarray:
+    """The 3×3 matrix of a unit quaternion ``(w, x, y, z)`` (MuJoCo's ``mju_quat2Mat``)."""
+    m = np.zeros(9)
+    mujoco.mju_quat2Mat(m, quat)
+    return m.reshape(3, 3)
+
+
 def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation matrix by ``angle`` (rad) about the unit vector ``axis``."""
-    x, y, z = axis
-    c, s = math.cos(angle), math.sin(angle)
-    t = 1.0 - c
-    return np.array(
-        [
-            [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-            [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
-        ]
-    )
-
-
-def _quat_matrix(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    """Rotation matrix by ``angle`` (rad) about ``axis`` (MuJoCo's ``mju_axisAngle2Quat``)."""
+    q = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(q, axis, angle)
+    return _rotation(q)
 
 
 def _mat3(r: np.ndarray) -> ode.Mat3:
@@ -323,7 +313,7 @@ class OdeWorld:
     ) -> tuple[list[np.ndarray], list[np.ndarray]]:
         """Per body, the rotation and translation that take zero-pose torso-frame points to
         world points (relative to the torso's x, y; torso centre at height 0)."""
-        root = _quat_matrix(heading_to_quat(heading_deg))
+        root = _rotation(heading_to_quat(heading_deg))
         index = {b.name: i for i, b in enumerate(model.bodies)}
         joint_of = {j.child: (k, j) for k, j in enumerate(model.joints)}
         rot: list = [None] * len(model.bodies)
