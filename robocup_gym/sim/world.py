@@ -34,6 +34,7 @@ except ImportError:  # numpy < 2
     from numpy.core.umath import clip as _clip
 
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
 from robocup_gym.sim.scene import (
@@ -132,6 +133,8 @@ class RobotState:
     motor_lost: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     """Joints whose motor saturated or sat at a stop in the last step: their creep compensation
     restarts from where they are (motion lost there is never caught up, as in ODE)."""
+    cmd: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Commands due this cycle for the compiled step (NaN: none), a view into the world's."""
     joint_slice: slice = field(default_factory=lambda: slice(0, 0))
     """This robot's joints in the world-level joint arrays."""
     pending: list = field(default_factory=list)
@@ -224,6 +227,11 @@ class World:
             :meth:`step` ``k`` acts from step ``k + 1`` on; with 0 it acts in step ``k``.
         vision: ``See`` settings (noise, field of view, interval, ground-truth extensions).
         seed: Seed for the vision noise and calibration offsets (deterministic when given).
+        compiled: Run the per-cycle work in C (:mod:`robocup_gym.sim.compiled`, bit-equal to
+            the NumPy path and several times cheaper). ``None`` (default): the environment
+            variable ``ROBOCUP_GYM_COMPILED``, else whenever it can be built here; ``True``:
+            raise :class:`~robocup_gym.sim.compiled.CompiledStepUnavailableError` if it cannot;
+            ``False``: the NumPy path. :attr:`stepper` says which one runs.
     """
 
     def __init__(
@@ -235,6 +243,7 @@ class World:
         dead_time_cycles: int = 1,
         vision: VisionConfig | None = None,
         seed: int | None = None,
+        compiled: bool | None = None,
     ) -> None:
         if dead_time_cycles < 0:
             raise ValueError(f"dead_time_cycles must be >= 0, got {dead_time_cycles}")
@@ -277,7 +286,8 @@ class World:
             )[0]
             for b in (False, True)
         }
-        self._ball_bouncy = False
+        self._flags = np.zeros(len(compiled_step.FLAGS), dtype=np.int32)
+        """Per-cycle switches shared with the compiled step (see ``compiled_step.FLAGS``)."""
         self.robots: list[RobotState] = []
         drag_bodies = []
         for i, slot in enumerate(slots):
@@ -286,7 +296,6 @@ class World:
             self.robots.append(r)
             drag_bodies.extend(r.robot_bodies.tolist())
         self._init_motor_arrays()
-        self._motors_relaxed = False
         self._inv_timestep = 1.0 / m.opt.timestep
         self._init_drag(drag_bodies)
         self._init_views()
@@ -304,8 +313,102 @@ class World:
         self.reset(seed=seed)
         self._check_motor_rows()
         self._check_contact_rows()
+        self._compiled: compiled_step.CompiledStep | None = None
+        self.compiled_unavailable: str | None = None
+        """Why the compiled step is not used (``None`` when it is, or was not wanted)."""
+        self._init_compiled(compiled_step.wanted() if compiled is None else compiled)
+        self._physics_step = self._step_numpy if self._compiled is None else self._step_compiled
+        """One cycle's physics, compiled or NumPy; returns whether the state diverged."""
+
+    @property
+    def _motors_relaxed(self) -> bool:
+        """Some motor rows are removed (joints at a stop pulled away) and fudge torques set."""
+        return bool(self._flags[0])
+
+    @_motors_relaxed.setter
+    def _motors_relaxed(self, value: bool) -> None:
+        self._flags[0] = value
+
+    @property
+    def _ball_bouncy(self) -> bool:
+        """The ball-ground contact pair has its bouncy parameters this cycle."""
+        return bool(self._flags[1])
+
+    @_ball_bouncy.setter
+    def _ball_bouncy(self, value: bool) -> None:
+        self._flags[1] = value
+
+    @property
+    def stepper(self) -> str:
+        """Which implementation runs the per-cycle work: ``"compiled"`` or ``"numpy"``."""
+        return "compiled" if self._compiled is not None else "numpy"
 
     # ------------------------------------------------------------------ construction helpers
+    def _init_compiled(self, mode: bool | None) -> None:
+        """Bind the compiled step (:mod:`robocup_gym.sim.compiled`) to this world's arrays when
+        ``mode`` is ``True`` (must work) or ``None`` (if it can be built)."""
+        if mode is False:
+            return
+        try:
+            compiled_step.load()
+        except compiled_step.CompiledStepUnavailableError as exc:
+            if mode:
+                raise
+            self.compiled_unavailable = str(exc)
+            return
+        m = self.model
+        n = len(self._qvel_j)
+        i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731
+        sort = self._motor_sort if self._motor_sort is not None else np.arange(n)
+        drag_bodies = m.sensor_objid[0 : 2 * len(self._drag_vel) : 2]
+        keep = {
+            "qpos_j": i32(self._qpos_j),
+            "qvel_j": i32(self._qvel_j),
+            "lo": np.ascontiguousarray(self._lo, dtype=float),
+            "hi": np.ascontiguousarray(self._hi, dtype=float),
+            "vmax": np.concatenate([r.max_speeds for r in self.robots]).astype(float)
+            if self.robots
+            else np.zeros(0),
+            "targets": self._targets,
+            "q_ref": self._q_ref,
+            "motor_lost": self._motor_lost,
+            "cmd": self._cmd,
+            "at_lo": np.zeros(n, dtype=bool),
+            "at_hi": np.zeros(n, dtype=bool),
+            "limited": np.zeros(n, dtype=bool),
+            "away": np.zeros(n, dtype=bool),
+            "q": np.zeros(n),
+            "mt": np.zeros(n),
+            "sort": i32(sort),
+            "dofs": i32(self._motor_dofs_sorted),
+            "motor_b": np.ascontiguousarray(self._motor_b, dtype=float),
+            "shift": np.zeros(n),
+            "rows": np.zeros(n, dtype=bool),
+            "qvel_root": i32([r.qvel_root for r in self.robots]),
+            "torso_body": i32([r.torso_body for r in self.robots]),
+            "prev_vel": self._prev_vel,
+            "accel": self._accel,
+            "drag_body": i32(drag_bodies),
+            "flags": self._flags,
+        }
+        st = compiled_step.WorldStruct()
+        for name, array in keep.items():
+            setattr(st, name, compiled_step.address(array))
+        st.n, st.nrobots, st.ndrag = n, len(self.robots), len(drag_bodies)
+        st.ball_qpos, st.ball_qvel = self._ball_qpos, self._ball_qvel
+        st.ball_pair = self._ball_ground_pair
+        st.ball_solref[:] = [*self._ball_ground_solref[False], *self._ball_ground_solref[True]]
+        st.cycle, st.inv_cycle, st.inv_timestep = CYCLE_S, 1.0 / CYCLE_S, self._inv_timestep
+        st.creep_window = CREEP_WINDOW_RAD
+        st.stop_erp, st.stop_bounce = phys.JOINT_STOP_ERP_CFM[0], phys.JOINT_STOP_BOUNCE
+        st.fudge_torque = phys.MOTOR_FUDGE_FACTOR * phys.MOTOR_MAX_TORQUE
+        st.max_torque, st.saturated = phys.MOTOR_MAX_TORQUE, _SATURATED
+        st.surface_layer, st.gravity = phys.SURFACE_LAYER, phys.GRAVITY
+        st.drag_lin, st.drag_ang = phys.BODY_LINEAR_DRAG, phys.BODY_ANGULAR_DRAG
+        st.ball_radius, st.ground_z = phys.BALL_RADIUS, phys.GROUND_PLANE_Z
+        st.bounce_min_speed, st.diverged_qvel_sq = phys.BALL_BOUNCE_MIN_SPEED, DIVERGED_QVEL_SQ
+        self._compiled = compiled_step.CompiledStep(st, m, self._data, list(keep.values()))
+
     def _init_drag(self, drag_bodies: list[int]) -> None:
         """Map the scene's drag sensors (:func:`robocup_gym.sim.scene._drag_sensors`: per robot
         body its centre-of-mass linear and angular velocity) onto ``xfrc_applied``."""
@@ -377,12 +480,20 @@ class World:
         self._targets = np.zeros(n)
         self._q_ref = np.zeros(n)
         self._motor_lost = np.zeros(n, dtype=bool)
+        self._cmd = np.full(n, np.nan)
+        """Due commands for the compiled step (NaN: none), see :meth:`_step_compiled`."""
+        self._accel = np.zeros((len(robots), 3))
+        self._prev_vel = np.zeros((len(robots), 3))
         off = 0
-        for r in robots:
+        for i, r in enumerate(robots):
             k = len(r.qvel_joints)
             r.targets = self._targets[off : off + k]
             r.q_ref = self._q_ref[off : off + k]
             r.motor_lost = self._motor_lost[off : off + k]
+            r.cmd = self._cmd[off : off + k]
+            self._accel[i] = r.accel
+            r.accel = self._accel[i]
+            r.prev_vel = self._prev_vel[i]
             r.joint_slice = slice(off, off + k)
             off += k
         sort = np.argsort(self._qvel_j, kind="stable")
@@ -980,6 +1091,55 @@ class World:
             else:
                 for i, c in commands.items():
                     self.command(i, c)
+        diverged = self._physics_step()
+        # MuJoCo computes positions at the start of a step; SimSpark senses after it. Body poses
+        # and velocities are brought up to the new state when first used (see ``data``).
+        self._poses_stale = self._com_stale = True
+        self.cycle += 1
+        self.time = round(self.time + CYCLE_S, 10)
+        if self.game.play_mode not in PAUSED_MODES:
+            self.game.game_time = round(self.game.game_time + CYCLE_S, 10)
+        for r in self.robots:
+            r.perception_counter += 1
+        if diverged:
+            self._raise_diverged()
+
+    def _wake_commanded(self) -> None:
+        """A non-zero motor target wakes a sleeping robot for this very step (spec §8.3)."""
+        for r in self._sleepers:
+            if _any(r.targets != 0.0):
+                r.asleep = False
+        self._update_sleepers()
+
+    def _step_compiled(self) -> bool:
+        """One cycle's physics with the per-cycle work in C (``cstep.c`` does what
+        :meth:`_step_numpy` does, bit for bit). Returns whether the state diverged."""
+        due = self.cycle
+        for r in self.robots:
+            pending = r.pending
+            if pending and pending[0][0] <= due:
+                r.cmd[:] = pending.pop(0)[1]
+                while pending and pending[0][0] <= due:  # later commands win where they command
+                    vel = pending.pop(0)[1]
+                    np.copyto(r.cmd, vel, where=vel == vel)
+        fast = self._compiled
+        fast.pre()
+        if self._sleepers:
+            self._wake_commanded()
+        m, d = self.model, self._data
+        for sub in range(self._substeps):
+            mujoco.mj_step1(m, d)
+            fast.mid(sub == 0)
+            if self._sleepers:
+                self._wake_touched()
+            mujoco.mj_step2(m, d)
+            if self._sleepers:
+                self._hold_sleepers()
+        return fast.post()
+
+    def _step_numpy(self) -> bool:
+        """One cycle's physics with the per-cycle work in NumPy (the reference implementation).
+        Returns whether the state diverged."""
         d = self._data
         m = self.model
         q = self._qpos[self._qpos_j]
@@ -992,11 +1152,7 @@ class World:
             if r.pending and r.pending[0][0] <= due:
                 self._realise_commands(r, ~limited[r.joint_slice] if any_limited else None)
         if self._sleepers:
-            # a non-zero motor target wakes the robot for this very step (spec §8.3)
-            for r in self._sleepers:
-                if _any(r.targets != 0.0):
-                    r.asleep = False
-            self._update_sleepers()
+            self._wake_commanded()
         targets = self._targets
         # ODE at a stop (spec §2.4, ODE's addLimot): the motor row gives way to the stop row
         # (fully elastic, ``_bounce_stops``) and a constant torque, FMax into the stop when the
@@ -1085,18 +1241,8 @@ class World:
             self._motor_lost[sort] = ~moving
         if any_limited:
             self._motor_lost |= limited
-        # MuJoCo computes positions at the start of a step; SimSpark senses after it. Body poses
-        # and velocities are brought up to the new state when first used (see ``data``).
-        self._poses_stale = self._com_stale = True
-        self.cycle += 1
-        self.time = round(self.time + CYCLE_S, 10)
-        if self.game.play_mode not in PAUSED_MODES:
-            self.game.game_time = round(self.game.game_time + CYCLE_S, 10)
-        for r in self.robots:
-            r.perception_counter += 1
         qvel = self._qvel
-        if not qvel.dot(qvel) < DIVERGED_QVEL_SQ:  # also True for NaN
-            self._raise_diverged()
+        return not qvel.dot(qvel) < DIVERGED_QVEL_SQ  # also True for NaN
 
     def _stop_speeds(self, q: np.ndarray, at_lo: np.ndarray, at_hi: np.ndarray) -> np.ndarray:
         """Per joint, the velocity (rad/s) the stop row of a joint at a stop asks for: its ERP

@@ -12,6 +12,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 KEYS = (
     "world_cycles_per_s",
+    "world_numpy_cycles_per_s",
+    "compiled_speedup",
     "raw_cycles_per_s",
     "env_steps_per_s",
     "reset_ms",
@@ -37,3 +39,7 @@ def test_throughput_quick_prints_json_last():
         assert isinstance(result[key], float) and math.isfinite(result[key]) and result[key] > 0
     assert result["world_vs_raw"] == result["world_cycles_per_s"] / result["raw_cycles_per_s"]
     assert result["env_vs_world"] == result["env_steps_per_s"] / result["world_cycles_per_s"]
+    from robocup_gym.sim import compiled
+
+    # the world measured is the compiled one wherever it can be built, and says so
+    assert result["stepper"] == ("compiled" if compiled.available() else "numpy")
