@@ -139,8 +139,14 @@ def build(path: Path | None = None) -> Path:
     include = Path(mujoco.__file__).with_name("include")
     if not (include / "mujoco" / "mjdata.h").exists():
         raise CompiledStepUnavailableError(f"the MuJoCo package has no C headers in {include}")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".so", dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(suffix=".so", dir=path.parent)
+    except OSError as exc:
+        raise CompiledStepUnavailableError(
+            f"cannot write the compiled step's cache {path.parent} ({exc}); set ROBOCUP_GYM_CACHE "
+            "to a writable folder"
+        ) from exc
     os.close(fd)
     cmd = [*_compiler(), *CFLAGS, "-I", str(include), str(SOURCE), "-o", tmp, "-lm"]
     try:

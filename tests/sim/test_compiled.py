@@ -206,6 +206,15 @@ def test_without_a_compiler_the_world_falls_back(no_compiler):
     assert not list((no_compiler / "cache").glob("*.so"))  # no half-written library left
 
 
+def test_an_unwritable_cache_falls_back(no_compiler, monkeypatch):
+    """A cache folder that cannot be made: the world runs the NumPy path and says why."""
+    blocker = no_compiler / "a-file"
+    blocker.write_text("")
+    monkeypatch.setenv("ROBOCUP_GYM_CACHE", str(blocker / "cache"))
+    w = World([0])
+    assert w.stepper == "numpy" and "ROBOCUP_GYM_CACHE" in w.compiled_unavailable
+
+
 def test_a_failed_compilation_says_why(no_compiler, monkeypatch):
     """A compiler that fails: the error carries its output."""
     fake = no_compiler / "failing-cc"
