@@ -1,12 +1,13 @@
-"""Does a policy learnt on the embedded world kick on SimSpark's physics? An open-loop check.
+"""Does a policy learnt on the embedded world kick on SimSpark's physics? Open- and closed-loop.
 
 Runs deterministic episodes of a trained run (``robocup-gym train`` folder) on the embedded
 MuJoCo world, records every placement and joint command the environment sent to its world, and
 replays the same commands, cycle for cycle, on ``robocup_gym.sim.ode.OdeWorld`` (SimSpark's step
 on ODE itself, which reproduces the real server's kick D; needs ``libode8``). The replay is
-open-loop: the policy does not see the ODE world's state, so this is a lower bound on what the
-same policy would do on rcssserver3d. Also replays on a fresh MuJoCo world, which must give the
-environment's own result (a check of the recording).
+open-loop: the policy does not see the ODE world's state. Also replays on a fresh MuJoCo world,
+which must give the environment's own result (a check of the recording). Then runs the same
+episodes closed-loop on the ``ode`` backend (the policy reads the ODE world's perceptors, as it
+would on rcssserver3d; ``robocup-gym eval RUN --backend ode`` does this alone).
 
     python benchmarks/ode_transfer.py runs/velocity-kick-ppo-<time> --episodes 3
 
@@ -81,25 +82,39 @@ def main(argv: list[str] | None = None) -> dict:
             )
     finally:
         env.close()
+    ode_env = make_env(cfg.env_id, backend="ode", env_kwargs=cfg.env_kwargs)
+    try:
+        for k, row in enumerate(rows):
+            (rec,) = run_episodes(
+                model, ode_env, 1, seed=args.seed + k, obs_normalizer=normalizer, deterministic=True
+            )
+            row["ode_closed_loop_ball_dx_m"] = round(float(rec["ball_dx"]), 4)
+            row["ode_closed_loop_fell"] = bool(rec.get("fell", 0.0))
+    finally:
+        ode_env.close()
     print(
         f"{'episode':>8}{'cycles':>8}{'env Δx m':>10}{'MuJoCo replay':>15}{'ODE replay':>12}"
-        f"{'ODE fell':>10}{'>1cm at':>9}"
+        f"{'ODE fell':>10}{'>1cm at':>9}{'ODE closed loop':>17}{'fell':>6}"
     )
     for r in rows:
         fell = "yes" if r["ode_replay_fell"] else "no"
         apart = r["torsos_1cm_apart_from_cycle"] or "-"
+        closed_fell = "yes" if r["ode_closed_loop_fell"] else "no"
         print(
             f"{r['episode']:>8}{r['cycles']:>8}{r['env_ball_dx_m']:>10.3f}"
             f"{r['mujoco_replay_ball_dx_m']:>15.3f}{r['ode_replay_ball_dx_m']:>12.3f}"
-            f"{fell:>10}{apart:>9}"
+            f"{fell:>10}{apart:>9}{r['ode_closed_loop_ball_dx_m']:>17.3f}{closed_fell:>6}"
         )
+
+    def mean(key: str) -> float:
+        return round(float(np.mean([r[key] for r in rows])), 4)
+
     summary = {
         "run": str(info.path),
         "episodes": rows,
-        "env_ball_dx_mean": round(float(np.mean([r["env_ball_dx_m"] for r in rows])), 4),
-        "ode_replay_ball_dx_mean": round(
-            float(np.mean([r["ode_replay_ball_dx_m"] for r in rows])), 4
-        ),
+        "env_ball_dx_mean": mean("env_ball_dx_m"),
+        "ode_replay_ball_dx_mean": mean("ode_replay_ball_dx_m"),
+        "ode_closed_loop_ball_dx_mean": mean("ode_closed_loop_ball_dx_m"),
     }
     print(json.dumps(summary))
     return summary

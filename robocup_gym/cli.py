@@ -196,6 +196,13 @@ if typer is not None:
         deterministic: Annotated[
             bool, typer.Option(help="Deterministic actions (the policy's mean).")
         ] = True,
+        backend: Annotated[
+            str | None,
+            typer.Option(
+                help="Evaluate on this simulator instead of the run's: mujoco, rcssserver3d, "
+                "or ode (SimSpark's physics on ODE itself, closed-loop; needs libode8)."
+            ),
+        ] = None,
     ) -> None:
         """Evaluate a run deterministically; the last line of output is one JSON object."""
         from rich.table import Table
@@ -216,11 +223,12 @@ if typer is not None:
                     video=video,
                     video_episodes=video_episodes,
                     checkpoint=checkpoint,
+                    backend=backend,
                 )
         except (ValueError, FileNotFoundError, RuntimeError) as exc:
             _fail(str(exc))
         table = Table(
-            title=f"{summary['task']} · {summary['algo'].upper()} · "
+            title=f"{summary['task']} · {summary['algo'].upper()} · {summary['backend']} · "
             f"{summary['timesteps_trained']:,} steps · {summary['episodes']} episodes"
         )
         table.add_column("metric")

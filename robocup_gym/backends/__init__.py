@@ -3,6 +3,9 @@
 >>> from robocup_gym.backends import make_backend
 >>> backend = make_backend("mujoco", robot_type=0)   # the embedded SimSpark world (default)
 
+``"rcssserver3d"`` drives the real server; ``"ode"`` steps SimSpark's physics on ODE itself
+(needs ``libode``), to check closed-loop that a policy learnt on the embedded world works there.
+
 Backends are looked up in a small registry of ``name -> "module:Class"`` entries and imported
 only when asked for. Adding a backend is one line here (or one call to :func:`register_backend`).
 """
@@ -35,6 +38,7 @@ __all__ = [
 _REGISTRY: dict[str, str | Callable[..., Backend]] = {
     "mujoco": "robocup_gym.backends.mujoco_backend:MujocoBackend",
     "rcssserver3d": "robocup_gym.backends.rcssserver3d_backend:Rcssserver3dBackend",
+    "ode": "robocup_gym.backends.ode_backend:OdeBackend",
 }
 """Implemented backends: name -> ``"module:Class"`` (imported lazily) or a factory."""
 

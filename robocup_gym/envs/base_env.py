@@ -78,7 +78,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     Args:
         config: The configuration; ``None`` = :meth:`default_config` of the class.
-        backend: Simulator name (``"mujoco"``, the default; ``"rcssserver3d"`` once available) or
+        backend: Simulator name (``"mujoco"``, the default; ``"rcssserver3d"``; ``"ode"``) or
             a ready :class:`~robocup_gym.backends.Backend` instance (its robot type must match).
         render_mode: ``None`` or ``"rgb_array"`` (MuJoCo backend; needs OpenGL, e.g.
             ``MUJOCO_GL=egl``).

@@ -179,15 +179,22 @@ def evaluate_run(
     video_episodes: int = 1,
     checkpoint: str | os.PathLike | None = None,
     write: bool = True,
+    backend: str | None = None,
 ) -> dict[str, Any]:
-    """Evaluate a run folder's policy; returns (and writes to ``eval.json``) the summary."""
+    """Evaluate a run folder's policy; returns (and writes to ``eval.json``, or to
+    ``eval-<backend>.json`` for another backend than the run's) the summary.
+
+    ``backend`` evaluates on another simulator than the run trained on (e.g. ``"ode"``:
+    SimSpark's physics on ODE itself, closed-loop); the video, if any, is recorded on the run's
+    own backend."""
     from robocup_gym.train.tasks import make_env
 
     info: RunInfo = load_run(run)
     cfg = info.config
     model = load_model(info, checkpoint=checkpoint)
     normalizer = info.obs_normalizer()
-    env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs)
+    backend = backend or cfg.backend
+    env = make_env(cfg.env_id, backend=backend, env_kwargs=cfg.env_kwargs)
     try:
         records = run_episodes(
             model, env, episodes, seed=seed, deterministic=deterministic, obs_normalizer=normalizer
@@ -202,12 +209,14 @@ def evaluate_run(
         "model": str(info.model_path if checkpoint is None else checkpoint),
         "timesteps_trained": int(model.num_timesteps),
         "deterministic": deterministic,
+        "backend": backend,
         **summarize(records),
     }
     if video is not None:
         summary["video"] = str(record_video(info, model, video, episodes=video_episodes, seed=seed))
     if write:
-        (info.path / "eval.json").write_text(json.dumps(summary, indent=2) + "\n")
+        name = "eval.json" if backend == cfg.backend else f"eval-{backend}.json"
+        (info.path / name).write_text(json.dumps(summary, indent=2) + "\n")
     return summary
 
 

@@ -60,6 +60,29 @@ def test_eval_prints_json_last(ppo_run):
     assert json.loads((ppo_run / "eval.json").read_text())["episodes"] == 2
 
 
+def test_eval_on_another_backend(ppo_run):
+    """``--backend ode`` runs the policy closed-loop on SimSpark's physics on ODE and writes
+    eval-ode.json beside the run's own eval.json; an unknown backend is a clear error."""
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+    from robocup_gym.sim.ode import available
+
+    bad = CliRunner().invoke(app, ["eval", str(ppo_run), "--episodes", "1", "--backend", "bullet"])
+    assert bad.exit_code == 1
+    assert "unknown backend 'bullet'" in bad.output and "'ode'" in bad.output
+    if not available():
+        pytest.skip("no double-precision libode here (apt-get install libode8)")
+    before = (ppo_run / "eval.json").read_text() if (ppo_run / "eval.json").exists() else None
+    result = invoke(["eval", ppo_run, "--episodes", 1, "--backend", "ode"])
+    summary = last_json(result.stdout)
+    assert summary["backend"] == "ode" and summary["episodes"] == 1
+    assert isinstance(summary["ball_dx_mean"], float)
+    assert json.loads((ppo_run / "eval-ode.json").read_text())["backend"] == "ode"
+    after = (ppo_run / "eval.json").read_text() if (ppo_run / "eval.json").exists() else None
+    assert after == before  # the run's own evaluation is left alone
+
+
 def test_export_matches_policy_and_drives_a_robot(ppo_run, tmp_path):
     import onnxruntime as ort
     from stable_baselines3 import PPO
@@ -331,3 +354,5 @@ def test_ode_transfer_replays_a_trained_policy_on_the_reference(ppo_run):
     assert ep["cycles"] > 0
     assert ep["mujoco_replay_ball_dx_m"] == ep["env_ball_dx_m"]
     assert isinstance(ep["ode_replay_ball_dx_m"], float)
+    assert isinstance(ep["ode_closed_loop_ball_dx_m"], float)
+    assert res["ode_closed_loop_ball_dx_mean"] == ep["ode_closed_loop_ball_dx_m"]

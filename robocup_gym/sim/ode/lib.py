@@ -94,6 +94,13 @@ class Contact(ctypes.Structure):
     _fields_ = [("surface", SurfaceParameters), ("geom", ContactGeom), ("fdir1", Vec4)]
 
 
+class JointFeedback(ctypes.Structure):
+    """``dJointFeedback``: force and torque a joint applied to its two bodies in the last step
+    (world frame), filled by ``dWorldStep`` for joints given one with ``dJointSetFeedback``."""
+
+    _fields_ = [("f1", Vec4), ("t1", Vec4), ("f2", Vec4), ("t2", Vec4)]
+
+
 _SIGNATURES: dict[str, tuple] = {
     # name: (restype, argtypes)
     "dInitODE2": (ctypes.c_int, [ctypes.c_uint]),
@@ -128,6 +135,7 @@ _SIGNATURES: dict[str, tuple] = {
     "dJointCreateHinge": (dID, [dID, dID]),
     "dJointCreateContact": (dID, [dID, dID, ctypes.POINTER(Contact)]),
     "dJointAttach": (None, [dID, dID, dID]),
+    "dJointSetFeedback": (None, [dID, ctypes.POINTER(JointFeedback)]),
     "dJointSetHingeAnchor": (None, [dID, dReal, dReal, dReal]),
     "dJointSetHingeAxis": (None, [dID, dReal, dReal, dReal]),
     "dJointSetHingeParam": (None, [dID, ctypes.c_int, dReal]),

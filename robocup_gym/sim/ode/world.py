@@ -10,8 +10,11 @@ contact surfaces mixed from each side's handler as SimSpark does (§7.3); drag b
 (§7.5); the hinge effector's rules (clip to the joint's max speed, ignore commands while the
 joint is not strictly inside its limits, wake the body on a non-zero command, §8.3).
 
-It is a yardstick, not a second simulator: no perception, no referee, no walls or goals (the
-motions it compares happen near the centre of the field). What it settles is how ODE's own
+It is a yardstick, not a second simulator: no referee, no vision, no walls or goals (the
+motions it compares happen near the centre of the field). It has the body sensors a kick
+policy reads (joint angles, gyro, accelerometer, foot force perceptors from ODE's contact
+feedback, as SimSpark computes them), so that :class:`robocup_gym.backends.ode_backend.OdeBackend`
+can run a trained policy closed-loop on SimSpark's physics. What it settles is how ODE's own
 solver, contact generation, joint stops and motor-at-stop rules behave for a given motion,
 which the MuJoCo translation (:mod:`robocup_gym.sim.world`) can then be compared with
 (``benchmarks/ode_compare.py``). It needs the system library ``libode``
@@ -36,7 +39,9 @@ import numpy as np
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.ode import lib as ode
+from robocup_gym.sim.scene import FRP_GEOMS
 from robocup_gym.sim.world import heading_to_quat, joint_angles_array, joint_index
+from robocup_gym.types import ForceResistance
 
 WORLD_CFM = 1e-5
 """SimSpark's world CFM (spec §7.1); the world ERP stays ODE's default 0.2."""
@@ -148,6 +153,16 @@ class OdeRobot:
     """(n, 2) stops in rad."""
     pending: list = field(default_factory=list)
     """Commands given but not yet realised (dead time)."""
+    frp_bodies: dict[str, int] = field(default_factory=dict)
+    """Force resistance perceptor name (``lf``, ``rf``, ``lf1``, ``rf1``) → its body handle."""
+    prev_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    """Torso velocity at the last accelerometer sample, m/s, world."""
+    accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
+    """Accelerometer reading, m/s², torso frame."""
+    frp: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    """The last step's foot contacts: name → (total force on the foot, force-weighted centre of
+    the contacts), world frame."""
+    last_frp: dict[str, ForceResistance] = field(default_factory=dict)
 
 
 class OdeWorld:
@@ -184,6 +199,9 @@ class OdeWorld:
         self._contact_buf = (ode.ContactGeom * MAX_CONTACTS)()
         self._contact = ode.Contact()
         self._pairs = self._collision_pairs()
+        n_sensed = sum(1 for p in self._pairs if p[5] or p[6])
+        self._feedback = (ode.JointFeedback * (MAX_CONTACTS * max(n_sensed, 1)))()
+        """Contact feedback slots for the contacts of foot/toe geoms (SimSpark's ``FRP``)."""
         self.place_ball((0.0, 0.0))
         for i in range(len(self.robots)):
             self.place_robot(i, -1.0 - 1.0 * i, 0.0)
@@ -240,7 +258,8 @@ class OdeWorld:
             joints.append(h)
             child.append(c)
         limits = np.array([j.range_rad for j in model.joints])
-        return OdeRobot(model, bodies, joints, geoms, child, limits)
+        frp = {f: bodies[names.index(FRP_GEOMS[f])] for f in FRP_GEOMS if FRP_GEOMS[f] in names}
+        return OdeRobot(model, bodies, joints, geoms, child, limits, frp_bodies=frp)
 
     def _collision_pairs(self) -> list[tuple]:
         """Every geom pair that can touch, as ``(geom1, geom2, body1, body2, surface)`` (body
@@ -259,7 +278,14 @@ class OdeWorld:
                 for other in self.robots[i + 1 :]:
                     pairs.extend((g, g2, robot_robot) for g2 in other.geoms)
         body = self._lib.dGeomGetBody
-        return [(g1, g2, body(g1), body(g2), s) for g1, g2, s in pairs]
+        sensor = {}  # body handle -> (robot, FRP name)
+        for i, r in enumerate(self.robots):
+            for name, b in r.frp_bodies.items():
+                sensor[b] = (i, name)
+        return [
+            (g1, g2, body(g1), body(g2), s, sensor.get(body(g1)), sensor.get(body(g2)))
+            for g1, g2, s in pairs
+        ]
 
     # ------------------------------------------------------------------ placement
     def place_robot(
@@ -306,6 +332,10 @@ class OdeWorld:
         for h in r.joints:
             lib.dJointSetHingeParam(h, ode.PARAM_VEL, 0.0)
         r.pending.clear()
+        r.prev_vel[:] = 0.0
+        r.accel[:] = (0.0, 0.0, phys.GRAVITY)
+        r.frp = {}
+        r.last_frp = {}
 
     @staticmethod
     def _forward_kinematics(
@@ -363,10 +393,12 @@ class OdeWorld:
                 due = r.pending.pop(0)
                 if due is not None:
                     self._realise(r, due)
+        self._sense_accelerometers()
         self._apply_drag()
         buf, contact = self._contact_buf, self._contact
         size = ctypes.sizeof(ode.ContactGeom)
-        for g1, g2, b1, b2, surface in self._pairs:
+        sensed = []  # (feedback slot, contact position, FRP of body 1, FRP of body 2)
+        for g1, g2, b1, b2, surface, frp1, frp2 in self._pairs:
             n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
             if n:
                 contact.surface = surface
@@ -374,9 +406,47 @@ class OdeWorld:
                     contact.geom = buf[k]
                     joint = lib.dJointCreateContact(self._world, self._contacts, contact)
                     lib.dJointAttach(joint, b1, b2)
+                    if frp1 or frp2:
+                        slot = self._feedback[len(sensed)]
+                        lib.dJointSetFeedback(joint, slot)
+                        sensed.append((slot, np.array(buf[k].pos[:3]), frp1, frp2))
         lib.dWorldStep(self._world, phys.CYCLE_S)
+        self._read_feedback(sensed)
         lib.dJointGroupEmpty(self._contacts)
         self.time += phys.CYCLE_S
+
+    def _sense_accelerometers(self) -> None:
+        """Each torso's accelerometer, sampled as :class:`robocup_gym.sim.world.World` samples
+        it (spec §4.5): the change of the torso's velocity since the last sample over one cycle
+        plus gravity, in the torso frame, m/s²; taken just before the physics step."""
+        lib = self._lib
+        for r in self.robots:
+            v = self._vec(lib.dBodyGetLinearVel(r.bodies[0]))
+            a = (v - r.prev_vel) / phys.CYCLE_S
+            a[2] += phys.GRAVITY
+            r.prev_vel[:] = v
+            r.accel[:] = a @ self._rotation(r.bodies[0])
+
+    def _read_feedback(self, sensed: list) -> None:
+        """SimSpark's force resistance perceptors from the step's contact feedback (spec §4.6):
+        per foot/toe the total contact force on it and the contacts' centre weighted by the
+        magnitude of each contact's force, world frame."""
+        sums: dict[tuple[int, str], list] = {}
+        for slot, pos, frp1, frp2 in sensed:
+            for frp, f in ((frp1, slot.f1), (frp2, slot.f2)):
+                if frp is None:
+                    continue
+                force = np.array(f[:3])
+                acc = sums.setdefault(frp, [np.zeros(3), np.zeros(3), 0.0])
+                magnitude = float(np.linalg.norm(force))
+                acc[0] += force
+                acc[1] += magnitude * pos
+                acc[2] += magnitude
+        for r in self.robots:
+            r.frp = {}
+        for (i, name), (force, moment, total) in sums.items():
+            centre = moment / total if total > 0.0 else None
+            self.robots[i].frp[name] = (force, centre)
 
     def _command_array(self, r: OdeRobot, cmd: Mapping[str, float] | np.ndarray) -> np.ndarray:
         """Targets in canonical order, rad/s; NaN marks a joint the command leaves alone.
@@ -459,8 +529,57 @@ class OdeWorld:
         world coordinates)."""
         r = self.robots[index]
         k = [b.name for b in r.model.bodies].index(name)
-        m = self._lib.dBodyGetRotation(r.bodies[k])
+        return self._rotation(r.bodies[k])
+
+    def _rotation(self, body: int) -> np.ndarray:
+        m = self._lib.dBodyGetRotation(body)
         return np.array([[m[4 * i + j] for j in range(3)] for i in range(3)])
+
+    def ball_angular_velocity(self) -> np.ndarray:
+        """Ball angular velocity, world, rad/s."""
+        return self._vec(self._lib.dBodyGetAngularVel(self._ball))
+
+    def torso_quat(self, index: int = 0) -> np.ndarray:
+        """Torso orientation of robot ``index`` as a unit quaternion ``(w, x, y, z)``."""
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, self._rotation(self.robots[index].bodies[0]).ravel())
+        return quat
+
+    def torso_velocity(self, index: int = 0) -> np.ndarray:
+        """Torso centre velocity of robot ``index``, world, m/s."""
+        return self._vec(self._lib.dBodyGetLinearVel(self.robots[index].bodies[0]))
+
+    def torso_angular_velocity(self, index: int = 0) -> np.ndarray:
+        """Torso angular velocity of robot ``index``, world, rad/s."""
+        return self._vec(self._lib.dBodyGetAngularVel(self.robots[index].bodies[0]))
+
+    def gyro(self, index: int = 0) -> np.ndarray:
+        """Torso angular velocity in the torso frame, deg/s (``GYR``, as the world's)."""
+        torso = self.robots[index].bodies[0]
+        return np.degrees(self.torso_angular_velocity(index) @ self._rotation(torso))
+
+    def accelerometer(self, index: int = 0) -> np.ndarray:
+        """The accelerometer (``ACC``) of robot ``index``, m/s², torso frame."""
+        return self.robots[index].accel.copy()
+
+    def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
+        """``FRP`` readings of robot ``index`` from the last step's contact feedback: force (N)
+        and centre of pressure (m) in the foot's own frame, as
+        :meth:`robocup_gym.sim.world.World.force_sensors` gives them (a foot without contact
+        is omitted; one whose contacts carry no force repeats its last reading)."""
+        r = self.robots[index]
+        out: dict[str, ForceResistance] = {}
+        for name, (force, centre) in r.frp.items():
+            if centre is None:
+                if name in r.last_frp:
+                    out[name] = r.last_frp[name]
+                continue
+            body = r.frp_bodies[name]
+            rot = self._rotation(body)
+            origin = self._vec(self._lib.dBodyGetPosition(body))
+            out[name] = ForceResistance(point=(centre - origin) @ rot, force=force @ rot)
+        r.last_frp = out
+        return out
 
     def torso_position(self, index: int = 0) -> np.ndarray:
         """Torso centre of robot ``index``, world, m."""
