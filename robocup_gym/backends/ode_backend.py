@@ -16,7 +16,6 @@ instant teleports, as on the MuJoCo backend.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -89,9 +88,6 @@ class OdeBackend(Backend):
         seed: int | None = None,
     ) -> Perception:
         w = self.world
-        for name, v in (("x", pose.x), ("y", pose.y), ("heading_deg", pose.heading_deg)):
-            if not math.isfinite(v):
-                raise ValueError(f"robot pose {name} must be finite, got {v}")
         w.place_robot(
             0,
             pose.x,
@@ -100,16 +96,7 @@ class OdeBackend(Backend):
             z=pose.z,
             joint_angles_deg=pose.joint_angles_deg,
         )
-        pos = np.asarray(ball_pos, float)
-        vel = np.asarray(ball_vel, float)
-        if pos.shape not in ((2,), (3,)) or vel.shape != (3,):
-            raise ValueError(
-                f"ball position (2 or 3 values) and velocity (3) expected, got "
-                f"{pos.shape} and {vel.shape}"
-            )
-        if not (np.isfinite(pos).all() and np.isfinite(vel).all()):
-            raise ValueError("ball position and velocity must be finite")
-        w.place_ball(pos, vel)
+        w.place_ball(ball_pos, ball_vel)
         self._game = GameState(play_mode=play_mode, game_time=0.0)
         return self._perceive()
 

@@ -76,6 +76,8 @@ _XYZ = (0, 1, 2)
 _SATURATED = phys.MOTOR_MAX_TORQUE * (1.0 - 1e-9)
 """Force (N·m) from which a motor row counts as saturated: it could not reach its target."""
 _any = np.count_nonzero
+_RELAXED = compiled_step.FLAGS.index("relaxed")
+_BOUNCY = compiled_step.FLAGS.index("bouncy")
 """``a.any()`` for a 1-d bool array (hot path: counting is several times cheaper than the
 method's or ``np.logical_or.reduce``'s reduction machinery on a few values)."""
 
@@ -323,20 +325,20 @@ class World:
     @property
     def _motors_relaxed(self) -> bool:
         """Some motor rows are removed (joints at a stop pulled away) and fudge torques set."""
-        return bool(self._flags[0])
+        return bool(self._flags[_RELAXED])
 
     @_motors_relaxed.setter
     def _motors_relaxed(self, value: bool) -> None:
-        self._flags[0] = value
+        self._flags[_RELAXED] = value
 
     @property
     def _ball_bouncy(self) -> bool:
         """The ball-ground contact pair has its bouncy parameters this cycle."""
-        return bool(self._flags[1])
+        return bool(self._flags[_BOUNCY])
 
     @_ball_bouncy.setter
     def _ball_bouncy(self, value: bool) -> None:
-        self._flags[1] = value
+        self._flags[_BOUNCY] = value
 
     @property
     def stepper(self) -> str:

@@ -307,6 +307,9 @@ class OdeWorld:
         lib = self._lib
         r = self.robots[index]
         model = r.model
+        for name, v in (("x", x), ("y", y), ("z", z), ("heading_deg", heading_deg)):
+            if v is not None and not math.isfinite(v):
+                raise ValueError(f"robot placement {name} must be finite, got {v}")
         angles = (
             np.zeros(len(model.joints))
             if joint_angles_deg is None
@@ -369,11 +372,20 @@ class OdeWorld:
         """Put the ball at ``pos`` (x, y[, z]; z defaults to 1 mm into the ground, as the MuJoCo
         world's default) with velocity ``vel`` (m/s) and ``angular_vel`` (rad/s)."""
         lib = self._lib
-        z = pos[2] if len(pos) > 2 else phys.BALL_RADIUS - phys.SURFACE_LAYER
-        lib.dBodySetPosition(self._ball, float(pos[0]), float(pos[1]), float(z))
+        p, v, w = (np.asarray(a, float) for a in (pos, vel, angular_vel))
+        if p.shape not in ((2,), (3,)) or not np.isfinite(p).all():
+            raise ValueError(f"ball position must be 2 or 3 finite numbers, got {pos!r}")
+        if (
+            v.shape != (3,)
+            or w.shape != (3,)
+            or not (np.isfinite(v).all() and np.isfinite(w).all())
+        ):
+            raise ValueError("ball velocities must be 3 finite numbers each")
+        z = p[2] if len(p) > 2 else phys.BALL_RADIUS - phys.SURFACE_LAYER
+        lib.dBodySetPosition(self._ball, float(p[0]), float(p[1]), float(z))
         lib.dBodySetRotation(self._ball, _mat3(np.eye(3)))
-        lib.dBodySetLinearVel(self._ball, *map(float, vel))
-        lib.dBodySetAngularVel(self._ball, *map(float, angular_vel))
+        lib.dBodySetLinearVel(self._ball, *map(float, v))
+        lib.dBodySetAngularVel(self._ball, *map(float, w))
         lib.dBodyEnable(self._ball)
 
     # ------------------------------------------------------------------ stepping
