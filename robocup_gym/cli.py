@@ -93,7 +93,10 @@ if typer is not None:
         seed: Annotated[int | None, typer.Option(help="Random seed (default 0).")] = None,
         out: Annotated[Path, typer.Option(help="Parent folder of run folders.")] = Path("runs"),
         backend: Annotated[
-            str | None, typer.Option(help="Simulator: mujoco (embedded) or rcssserver3d.")
+            str | None,
+            typer.Option(
+                help="Simulator: mujoco (embedded), rcssserver3d, or ode (SimSpark's step on ODE)."
+            ),
         ] = None,
         config: Annotated[
             Path | None,

@@ -27,8 +27,9 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from robocup_gym.backends import available_backends
+
 ALGOS = ("ppo", "sac")
-BACKENDS = ("mujoco", "rcssserver3d")
 
 PPO_PAPER_DEFAULTS: dict[str, Any] = {
     "learning_rate": 1e-4,
@@ -121,9 +122,10 @@ class TrainConfig:
         self.algo = self.algo.lower()
         if self.algo not in ALGOS:
             raise ValueError(f"unknown algorithm {self.algo!r}; choose one of {', '.join(ALGOS)}")
-        if self.backend not in BACKENDS:
+        backends = available_backends()
+        if self.backend not in backends:
             raise ValueError(
-                f"unknown backend {self.backend!r}; choose one of {', '.join(BACKENDS)}"
+                f"unknown backend {self.backend!r}; choose one of {', '.join(backends)}"
             )
         if self.n_envs < 1:
             raise ValueError(f"n_envs must be >= 1, got {self.n_envs}")

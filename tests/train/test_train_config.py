@@ -51,12 +51,23 @@ def test_yaml_round_trip_and_merge(tmp_path):
     [
         ({"algo": "dqn"}, "unknown algorithm"),
         ({"n_envs": 0}, "n_envs"),
-        ({"backend": "gazebo"}, "unknown backend"),
+        (
+            {"backend": "gazebo"},
+            "unknown backend 'gazebo'; choose one of mujoco, rcssserver3d, ode",
+        ),
     ],
 )
 def test_invalid_config(kwargs, match):
     with pytest.raises(ValueError, match=match):
         TrainConfig(**kwargs)
+
+
+def test_every_registered_backend_is_a_valid_choice():
+    """The training config accepts exactly the backends the registry can build."""
+    from robocup_gym.backends import available_backends
+
+    for name in available_backends():
+        assert TrainConfig(backend=name).backend == name
 
 
 def test_unknown_config_key(tmp_path):
