@@ -97,6 +97,7 @@ class OdeBackend(Backend):
             joint_angles_deg=pose.joint_angles_deg,
         )
         w.place_ball(ball_pos, ball_vel)
+        w.sense_contacts()  # the first perception shows the feet loaded, as the world's does
         self._game = GameState(play_mode=play_mode, game_time=0.0)
         return self._perceive()
 

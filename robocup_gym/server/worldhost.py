@@ -175,7 +175,7 @@ class WorldHost:
             r.perception_counter = 0
             x, y, z = PRE_INIT_POS
             self._place_pre_init(j, x + 1.0 * k, y, z)
-        mujoco.mj_forward(m_new, d_new)
+        world.forward()
         self._refresh_maps()
         self.rebuilds += 1
 

@@ -747,8 +747,8 @@ class World:
                 self.place_robot(r.index, x=-x, y=y, heading_deg=180.0, forward=False)
             else:
                 self.place_robot(r.index, x=x, y=y, heading_deg=0.0, forward=False)
-        self.place_ball((0.0, 0.0))
-        mujoco.mj_forward(self.model, self.data)
+        self.place_ball((0.0, 0.0), forward=False)
+        self.forward()
 
     def _restore_run_time_parameters(self) -> None:
         """Undo the per-cycle parameter switches (motor relaxation at stops, ball bounce mode) and
@@ -784,7 +784,7 @@ class World:
                 an array in canonical order. ``None`` keeps the current angles.
             quat: Full torso orientation ``(w, x, y, z)`` instead of ``heading_deg``.
             forward: Recompute the derived quantities (contacts, sensors) now. Pass ``False``
-                when placing several robots in a row and call ``mujoco.mj_forward`` once at the
+                when placing several robots in a row and call :meth:`forward` once at the
                 end (robots still overlapping half-way would create thousands of contacts).
             asleep: Leave the robot asleep, as ODE's auto-disable leaves a resting robot that a
                 trainer ``move`` teleports (spec §7.1, §8.3; fixture README: the real robot then
@@ -829,7 +829,7 @@ class World:
             r.sleep_qpos = np.concatenate((d.qpos[a : a + 7], d.qpos[r.qpos_joints]))
         self._update_sleepers()
         if forward:
-            mujoco.mj_forward(self.model, d)
+            self.forward()
 
     def _update_sleepers(self) -> None:
         self._sleepers = [r for r in self.robots if r.asleep]
@@ -884,9 +884,12 @@ class World:
         pos: Sequence[float],
         vel: Sequence[float] = (0.0, 0.0, 0.0),
         angular_vel: Sequence[float] = (0.0, 0.0, 0.0),
+        *,
+        forward: bool = True,
     ) -> None:
         """Put the ball at ``pos`` (x, y[, z]; z defaults to resting on the ground) with linear
-        velocity ``vel`` (m/s) and angular velocity ``angular_vel`` (rad/s, world frame)."""
+        velocity ``vel`` (m/s) and angular velocity ``angular_vel`` (rad/s, world frame).
+        ``forward``: as in :meth:`place_robot`."""
         p = np.asarray(pos, float)
         if p.shape not in ((2,), (3,)) or not np.all(np.isfinite(p)):
             raise ValueError(f"ball position must be 2 or 3 finite numbers, got {pos!r}")
@@ -909,7 +912,24 @@ class World:
         self.data.qvel[b : b + 3] = v
         # free-joint angular velocity is in the body frame; the ball's frame is the world's here
         self.data.qvel[b + 3 : b + 6] = w
-        mujoco.mj_forward(self.model, self.data)
+        if forward:
+            self.forward()
+
+    def forward(self) -> None:
+        """Bring every derived quantity (body poses, contacts and their forces, sensors) up to
+        the current state without advancing it, with the contacts solved as a step solves them
+        (ODE's surface layer, :meth:`_surface_layer`): a robot just placed 1 mm deep reads its
+        weight on its feet (22.5 N each standing), as in every later cycle, where plain
+        ``mj_forward`` would push it out of the layer (24.8 N). Motors at rest need no shift."""
+        m, d = self.model, self._data
+        mujoco.mj_step1(m, d)
+        if d.ncon:
+            self._surface_layer()
+        mujoco.mj_fwdActuation(m, d)
+        mujoco.mj_fwdAcceleration(m, d)
+        mujoco.mj_fwdConstraint(m, d)
+        mujoco.mj_sensorAcc(m, d)
+        self._poses_stale = self._com_stale = False
 
     def set_game(
         self,

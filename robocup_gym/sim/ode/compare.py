@@ -303,9 +303,9 @@ class record_world:  # noqa: N801 (used as a context manager, like contextlib's 
             calls.append(("robot", (index, x, y, {k: v for k, v in kwargs.items() if k in keep})))
             return place_robot(index, x, y, **kwargs)
 
-        def recording_place_ball(pos, vel=(0.0, 0.0, 0.0), angular_vel=(0.0, 0.0, 0.0)):
+        def recording_place_ball(pos, vel=(0.0, 0.0, 0.0), angular_vel=(0.0, 0.0, 0.0), **kwargs):
             calls.append(("ball", (tuple(pos), tuple(vel))))
-            return place_ball(pos, vel, angular_vel)
+            return place_ball(pos, vel, angular_vel, **kwargs)
 
         w.step, w.place_robot, w.place_ball = (
             recording_step,

@@ -121,6 +121,8 @@ _SIGNATURES: dict[str, tuple] = {
     "dBodyGetPosition": (ctypes.POINTER(dReal), [dID]),
     "dBodyGetRotation": (ctypes.POINTER(dReal), [dID]),
     "dBodyGetLinearVel": (ctypes.POINTER(dReal), [dID]),
+    "dBodyGetQuaternion": (ctypes.POINTER(dReal), [dID]),
+    "dBodySetQuaternion": (None, [dID, Vec4]),
     "dBodyGetAngularVel": (ctypes.POINTER(dReal), [dID]),
     "dBodySetMass": (None, [dID, ctypes.POINTER(Mass)]),
     "dBodyAddForce": (None, [dID, dReal, dReal, dReal]),

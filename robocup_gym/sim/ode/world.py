@@ -393,7 +393,6 @@ class OdeWorld:
         """Advance one 20 ms cycle: realise due commands (target rad/s, clipped to the joint's
         max speed, ignored for a joint not strictly inside its limits, a non-zero one wakes the
         joint's child body), drag on every body, collisions, one ``dWorldStep(0.02)``."""
-        lib = self._lib
         commands = commands or {}
         arrays = [  # all validated before any is queued
             None if commands.get(i) is None else self._command_array(r, commands[i])
@@ -407,6 +406,38 @@ class OdeWorld:
                     self._realise(r, due)
         self._sense_accelerometers()
         self._apply_drag()
+        self._collide_and_step()
+        self.time += phys.CYCLE_S
+
+    def sense_contacts(self) -> None:
+        """Fill the force perceptors for the current state without advancing it: with the
+        contact forces ODE's next step would apply (what MuJoCo's ``mj_forward`` gives the
+        world at a placement), so that the perception of a freshly placed robot shows its feet
+        loaded, as every later one does. The state is put back exactly; nothing else changes
+        (ODE's big-matrix step keeps no warm start, and placing re-arms auto-disable)."""
+        lib = self._lib
+        bodies = [self._ball, *(b for r in self.robots for b in r.bodies)]
+        saved = [
+            (
+                self._vec(lib.dBodyGetPosition(b)),
+                ode.Vec4(*lib.dBodyGetQuaternion(b)[:4]),
+                self._vec(lib.dBodyGetLinearVel(b)),
+                self._vec(lib.dBodyGetAngularVel(b)),
+                lib.dBodyIsEnabled(b),
+            )
+            for b in bodies
+        ]
+        self._collide_and_step()
+        for b, (pos, quat, vel, ang, enabled) in zip(bodies, saved, strict=True):
+            lib.dBodySetPosition(b, *pos)
+            lib.dBodySetQuaternion(b, quat)
+            lib.dBodySetLinearVel(b, *vel)
+            lib.dBodySetAngularVel(b, *ang)
+            (lib.dBodyEnable if enabled else lib.dBodyDisable)(b)
+
+    def _collide_and_step(self) -> None:
+        """Contacts for the current poses, one ``dWorldStep(0.02)``, the force perceptors."""
+        lib = self._lib
         buf, contact = self._contact_buf, self._contact
         size = ctypes.sizeof(ode.ContactGeom)
         sensed = []  # (feedback slot, contact position, FRP of body 1, FRP of body 2)
@@ -425,7 +456,6 @@ class OdeWorld:
         lib.dWorldStep(self._world, phys.CYCLE_S)
         self._read_feedback(sensed)
         lib.dJointGroupEmpty(self._contacts)
-        self.time += phys.CYCLE_S
 
     def _sense_accelerometers(self) -> None:
         """Each torso's accelerometer, sampled as :class:`robocup_gym.sim.world.World` samples
