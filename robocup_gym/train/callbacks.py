@@ -173,7 +173,8 @@ class RichProgressCallback(BaseCallback):
     def _fields(self) -> dict[str, str]:
         s = self.stats.summary()
         return {
-            "sps": f"{self.stats.steps_per_s:,.0f}",
+            # the recent rate once a 2-s window has passed, the overall rate before
+            "sps": f"{self.stats.steps_per_s or self.stats.overall_steps_per_s():,.0f}",
             "rew": _fmt(s["return_mean"]),
             "dx": _fmt(s["ball_dx_mean"]),
             "eps": f"{self.stats.episodes:,}",

@@ -356,3 +356,32 @@ def test_ode_transfer_replays_a_trained_policy_on_the_reference(ppo_run):
     assert isinstance(ep["ode_replay_ball_dx_m"], float)
     assert isinstance(ep["ode_closed_loop_ball_dx_m"], float)
     assert res["ode_closed_loop_ball_dx_mean"] == ep["ode_closed_loop_ball_dx_m"]
+
+
+def test_progress_lines_report_the_rate_of_a_short_run(tmp_path):
+    """Without a terminal the progress is printed as lines; a run shorter than the 2-s rate
+    window reports its overall rate, not 0 steps/s."""
+    import re
+
+    out = tmp_path / "runs"
+    result = invoke(
+        [
+            "train",
+            "velocity-kick",
+            "--n-envs",
+            1,
+            "--timesteps",
+            256,
+            "--out",
+            out,
+            "--checkpoint-freq",
+            0,
+            "--eval-freq",
+            0,
+            *TINY_PPO,
+        ]
+    )
+    final = [line for line in result.stdout.splitlines() if "(100%)" in line]
+    assert final, result.stdout
+    rate = re.search(r"(\d[\d,]*) steps/s", final[-1])
+    assert rate and int(rate.group(1).replace(",", "")) > 0, final[-1]
