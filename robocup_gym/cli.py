@@ -138,6 +138,16 @@ if typer is not None:
         eval_freq: Annotated[
             int | None, typer.Option(help="Steps between evaluations (0 = none).")
         ] = None,
+        init_from: Annotated[
+            Path | None,
+            typer.Option(
+                "--init-from",
+                help="Start from this run's policy (e.g. fine-tune on --backend ode a kick "
+                "learnt on the embedded world).",
+                exists=True,
+                file_okay=False,
+            ),
+        ] = None,
         progress: Annotated[bool, typer.Option(help="Show the progress bar.")] = True,
     ) -> None:
         """Train a policy with Stable-Baselines3 (defaults: the paper's PPO setup).
@@ -151,8 +161,11 @@ if typer is not None:
         console = _console()
         try:
             if resume is not None:
-                if task is not None or config is not None:
-                    _fail("--resume continues a run with its own config; give no TASK/--config")
+                if task is not None or config is not None or init_from is not None:
+                    _fail(
+                        "--resume continues a run with its own config; "
+                        "give no TASK/--config/--init-from"
+                    )
                 result = run_training(
                     resume=resume, extra_timesteps=timesteps, console=console, progress=progress
                 )
@@ -175,6 +188,7 @@ if typer is not None:
                     eval_freq=eval_freq,
                     env_kwargs=env_kw,
                     algo_kwargs=algo_kw,
+                    init_from=None if init_from is None else str(init_from),
                 )
                 result = run_training(cfg, out=out, console=console, progress=progress)
         except (ValueError, FileNotFoundError) as exc:

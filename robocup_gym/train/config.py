@@ -94,6 +94,11 @@ class TrainConfig:
     """Keyword arguments for ``gymnasium.make`` (the task's config fields)."""
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
     """Hyperparameters passed to the SB3 algorithm (merged over the paper's defaults)."""
+    init_from: str = ""
+    """A run folder whose final policy (and observation statistics) this run starts from, e.g.
+    a policy learnt on the embedded world, fine-tuned here on ``backend="ode"``. The task's
+    observation and action spaces must match; this run's hyperparameters apply. Empty: start
+    from scratch."""
     normalize_obs: bool = False
     """Wrap in ``VecNormalize`` (observations only); off in the paper."""
     checkpoint_freq: int = 100_000

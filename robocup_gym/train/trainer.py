@@ -64,6 +64,29 @@ def prepare_run(
     return config, path
 
 
+def _start_from_run(model, init, cfg: TrainConfig) -> None:
+    """Give a fresh ``model`` the policy of run ``init`` (``TrainConfig.init_from``).
+
+    Raises:
+        ValueError: the runs' algorithms or observation/action spaces differ.
+    """
+    from robocup_gym.train.run import algo_class
+
+    if init.config.algo != cfg.algo:
+        raise ValueError(
+            f"init_from {init.path} was trained with {init.config.algo}, this run uses {cfg.algo}"
+        )
+    source = algo_class(cfg.algo).load(init.model_path, device=cfg.device)
+    for name in ("observation_space", "action_space"):
+        ours, theirs = getattr(model, name), getattr(source, name)
+        if ours.shape != theirs.shape:
+            raise ValueError(
+                f"init_from {init.path}: its {name.replace('_', ' ')} has shape {theirs.shape}, "
+                f"this run's {ours.shape} (the task and its options must match)"
+            )
+    model.set_parameters(str(init.model_path), exact_match=True, device=cfg.device)
+
+
 def train(
     config: TrainConfig | None = None,
     *,
@@ -135,11 +158,15 @@ def train(
             start_method=cfg.start_method,
             n_workers=cfg.n_workers,
         )
+        init = load_run(cfg.init_from) if start_from is None and cfg.init_from else None
         if cfg.normalize_obs:
             vn_path = path / "checkpoints" / "vecnormalize.pkl"
             if start_from is not None and (path / "vecnormalize.pkl").exists():
                 vn_path = path / "vecnormalize.pkl"
-            if start_from is not None and vn_path.exists():
+            if init is not None and init.vecnormalize_path() is not None:
+                venv = VecNormalize.load(str(init.vecnormalize_path()), venv)
+                venv.training = True
+            elif start_from is not None and vn_path.exists():
                 venv = VecNormalize.load(str(vn_path), venv)
                 venv.training = True
             else:
@@ -154,6 +181,8 @@ def train(
                 verbose=0,
                 **cfg.resolved_algo_kwargs(),
             )
+            if init is not None:
+                _start_from_run(model, init, cfg)
         else:
             model = cls.load(start_from, env=venv, device=cfg.device)
             rb = path / "checkpoints" / "replay_buffer.pkl"

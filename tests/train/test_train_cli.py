@@ -385,3 +385,34 @@ def test_progress_lines_report_the_rate_of_a_short_run(tmp_path):
     assert final, result.stdout
     rate = re.search(r"(\d[\d,]*) steps/s", final[-1])
     assert rate and int(rate.group(1).replace(",", "")) > 0, final[-1]
+
+
+def test_init_from_starts_a_new_run_from_a_trained_policy(ppo_run, tmp_path):
+    """``--init-from RUN``: a new run (here on another backend when libode is present) starts
+    from RUN's policy. With learning rate 0 the saved policy is RUN's exactly; a run whose
+    observation differs is refused, naming the mismatch."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from robocup_gym.sim.ode import available
+
+    backend = "ode" if available() else "mujoco"
+    out = tmp_path / "runs"
+    args = ["train", "velocity-kick", "--n-envs", 1, "--timesteps", 64, "--out", out]
+    args += ["--checkpoint-freq", 0, "--eval-freq", 0, "--no-progress", "--backend", backend]
+    invoke([*args, "--init-from", ppo_run, *TINY_PPO, "--hp", "learning_rate=0.0"])
+    (run,) = list(out.iterdir())
+    assert f"init_from: {ppo_run}" in (run / "config.yaml").read_text()
+    source = PPO.load(ppo_run / "model.zip").policy.state_dict()
+    tuned = PPO.load(run / "model.zip").policy.state_dict()
+    assert source.keys() == tuned.keys()
+    assert all(torch.equal(source[k], tuned[k]) for k in source)
+
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    stacked = [*args, "--init-from", str(ppo_run), *map(str, TINY_PPO), "--env", "frame_stack=2"]
+    bad = CliRunner().invoke(app, [str(a) for a in stacked])
+    assert bad.exit_code == 1
+    assert "observation space has shape" in bad.output
