@@ -145,6 +145,12 @@ def train(
         from robocup_gym.train.run import algo_class
         from robocup_gym.train.vecenv import make_vec_env
 
+        init = load_run(cfg.init_from) if start_from is None and cfg.init_from else None
+        if init is not None and (init.vecnormalize_path is not None) != cfg.normalize_obs:
+            raise ValueError(
+                f"init_from {init.path} was trained with normalize_obs="
+                f"{init.vecnormalize_path is not None}; this run must use the same"
+            )
         if cfg.torch_threads > 0:
             torch.set_num_threads(cfg.torch_threads)
         set_random_seed(cfg.seed)
@@ -158,13 +164,12 @@ def train(
             start_method=cfg.start_method,
             n_workers=cfg.n_workers,
         )
-        init = load_run(cfg.init_from) if start_from is None and cfg.init_from else None
         if cfg.normalize_obs:
             vn_path = path / "checkpoints" / "vecnormalize.pkl"
             if start_from is not None and (path / "vecnormalize.pkl").exists():
                 vn_path = path / "vecnormalize.pkl"
-            if init is not None and init.vecnormalize_path() is not None:
-                venv = VecNormalize.load(str(init.vecnormalize_path()), venv)
+            if init is not None and init.vecnormalize_path is not None:
+                venv = VecNormalize.load(str(init.vecnormalize_path), venv)
                 venv.training = True
             elif start_from is not None and vn_path.exists():
                 venv = VecNormalize.load(str(vn_path), venv)
@@ -182,7 +187,11 @@ def train(
                 **cfg.resolved_algo_kwargs(),
             )
             if init is not None:
-                _start_from_run(model, init, cfg)
+                try:
+                    _start_from_run(model, init, cfg)
+                except ValueError:
+                    venv.close()  # the environment workers go with the refused run
+                    raise
         else:
             model = cls.load(start_from, env=venv, device=cfg.device)
             rb = path / "checkpoints" / "replay_buffer.pkl"

@@ -416,3 +416,29 @@ def test_init_from_starts_a_new_run_from_a_trained_policy(ppo_run, tmp_path):
     bad = CliRunner().invoke(app, [str(a) for a in stacked])
     assert bad.exit_code == 1
     assert "observation space has shape" in bad.output
+    cfg = tmp_path / "norm.yaml"
+    cfg.write_text("task: velocity-kick\nnormalize_obs: true\n")
+    normalised = ["train", "--config", cfg, *args[2:], "--init-from", ppo_run, *TINY_PPO]
+    bad = CliRunner().invoke(app, [str(a) for a in normalised])
+    assert bad.exit_code == 1 and "normalize_obs" in bad.output
+
+
+def test_init_from_carries_the_observation_statistics(tmp_path):
+    """A run with ``normalize_obs`` passes its running observation statistics on: the new run
+    continues them (its count starts at the source's)."""
+    import pickle
+
+    cfg = tmp_path / "norm.yaml"
+    cfg.write_text("task: velocity-kick\nn_envs: 1\nnormalize_obs: true\n")
+    base = ["train", "--config", cfg, "--timesteps", 128, "--checkpoint-freq", 0]
+    base += ["--eval-freq", 0, "--no-progress", *TINY_PPO]
+    invoke([*base, "--out", tmp_path / "a"])
+    (source,) = list((tmp_path / "a").iterdir())
+    invoke([*base, "--out", tmp_path / "b", "--init-from", source])
+    (tuned,) = list((tmp_path / "b").iterdir())
+
+    def count(run):
+        with open(run / "vecnormalize.pkl", "rb") as f:
+            return pickle.load(f).obs_rms.count
+
+    assert count(tuned) > count(source) > 100
