@@ -166,14 +166,35 @@ def build(path: Path | None = None) -> Path:
     return path
 
 
-@cache
 def load() -> ctypes.CDLL:
     """Build (if needed) and load the compiled step, checked against the installed MuJoCo and
-    the :class:`WorldStruct` layout.
+    the :class:`WorldStruct` layout. Done once per process: the library, or the reason it is
+    unavailable, is remembered (:func:`forget` starts over), so that a machine without a
+    compiler does not try again for every world.
 
     Raises:
         CompiledStepUnavailableError: it cannot be built or does not match.
     """
+    result = _load_once()
+    if isinstance(result, CompiledStepUnavailableError):
+        raise CompiledStepUnavailableError(str(result))
+    return result
+
+
+def forget() -> None:
+    """Forget the loaded library or the failure (the next :func:`load` tries again)."""
+    _load_once.cache_clear()
+
+
+@cache
+def _load_once() -> ctypes.CDLL | CompiledStepUnavailableError:
+    try:
+        return _load()
+    except CompiledStepUnavailableError as exc:
+        return exc
+
+
+def _load() -> ctypes.CDLL:
     path = build()
     try:
         lib = ctypes.CDLL(str(path))

@@ -189,9 +189,9 @@ def no_compiler(monkeypatch, tmp_path):
     monkeypatch.setenv("ROBOCUP_GYM_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
     monkeypatch.delenv("ROBOCUP_GYM_COMPILED", raising=False)
-    compiled.load.cache_clear()
+    compiled.forget()
     yield tmp_path
-    compiled.load.cache_clear()
+    compiled.forget()
 
 
 def test_without_a_compiler_the_world_falls_back(no_compiler):
@@ -213,6 +213,23 @@ def test_an_unwritable_cache_falls_back(no_compiler, monkeypatch):
     monkeypatch.setenv("ROBOCUP_GYM_CACHE", str(blocker / "cache"))
     w = World([0])
     assert w.stepper == "numpy" and "ROBOCUP_GYM_CACHE" in w.compiled_unavailable
+
+
+def test_a_failure_is_remembered(no_compiler, monkeypatch):
+    """A process that could not build the step does not try again for every world (a machine
+    without a compiler would otherwise pay for the attempt at each one); ``forget`` retries."""
+    calls = []
+    real_build = compiled.build
+
+    def counting_build(*args, **kwargs):
+        calls.append(1)
+        return real_build(*args, **kwargs)
+
+    monkeypatch.setattr(compiled, "build", counting_build)
+    assert [World([0]).stepper for _ in range(3)] == ["numpy"] * 3
+    assert len(calls) == 1
+    compiled.forget()
+    assert not compiled.available() and len(calls) == 2
 
 
 def test_a_failed_compilation_says_why(no_compiler, monkeypatch):
