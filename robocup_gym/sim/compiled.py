@@ -118,22 +118,23 @@ def _compiler() -> list[str]:
     return shlex.split(os.environ.get("CC") or "cc")
 
 
-def library_path() -> Path:
-    """The cached library's path for this source, MuJoCo version, compiler and flags."""
+def library_path(source: Path = SOURCE) -> Path:
+    """The cached library's path for ``source``, the MuJoCo version, compiler and flags."""
     key = hashlib.sha256()
-    key.update(SOURCE.read_bytes())
+    key.update(source.read_bytes())
     key.update(" ".join([mujoco.__version__, *_compiler(), *CFLAGS]).encode())
-    return cache_dir() / f"cstep-mujoco{mujoco.__version__}-{key.hexdigest()[:16]}.so"
+    return cache_dir() / f"{source.stem}-mujoco{mujoco.__version__}-{key.hexdigest()[:16]}.so"
 
 
-def build(path: Path | None = None) -> Path:
-    """Compile ``cstep.c`` into ``path`` (default :func:`library_path`) unless it is there.
-    Safe when several processes build at once (each writes a temporary file and renames it).
+def build(path: Path | None = None, source: Path = SOURCE) -> Path:
+    """Compile ``source`` (default ``cstep.c``) into ``path`` (default :func:`library_path`)
+    unless it is there. Safe when several processes build at once (each writes a temporary file
+    and renames it).
 
     Raises:
         CompiledStepUnavailableError: no compiler, or the compilation failed (with its output).
     """
-    path = Path(path) if path is not None else library_path()
+    path = Path(path) if path is not None else library_path(source)
     if path.exists():
         return path
     include = Path(mujoco.__file__).with_name("include")
@@ -148,7 +149,7 @@ def build(path: Path | None = None) -> Path:
             "to a writable folder"
         ) from exc
     os.close(fd)
-    cmd = [*_compiler(), *CFLAGS, "-I", str(include), str(SOURCE), "-o", tmp, "-lm"]
+    cmd = [*_compiler(), *CFLAGS, "-I", str(include), str(source), "-o", tmp, "-lm"]
     try:
         result = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     except (OSError, subprocess.TimeoutExpired) as exc:
@@ -160,7 +161,7 @@ def build(path: Path | None = None) -> Path:
     if result.returncode != 0:
         os.unlink(tmp)
         raise CompiledStepUnavailableError(
-            f"compiling {SOURCE.name} failed ({shlex.join(cmd)}):\n{result.stderr[-2000:]}"
+            f"compiling {source.name} failed ({shlex.join(cmd)}):\n{result.stderr[-2000:]}"
         )
     os.replace(tmp, path)
     return path

@@ -238,3 +238,70 @@ def test_a_recorded_episode_replays_exactly_on_a_fresh_world():
         ref = OdeWorld([0])
         replay_recording(rec, ref)
         assert np.all(np.isfinite(ref.ball_position())) and ref.torso_position(0)[2] > 0.0
+
+
+def _flail_reference(compiled, types, cycles=400):
+    """Random over-speed flailing (partial commands, re-placements, a bouncing ball) on an
+    ODE world whose robots start asleep (the first command wakes them); per cycle its joints,
+    torso, ball, accelerometer and foot sensors."""
+    from robocup_gym.sim.ode import OdeWorld
+
+    w = OdeWorld(list(types), compiled=compiled)
+    for i in range(len(types)):
+        w.place_robot(i, -1.0 - i, 0.5 * i, z=0.39, asleep=True)
+    w.place_ball((-0.8, -0.055, 0.3), vel=(0.5, 0.0, -1.0))
+    rng = np.random.default_rng(0)
+    out = []
+    for c in range(cycles):
+        if c < 5:  # asleep and held above the ground until the commands begin
+            w.step()
+            assert w.asleep(0)
+            continue
+        cmds = {
+            i: rng.uniform(-1.5, 1.5, len(r.model.max_speeds)) * r.model.max_speeds
+            for i, r in enumerate(w.robots)
+        }
+        if c % 7 == 3:
+            cmds[0] = {"rle3": 3.0, "lae1": -9.0}
+        w.step(cmds)
+        if c % 60 == 59:
+            w.place_robot(0, -1.0, 0.0)
+        frp = [np.r_[f.force, f.point] for _, f in sorted(w.force_sensors(0).items())]
+        state = [w.joint_angles_deg(0), w.torso_position(0), w.ball_position(), w.accelerometer(0)]
+        out.append(np.concatenate(state + frp))
+    return w, out
+
+
+@needs_ode
+@pytest.mark.parametrize("types", [(0,), (4, 1)])
+def test_compiled_reference_loops_are_bit_equal(types):
+    """The ODE world's loops in C (drag, commands, contacts: robocup_gym/sim/ode/ode_step.c)
+    give exactly what the Python loops give."""
+    from robocup_gym.sim import compiled
+
+    if not compiled.available():
+        pytest.skip("no C compiler here (apt-get install gcc, or set CC)")
+    wp, python = _flail_reference(False, types)
+    wc, fast = _flail_reference(True, types)
+    assert (wp.stepper, wc.stepper) == ("python", "compiled")
+    assert len(python) == len(fast)
+    for c, (a, b) in enumerate(zip(python, fast, strict=True)):
+        assert np.array_equal(a, b), f"first difference in cycle {c}"
+
+
+@needs_ode
+def test_reference_without_a_compiler_runs_its_python_loops(monkeypatch, tmp_path):
+    from robocup_gym.sim import compiled
+    from robocup_gym.sim.ode import OdeWorld, fast
+
+    monkeypatch.setenv("ROBOCUP_GYM_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
+    fast.forget()
+    try:
+        w = OdeWorld([0])
+        assert w.stepper == "python" and "no-such-cc" in w.compiled_unavailable
+        w.step({0: {"lle3": 1.0}})
+        with pytest.raises(compiled.CompiledStepUnavailableError, match="no-such-cc"):
+            OdeWorld([0], compiled=True)
+    finally:
+        fast.forget()

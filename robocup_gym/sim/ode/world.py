@@ -37,8 +37,11 @@ import mujoco
 import numpy as np
 
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.ode import lib as ode
+from robocup_gym.sim.ode.fast import FastLoops
+from robocup_gym.sim.ode.fast import load as load_fast
 from robocup_gym.sim.scene import FRP_GEOMS
 from robocup_gym.sim.world import heading_to_quat, joint_angles_array, joint_index
 from robocup_gym.types import ForceResistance
@@ -172,12 +175,21 @@ class OdeWorld:
         robot_types: One entry per robot (types 0–4).
         dead_time_cycles: Cycles between a command given to :meth:`step` and the step it first
             acts in, as :class:`robocup_gym.sim.world.World` (1 = SimSpark's sync-mode latency).
+        compiled: Run the per-cycle loops in C (:mod:`robocup_gym.sim.ode.fast`, bit-equal,
+            twice as fast), as :class:`~robocup_gym.sim.world.World`'s argument of that name:
+            ``None`` = ``ROBOCUP_GYM_COMPILED``, else whenever it can be built.
 
     Raises:
         robocup_gym.sim.ode.lib.OdeUnavailableError: when ``libode`` is missing.
     """
 
-    def __init__(self, robot_types: Sequence[int] = (0,), *, dead_time_cycles: int = 1) -> None:
+    def __init__(
+        self,
+        robot_types: Sequence[int] = (0,),
+        *,
+        dead_time_cycles: int = 1,
+        compiled: bool | None = None,
+    ) -> None:
         self._lib = lib = ode.load()
         self.dead_time_cycles = int(dead_time_cycles)
         self.time = 0.0
@@ -202,6 +214,7 @@ class OdeWorld:
         n_sensed = sum(1 for p in self._pairs if p[5] or p[6])
         self._feedback = (ode.JointFeedback * (MAX_CONTACTS * max(n_sensed, 1)))()
         """Contact feedback slots for the contacts of foot/toe geoms (SimSpark's ``FRP``)."""
+        self._fast = self._init_fast(compiled_step.wanted() if compiled is None else compiled)
         self.place_ball((0.0, 0.0))
         for i in range(len(self.robots)):
             self.place_robot(i, -1.0 - 1.0 * i, 0.0)
@@ -286,6 +299,39 @@ class OdeWorld:
             (g1, g2, body(g1), body(g2), s, sensor.get(body(g1)), sensor.get(body(g2)))
             for g1, g2, s in pairs
         ]
+
+    def _init_fast(self, mode: bool | None) -> FastLoops | None:
+        """The compiled loops when ``mode`` is ``True`` (must work) or ``None`` (if they can
+        be built); :attr:`stepper` says which run, :attr:`compiled_unavailable` why not."""
+        self.compiled_unavailable: str | None = None
+        if mode is False:
+            return None
+        try:
+            load_fast()
+        except compiled_step.CompiledStepUnavailableError as exc:
+            if mode:
+                raise
+            self.compiled_unavailable = str(exc)
+            return None
+        lin, ang = phys.BODY_LINEAR_DRAG, phys.BODY_ANGULAR_DRAG
+        bodies = [(b, (lin, ang)) for r in self.robots for b in r.bodies]
+        bodies.append((self._ball, (phys.BALL_LINEAR_DRAG, phys.BALL_ANGULAR_DRAG)))
+        robots = [(r.joints, r.child_body, r.limits, r.model.max_speeds) for r in self.robots]
+        return FastLoops(
+            self._lib,
+            bodies,
+            robots,
+            self._world,
+            self._contacts,
+            self._pairs,
+            self._feedback,
+            MAX_CONTACTS,
+        )
+
+    @property
+    def stepper(self) -> str:
+        """Which implementation runs the per-cycle loops: ``"compiled"`` or ``"python"``."""
+        return "compiled" if self._fast is not None else "python"
 
     # ------------------------------------------------------------------ placement
     def place_robot(
@@ -402,10 +448,17 @@ class OdeWorld:
             r.pending.append(cmd)
             if len(r.pending) > self.dead_time_cycles:
                 due = r.pending.pop(0)
-                if due is not None:
+                if due is None:
+                    pass
+                elif self._fast is not None:
+                    self._fast.realise(self.robots.index(r), due)
+                else:
                     self._realise(r, due)
         self._sense_accelerometers()
-        self._apply_drag()
+        if self._fast is not None:
+            self._fast.drag()
+        else:
+            self._apply_drag()
         self._collide_and_step()
         self.time += phys.CYCLE_S
 
@@ -438,9 +491,18 @@ class OdeWorld:
     def _collide_and_step(self) -> None:
         """Contacts for the current poses, one ``dWorldStep(0.02)``, the force perceptors."""
         lib = self._lib
+        sensed = self._fast.collide() if self._fast is not None else self._collide()
+        lib.dWorldStep(self._world, phys.CYCLE_S)
+        self._read_feedback(sensed)
+        lib.dJointGroupEmpty(self._contacts)
+
+    def _collide(self) -> list:
+        """Contact joints for the current poses; returns the contacts of foot/toe geoms as
+        ``(feedback slot, contact position, FRP of body 1, FRP of body 2)``."""
+        lib = self._lib
         buf, contact = self._contact_buf, self._contact
         size = ctypes.sizeof(ode.ContactGeom)
-        sensed = []  # (feedback slot, contact position, FRP of body 1, FRP of body 2)
+        sensed = []
         for g1, g2, b1, b2, surface, frp1, frp2 in self._pairs:
             n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
             if n:
@@ -453,9 +515,7 @@ class OdeWorld:
                         slot = self._feedback[len(sensed)]
                         lib.dJointSetFeedback(joint, slot)
                         sensed.append((slot, np.array(buf[k].pos[:3]), frp1, frp2))
-        lib.dWorldStep(self._world, phys.CYCLE_S)
-        self._read_feedback(sensed)
-        lib.dJointGroupEmpty(self._contacts)
+        return sensed
 
     def _sense_accelerometers(self) -> None:
         """Each torso's accelerometer, sampled as :class:`robocup_gym.sim.world.World` samples

@@ -1,0 +1,175 @@
+"""The ODE world's per-cycle loops in C (``ode_step.c``): drag, commands, contact generation.
+
+In Python they make ~200 ctypes calls a cycle, which take as long as ODE's own ``dWorldStep``.
+``ode_step.c`` makes the same ODE calls, with the same arguments in the same order, through
+the function pointers of the ctypes binding (:mod:`robocup_gym.sim.ode.lib`), so it needs
+neither ODE's headers nor linking, and the results are bit-equal. It is built like the MuJoCo
+world's compiled step (:mod:`robocup_gym.sim.compiled`: system C compiler, cached, the same
+``ROBOCUP_GYM_COMPILED`` switch); where it cannot be built, :class:`OdeWorld
+<robocup_gym.sim.ode.world.OdeWorld>` runs the Python loops.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from robocup_gym.sim import compiled
+from robocup_gym.sim.ode import lib as ode
+
+SOURCE = Path(__file__).with_name("ode_step.c")
+FUNCTIONS = (
+    "dCollide",
+    "dJointCreateContact",
+    "dJointAttach",
+    "dJointSetFeedback",
+    "dBodyGetLinearVel",
+    "dBodyGetAngularVel",
+    "dBodyAddForce",
+    "dBodyAddTorque",
+    "dJointGetHingeAngle",
+    "dJointSetHingeParam",
+    "dBodyEnable",
+)
+"""The ODE functions ``ode_step.c`` calls, in the order of its ``ode_fns`` struct."""
+
+_p = ctypes.c_void_p
+
+
+class OdeFunctions(ctypes.Structure):
+    """``ode_fns``: pointers to the ODE functions, taken from the ctypes binding."""
+
+    _fields_ = [(name, _p) for name in FUNCTIONS]
+
+
+@cache
+def _load_once() -> ctypes.CDLL | compiled.CompiledStepUnavailableError:
+    try:
+        path = compiled.build(source=SOURCE)
+        lib = ctypes.CDLL(str(path))
+    except compiled.CompiledStepUnavailableError as exc:
+        return exc
+    except OSError as exc:
+        return compiled.CompiledStepUnavailableError(f"cannot load the ODE helper: {exc}")
+    lib.ode_sizeof_contact.restype = ctypes.c_int
+    if lib.ode_sizeof_contact() != ctypes.sizeof(ode.Contact):
+        return compiled.CompiledStepUnavailableError(
+            "ode_step.c's dContact and lib.py's Contact differ in size"
+        )
+    lib.ode_drag.argtypes = [_p, ctypes.c_int, _p, _p]
+    lib.ode_drag.restype = None
+    lib.ode_realise.argtypes = [_p, ctypes.c_int, _p, _p, _p, _p, _p, ctypes.c_int]
+    lib.ode_realise.restype = None
+    lib.ode_collide.argtypes = [_p, _p, _p, ctypes.c_int, _p, _p, _p, ctypes.c_int, _p, _p]
+    lib.ode_collide.argtypes += [_p, _p]
+    lib.ode_collide.restype = ctypes.c_int
+    return lib
+
+
+def forget() -> None:
+    """Forget the loaded helper or the failure (the next :func:`load` tries again)."""
+    _load_once.cache_clear()
+
+
+def load() -> ctypes.CDLL:
+    """The compiled helper (built once per process; a failure is remembered too).
+
+    Raises:
+        robocup_gym.sim.compiled.CompiledStepUnavailableError: it cannot be built or loaded.
+    """
+    result = _load_once()
+    if isinstance(result, compiled.CompiledStepUnavailableError):
+        raise compiled.CompiledStepUnavailableError(str(result))
+    return result
+
+
+def _address(array: np.ndarray) -> int:
+    return compiled.address(array)
+
+
+class FastLoops:
+    """The C loops bound to one :class:`~robocup_gym.sim.ode.world.OdeWorld`'s handles.
+
+    Args:
+        ode_lib: The world's ctypes ODE binding (its function pointers are passed to C).
+        bodies: Every body that feels drag, with its ``(linear, angular)`` drag coefficients.
+        robots: Per robot ``(joint handles, child body handles, (n, 2) limits rad, max speeds
+            rad/s)``.
+        world, group: The ODE world and its contact joint group.
+        pairs: The world's collision pairs ``(g1, g2, b1, b2, surface, frp1, frp2)``.
+        feedback: The world's ``dJointFeedback`` slots (one per sensed contact).
+        max_contacts: Contacts per pair.
+    """
+
+    def __init__(self, ode_lib, bodies, robots, world, group, pairs, feedback, max_contacts):
+        self._lib = load()
+        self._fns = OdeFunctions(
+            *[ctypes.cast(getattr(ode_lib, name), _p).value for name in FUNCTIONS]
+        )
+        fns = ctypes.addressof(self._fns)
+        n_bodies = len(bodies)
+        self._bodies = (_p * n_bodies)(*[b for b, _ in bodies])
+        self._coef = np.ascontiguousarray([c for _, c in bodies], dtype=float)
+        self._drag_args = (fns, n_bodies, ctypes.addressof(self._bodies), _address(self._coef))
+        self._robots = []
+        for joints, child, limits, vmax in robots:
+            j = (_p * len(joints))(*joints)
+            c = (_p * len(child))(*child)
+            lim = np.ascontiguousarray(limits, dtype=float)
+            vm = np.ascontiguousarray(vmax, dtype=float)
+            self._robots.append((len(joints), j, c, lim, vm))
+        n = len(pairs)
+        self._pairs = (_p * (4 * n))(*[h for pair in pairs for h in pair[:4]])
+        self._surfaces = (ode.SurfaceParameters * n)(*[pair[4] for pair in pairs])
+        self._sensed = np.array([int(bool(p[5] or p[6])) for p in pairs], dtype=np.int32)
+        self._frp = [(p[5], p[6]) for p in pairs]
+        self._buf = (ode.ContactGeom * max_contacts)()
+        self._feedback = feedback
+        slots = len(feedback)
+        self._out_pair = np.zeros(slots, dtype=np.int32)
+        self._out_pos = np.zeros((slots, 3))
+        self._collide_args = (
+            fns,
+            world,
+            group,
+            n,
+            ctypes.addressof(self._pairs),
+            ctypes.addressof(self._surfaces),
+            _address(self._sensed),
+            max_contacts,
+            ctypes.addressof(self._buf),
+            ctypes.addressof(feedback),
+            _address(self._out_pair),
+            _address(self._out_pos),
+        )
+
+    def drag(self) -> None:
+        """Drag on every body (``OdeWorld._apply_drag``)."""
+        self._lib.ode_drag(*self._drag_args)
+
+    def realise(self, robot: int, targets: np.ndarray) -> None:
+        """Robot ``robot``'s due targets, rad/s, NaN = none (``OdeWorld._realise``)."""
+        n, joints, child, limits, vmax = self._robots[robot]
+        targets = np.ascontiguousarray(targets, dtype=float)
+        self._lib.ode_realise(
+            ctypes.addressof(self._fns),
+            n,
+            ctypes.addressof(joints),
+            ctypes.addressof(child),
+            _address(targets),
+            _address(limits),
+            _address(vmax),
+            ode.PARAM_VEL,
+        )
+
+    def collide(self) -> list:
+        """Contact joints for this step; returns the sensed contacts as ``OdeWorld`` lists
+        them: ``(feedback slot, position, FRP of body 1, FRP of body 2)``."""
+        m = self._lib.ode_collide(*self._collide_args)
+        return [
+            (self._feedback[i], self._out_pos[i].copy(), *self._frp[self._out_pair[i]])
+            for i in range(m)
+        ]

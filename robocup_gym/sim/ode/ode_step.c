@@ -1,0 +1,112 @@
+/* The Python-side loops of robocup_gym.sim.ode.world.OdeWorld.step in C: drag on every body,
+ * the hinge effector's rules for a command, and contact generation. They make ~200 ctypes
+ * calls a cycle in Python, as long as ODE's own dWorldStep.
+ *
+ * ODE is called through the function pointers Python's ctypes binding already holds
+ * (robocup_gym/sim/ode/lib.py), so this file needs neither ODE's headers nor linking. The
+ * structs mirror the ctypes ones in lib.py (ODE 0.16, double precision). Every call is made
+ * with the same arguments in the same order as the Python it replaces, so the results are
+ * bit-equal (tests/sim/test_ode_reference.py). Compiled by robocup_gym/sim/compiled.py.
+ */
+#include <math.h>
+
+typedef double dReal;
+typedef void* dID;
+
+typedef struct {
+  int mode;
+  dReal mu, mu2, rho, rho2, rhoN, bounce, bounce_vel, soft_erp, soft_cfm;
+  dReal motion1, motion2, motionN, slip1, slip2;
+} dSurfaceParameters;
+
+typedef struct {
+  dReal pos[4];
+  dReal normal[4];
+  dReal depth;
+  dID g1, g2;
+  int side1, side2;
+} dContactGeom;
+
+typedef struct {
+  dSurfaceParameters surface;
+  dContactGeom geom;
+  dReal fdir1[4];
+} dContact;
+
+typedef struct {
+  dReal f1[4], t1[4], f2[4], t2[4];
+} dJointFeedback;
+
+typedef struct {
+  int (*dCollide)(dID, dID, int, dContactGeom*, int);
+  dID (*dJointCreateContact)(dID, dID, const dContact*);
+  void (*dJointAttach)(dID, dID, dID);
+  void (*dJointSetFeedback)(dID, dJointFeedback*);
+  const dReal* (*dBodyGetLinearVel)(dID);
+  const dReal* (*dBodyGetAngularVel)(dID);
+  void (*dBodyAddForce)(dID, dReal, dReal, dReal);
+  void (*dBodyAddTorque)(dID, dReal, dReal, dReal);
+  dReal (*dJointGetHingeAngle)(dID);
+  void (*dJointSetHingeParam)(dID, int, dReal);
+  void (*dBodyEnable)(dID);
+} ode_fns;
+
+int ode_sizeof_contact(void) { return (int)sizeof(dContact); }
+
+/* Drag F = -lin v, torque -ang w on each body; coef holds (lin, ang) per body. */
+void ode_drag(const ode_fns* f, int n, dID* bodies, const double* coef) {
+  for (int i = 0; i < n; i++) {
+    dID b = bodies[i];
+    const dReal* v = f->dBodyGetLinearVel(b);
+    const dReal* w = f->dBodyGetAngularVel(b);
+    double lin = coef[2 * i], ang = coef[2 * i + 1];
+    f->dBodyAddForce(b, -lin * v[0], -lin * v[1], -lin * v[2]);
+    f->dBodyAddTorque(b, -ang * w[0], -ang * w[1], -ang * w[2]);
+  }
+}
+
+/* SimSpark's hinge effector for one robot's targets (rad/s, NaN = no command): a joint not
+ * strictly inside its limits keeps its target; the target is clipped to the joint's max speed;
+ * a non-zero one wakes the joint's child body. */
+void ode_realise(const ode_fns* f, int n, dID* joints, dID* child, const double* targets,
+                 const double* limits, const double* vmax, int param_vel) {
+  for (int k = 0; k < n; k++) {
+    double v = targets[k];
+    if (isnan(v)) continue;
+    double angle = f->dJointGetHingeAngle(joints[k]);
+    if (!(limits[2 * k] < angle && angle < limits[2 * k + 1])) continue;
+    v = v >= -vmax[k] ? v : -vmax[k];
+    v = v <= vmax[k] ? v : vmax[k];
+    f->dJointSetHingeParam(joints[k], param_vel, v);
+    if (v != 0.0) f->dBodyEnable(child[k]);
+  }
+}
+
+/* Contact joints for every pair (g1, g2, body1, body2 in pairs[4p..4p+3], the mixed surface in
+ * surfaces[p]); contacts of pairs with sensed[p] get a feedback slot, and their pair index and
+ * position are written out. Returns the number of sensed contacts. */
+int ode_collide(const ode_fns* f, dID world, dID group, int npairs, dID* pairs,
+                const dSurfaceParameters* surfaces, const int* sensed, int max_contacts,
+                dContactGeom* buf, dJointFeedback* feedback, int* out_pair, double* out_pos) {
+  dContact contact;
+  for (int j = 0; j < 4; j++) contact.fdir1[j] = 0.0;
+  int m = 0;
+  for (int p = 0; p < npairs; p++) {
+    int n = f->dCollide(pairs[4 * p], pairs[4 * p + 1], max_contacts, buf,
+                        (int)sizeof(dContactGeom));
+    if (!n) continue;
+    contact.surface = surfaces[p];
+    for (int k = 0; k < n; k++) {
+      contact.geom = buf[k];
+      dID joint = f->dJointCreateContact(world, group, &contact);
+      f->dJointAttach(joint, pairs[4 * p + 2], pairs[4 * p + 3]);
+      if (sensed[p]) {
+        f->dJointSetFeedback(joint, feedback + m);
+        out_pair[m] = p;
+        for (int j = 0; j < 3; j++) out_pos[3 * m + j] = buf[k].pos[j];
+        m++;
+      }
+    }
+  }
+  return m;
+}
