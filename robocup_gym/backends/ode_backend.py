@@ -5,7 +5,7 @@ The embedded MuJoCo world is the fast simulator (~4× the environment steps per 
 twice as fast end to end). This backend answers whether what was learnt there works under
 ODE's own solver, contacts, joint stops and motor rules: ``robocup-gym eval RUN --backend ode``
 evaluates a trained policy here. It is also a training backend for policies that must work on
-rcssserver3d (``robocup-gym train TASK --backend ode``: 1M PPO steps in ~16 min on 2 cores),
+rcssserver3d (``robocup-gym train TASK --backend ode``: 1M PPO steps in ~13 min on 2 cores),
 since session 9 found that learnt kicks do not yet carry over between the two engines
 (docs/training.md). It needs the system library ``libode`` (Debian/Ubuntu: ``apt-get install
 libode8``).
