@@ -444,15 +444,13 @@ class OdeWorld:
             None if commands.get(i) is None else self._command_array(r, commands[i])
             for i, r in enumerate(self.robots)
         ]
-        for r, cmd in zip(self.robots, arrays, strict=True):
+        for i, (r, cmd) in enumerate(zip(self.robots, arrays, strict=True)):
             r.pending.append(cmd)
             if len(r.pending) > self.dead_time_cycles:
                 due = r.pending.pop(0)
-                if due is None:
-                    pass
-                elif self._fast is not None:
-                    self._fast.realise(self.robots.index(r), due)
-                else:
+                if due is not None and self._fast is not None:
+                    self._fast.realise(i, due)
+                elif due is not None:
                     self._realise(r, due)
         self._sense_accelerometers()
         if self._fast is not None:
