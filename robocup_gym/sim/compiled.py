@@ -26,6 +26,7 @@ import os
 import shlex
 import subprocess
 import tempfile
+from collections.abc import Callable
 from functools import cache
 from pathlib import Path
 
@@ -167,57 +168,70 @@ def build(path: Path | None = None, source: Path = SOURCE) -> Path:
     return path
 
 
-def load() -> ctypes.CDLL:
-    """Build (if needed) and load the compiled step, checked against the installed MuJoCo and
-    the :class:`WorldStruct` layout. Done once per process: the library, or the reason it is
-    unavailable, is remembered (:func:`forget` starts over), so that a machine without a
-    compiler does not try again for every world.
+def load_library(source: Path, configure: Callable[[ctypes.CDLL], None]) -> ctypes.CDLL:
+    """Build (if needed) and load the library of ``source``, then ``configure`` it (declare
+    its signatures, check it; it raises :class:`CompiledStepUnavailableError` on a mismatch).
+    Done once per process and source: the library, or the reason it is unavailable, is
+    remembered (:func:`forget` starts over), so that a machine without a compiler does not try
+    again for every world.
 
     Raises:
-        CompiledStepUnavailableError: it cannot be built or does not match.
+        CompiledStepUnavailableError: it cannot be built, loaded or configured.
     """
-    result = _load_once()
+    result = _load_once(source, configure)
     if isinstance(result, CompiledStepUnavailableError):
         raise CompiledStepUnavailableError(str(result))
     return result
 
 
 def forget() -> None:
-    """Forget the loaded library or the failure (the next :func:`load` tries again)."""
+    """Forget every loaded library and failure (the next load tries again)."""
     _load_once.cache_clear()
 
 
 @cache
-def _load_once() -> ctypes.CDLL | CompiledStepUnavailableError:
+def _load_once(
+    source: Path, configure: Callable[[ctypes.CDLL], None]
+) -> ctypes.CDLL | CompiledStepUnavailableError:
     try:
-        return _load()
+        path = build(source=source)
+        try:
+            lib = ctypes.CDLL(str(path))
+        except OSError as exc:
+            raise CompiledStepUnavailableError(f"cannot load {path}: {exc}") from exc
+        configure(lib)
     except CompiledStepUnavailableError as exc:
         return exc
+    return lib
 
 
-def _load() -> ctypes.CDLL:
-    path = build()
-    try:
-        lib = ctypes.CDLL(str(path))
-    except OSError as exc:
-        raise CompiledStepUnavailableError(f"cannot load {path}: {exc}") from exc
+def load() -> ctypes.CDLL:
+    """The world's compiled step (:func:`load_library` of ``cstep.c``), checked against the
+    installed MuJoCo and the :class:`WorldStruct` layout.
+
+    Raises:
+        CompiledStepUnavailableError: it cannot be built or does not match.
+    """
+    return load_library(SOURCE, _configure_step)
+
+
+def _configure_step(lib: ctypes.CDLL) -> None:
     lib.rg_header_version.restype = ctypes.c_int
     lib.rg_sizeof_world.restype = ctypes.c_int
     if lib.rg_header_version() != mujoco.mj_version():
         raise CompiledStepUnavailableError(
-            f"{path} was compiled for MuJoCo {lib.rg_header_version()}, this is "
-            f"{mujoco.mj_version()}; delete it to rebuild"
+            f"{SOURCE.name} was compiled for MuJoCo {lib.rg_header_version()}, this is "
+            f"{mujoco.mj_version()}; delete it from {cache_dir()} to rebuild"
         )
     if lib.rg_sizeof_world() != ctypes.sizeof(WorldStruct):
         raise CompiledStepUnavailableError(
-            f"{path}: rg_world has {lib.rg_sizeof_world()} bytes, WorldStruct "
+            f"rg_world has {lib.rg_sizeof_world()} bytes, WorldStruct "
             f"{ctypes.sizeof(WorldStruct)}: cstep.c and compiled.py disagree"
         )
     for name in ("rg_pre", "rg_mid", "rg_post"):
         fn = getattr(lib, name)
         fn.argtypes = [_p, _p, _p] + ([ctypes.c_int] if name == "rg_mid" else [])
         fn.restype = ctypes.c_int if name == "rg_post" else None
-    return lib
 
 
 def wanted() -> bool | None:

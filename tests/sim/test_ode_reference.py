@@ -292,11 +292,11 @@ def test_compiled_reference_loops_are_bit_equal(types):
 @needs_ode
 def test_reference_without_a_compiler_runs_its_python_loops(monkeypatch, tmp_path):
     from robocup_gym.sim import compiled
-    from robocup_gym.sim.ode import OdeWorld, fast
+    from robocup_gym.sim.ode import OdeWorld
 
     monkeypatch.setenv("ROBOCUP_GYM_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
-    fast.forget()
+    compiled.forget()
     try:
         w = OdeWorld([0])
         assert w.stepper == "python" and "no-such-cc" in w.compiled_unavailable
@@ -304,4 +304,4 @@ def test_reference_without_a_compiler_runs_its_python_loops(monkeypatch, tmp_pat
         with pytest.raises(compiled.CompiledStepUnavailableError, match="no-such-cc"):
             OdeWorld([0], compiled=True)
     finally:
-        fast.forget()
+        compiled.forget()

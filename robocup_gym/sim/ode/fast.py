@@ -12,7 +12,6 @@ world's compiled step (:mod:`robocup_gym.sim.compiled`: system C compiler, cache
 from __future__ import annotations
 
 import ctypes
-from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -45,18 +44,21 @@ class OdeFunctions(ctypes.Structure):
     _fields_ = [(name, _p) for name in FUNCTIONS]
 
 
-@cache
-def _load_once() -> ctypes.CDLL | compiled.CompiledStepUnavailableError:
-    try:
-        path = compiled.build(source=SOURCE)
-        lib = ctypes.CDLL(str(path))
-    except compiled.CompiledStepUnavailableError as exc:
-        return exc
-    except OSError as exc:
-        return compiled.CompiledStepUnavailableError(f"cannot load the ODE helper: {exc}")
+def load() -> ctypes.CDLL:
+    """The compiled helper (:func:`robocup_gym.sim.compiled.load_library` of ``ode_step.c``:
+    built once per process; a failure is remembered too, :func:`compiled.forget
+    <robocup_gym.sim.compiled.forget>` starts over).
+
+    Raises:
+        robocup_gym.sim.compiled.CompiledStepUnavailableError: it cannot be built or loaded.
+    """
+    return compiled.load_library(SOURCE, _configure)
+
+
+def _configure(lib: ctypes.CDLL) -> None:
     lib.ode_sizeof_contact.restype = ctypes.c_int
     if lib.ode_sizeof_contact() != ctypes.sizeof(ode.Contact):
-        return compiled.CompiledStepUnavailableError(
+        raise compiled.CompiledStepUnavailableError(
             "ode_step.c's dContact and lib.py's Contact differ in size"
         )
     lib.ode_drag.argtypes = [_p, ctypes.c_int, _p, _p]
@@ -66,28 +68,6 @@ def _load_once() -> ctypes.CDLL | compiled.CompiledStepUnavailableError:
     lib.ode_collide.argtypes = [_p, _p, _p, ctypes.c_int, _p, _p, _p, ctypes.c_int, _p, _p]
     lib.ode_collide.argtypes += [_p, _p]
     lib.ode_collide.restype = ctypes.c_int
-    return lib
-
-
-def forget() -> None:
-    """Forget the loaded helper or the failure (the next :func:`load` tries again)."""
-    _load_once.cache_clear()
-
-
-def load() -> ctypes.CDLL:
-    """The compiled helper (built once per process; a failure is remembered too).
-
-    Raises:
-        robocup_gym.sim.compiled.CompiledStepUnavailableError: it cannot be built or loaded.
-    """
-    result = _load_once()
-    if isinstance(result, compiled.CompiledStepUnavailableError):
-        raise compiled.CompiledStepUnavailableError(str(result))
-    return result
-
-
-def _address(array: np.ndarray) -> int:
-    return compiled.address(array)
 
 
 class FastLoops:
@@ -113,14 +93,30 @@ class FastLoops:
         n_bodies = len(bodies)
         self._bodies = (_p * n_bodies)(*[b for b, _ in bodies])
         self._coef = np.ascontiguousarray([c for _, c in bodies], dtype=float)
-        self._drag_args = (fns, n_bodies, ctypes.addressof(self._bodies), _address(self._coef))
-        self._robots = []
+        self._drag_args = (
+            fns,
+            n_bodies,
+            ctypes.addressof(self._bodies),
+            compiled.address(self._coef),
+        )
+        self._keep = []  # the arrays the per-robot arguments point into
+        self._realise_args = []
         for joints, child, limits, vmax in robots:
             j = (_p * len(joints))(*joints)
             c = (_p * len(child))(*child)
             lim = np.ascontiguousarray(limits, dtype=float)
             vm = np.ascontiguousarray(vmax, dtype=float)
-            self._robots.append((len(joints), j, c, lim, vm))
+            self._keep.append((j, c, lim, vm))
+            self._realise_args.append(
+                (
+                    fns,
+                    len(joints),
+                    ctypes.addressof(j),
+                    ctypes.addressof(c),
+                    compiled.address(lim),
+                    compiled.address(vm),
+                )
+            )
         n = len(pairs)
         self._pairs = (_p * (4 * n))(*[h for pair in pairs for h in pair[:4]])
         self._surfaces = (ode.SurfaceParameters * n)(*[pair[4] for pair in pairs])
@@ -138,12 +134,12 @@ class FastLoops:
             n,
             ctypes.addressof(self._pairs),
             ctypes.addressof(self._surfaces),
-            _address(self._sensed),
+            compiled.address(self._sensed),
             max_contacts,
             ctypes.addressof(self._buf),
             ctypes.addressof(feedback),
-            _address(self._out_pair),
-            _address(self._out_pos),
+            compiled.address(self._out_pair),
+            compiled.address(self._out_pos),
         )
 
     def drag(self) -> None:
@@ -152,17 +148,10 @@ class FastLoops:
 
     def realise(self, robot: int, targets: np.ndarray) -> None:
         """Robot ``robot``'s due targets, rad/s, NaN = none (``OdeWorld._realise``)."""
-        n, joints, child, limits, vmax = self._robots[robot]
+        fns, n, joints, child, limits, vmax = self._realise_args[robot]
         targets = np.ascontiguousarray(targets, dtype=float)
         self._lib.ode_realise(
-            ctypes.addressof(self._fns),
-            n,
-            ctypes.addressof(joints),
-            ctypes.addressof(child),
-            _address(targets),
-            _address(limits),
-            _address(vmax),
-            ode.PARAM_VEL,
+            fns, n, joints, child, compiled.address(targets), limits, vmax, ode.PARAM_VEL
         )
 
     def collide(self) -> list:
