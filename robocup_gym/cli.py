@@ -38,7 +38,9 @@ def _console():
 def _fail(message: str, code: int = 1):
     from rich.console import Console
 
-    Console(stderr=True).print(f"[bold red]error:[/bold red] {message}")
+    Console(stderr=True, soft_wrap=True).print(
+        f"[bold red]error:[/bold red] {message}", highlight=False
+    )
     raise typer.Exit(code)
 
 
@@ -135,6 +137,14 @@ if typer is not None:
         checkpoint_freq: Annotated[
             int | None, typer.Option(help="Steps between checkpoints (0 = none).")
         ] = None,
+        checkpoint_every_s: Annotated[
+            float | None,
+            typer.Option(
+                "--checkpoint-every-s",
+                help="Also save every this many seconds of wall-clock time (default 120; "
+                "0 = never); each replaces the previous time-triggered one.",
+            ),
+        ] = None,
         eval_freq: Annotated[
             int | None, typer.Option(help="Steps between evaluations (0 = none).")
         ] = None,
@@ -185,27 +195,28 @@ if typer is not None:
                     backend=backend,
                     n_workers=n_workers,
                     checkpoint_freq=checkpoint_freq,
+                    checkpoint_every_s=checkpoint_every_s,
                     eval_freq=eval_freq,
                     env_kwargs=env_kw,
                     algo_kwargs=algo_kw,
                     init_from=None if init_from is None else str(init_from),
                 )
                 result = run_training(cfg, out=out, console=console, progress=progress)
-        except (ValueError, FileNotFoundError) as exc:
+        except (ValueError, FileNotFoundError, RuntimeError, OSError) as exc:
             _fail(str(exc))
-        if result.interrupted:
-            raise typer.Exit(130)
+        if result.interrupted:  # 128 + the signal, as a shell reports a process it stopped
+            raise typer.Exit(128 + (result.signal or 2))
 
     # ------------------------------------------------------------------------------ eval
     @app.command("eval")
     def eval_(
         run: Annotated[Path, typer.Argument(help="Run folder.", exists=True, file_okay=False)],
-        episodes: Annotated[int, typer.Option(help="Episodes to run.")] = 10,
+        episodes: Annotated[int, typer.Option(help="Episodes to run (>= 1).")] = 10,
         video: Annotated[
             Path | None,
             typer.Option(help="Record episodes to this .mp4 (or .gif); headless: MUJOCO_GL=egl."),
         ] = None,
-        video_episodes: Annotated[int, typer.Option(help="Episodes in the video.")] = 1,
+        video_episodes: Annotated[int, typer.Option(help="Episodes in the video (>= 1).")] = 1,
         seed: Annotated[int, typer.Option(help="Seed of the first episode.")] = 100_000,
         checkpoint: Annotated[
             Path | None, typer.Option(help="Evaluate this checkpoint instead of model.zip.")
@@ -224,13 +235,14 @@ if typer is not None:
         """Evaluate a run deterministically; the last line of output is one JSON object."""
         from rich.table import Table
 
-        from robocup_gym.train.evaluate import ensure_gl_backend, evaluate_run
+        from robocup_gym.train.evaluate import check_renderer, ensure_gl_backend, evaluate_run
 
-        if video is not None:
-            ensure_gl_backend()
         _single_thread_torch()
         console = _console()
         try:
+            if video is not None:
+                ensure_gl_backend()
+                check_renderer()
             with console.status(f"evaluating {run} ({episodes} episodes)…"):
                 summary = evaluate_run(
                     run,
@@ -269,7 +281,8 @@ if typer is not None:
         console.print(table)
         if summary.get("video"):
             console.print(f"video: {summary['video']}")
-        console.print(f"written: {Path(run) / 'eval.json'}")
+        if summary.get("written"):
+            console.print(f"written: {summary['written']}")
         print(json.dumps(summary), flush=True)
 
     # ------------------------------------------------------------------------------ export
@@ -326,8 +339,20 @@ if typer is not None:
         team: Annotated[str, typer.Option(help="Team name.")] = "RoboCupGym",
         unum: Annotated[int, typer.Option(help="Uniform number (0 = server's choice).")] = 0,
         sync: Annotated[bool, typer.Option(help="Send (syn) every cycle.")] = True,
+        monitor_interval: Annotated[
+            int,
+            typer.Option(
+                help="The server's cycles per monitor frame (2: rcssserver3d's default and "
+                "robocup-gym serve's)."
+            ),
+        ] = 2,
+        seed: Annotated[int, typer.Option(help="Seed of the first episode (as eval).")] = 100_000,
     ) -> None:
-        """Drive a robot with an exported policy over the rcssserver3d protocol."""
+        """Drive a robot with an exported policy over the rcssserver3d protocol.
+
+        With --monitor-port the episodes start as in training and ground truth comes from the
+        monitor stream (the policy sees what it sees in `eval`); without it, from the See
+        extensions of a server started with ground truth."""
         from robocup_gym.train.agent import run_onnx_agent
 
         console = _console()
@@ -349,53 +374,26 @@ if typer is not None:
                 team=team,
                 unum=unum,
                 sync=sync,
+                monitor_interval=monitor_interval,
+                seed=seed,
                 on_episode=report,
             )
         except (OSError, RuntimeError, ValueError) as exc:
             _fail(str(exc))
 
     # ------------------------------------------------------------------------------ serve
-    @app.command()
-    def serve(
-        agent_port: Annotated[int, typer.Option("--agent-port", help="Agent port.")] = 3100,
-        monitor_port: Annotated[
-            int, typer.Option("--monitor-port", help="Monitor/trainer port.")
-        ] = 3200,
-        host: Annotated[str, typer.Option(help="Address to listen on.")] = "0.0.0.0",
-        sync: Annotated[
-            bool, typer.Option("--sync/--no-sync", help="Sync mode: wait for (syn).")
-        ] = False,
-        real_time: Annotated[
-            bool,
-            typer.Option("--real-time/--no-real-time", help="20 ms cycles on the wall clock."),
-        ] = True,
-        ground_truth: Annotated[
-            bool,
-            typer.Option(
-                "--ground-truth/--no-ground-truth",
-                help="Send mypos/myorien/ballpos in See (needed by `agent`).",
-            ),
-        ] = False,
-    ) -> None:
-        """Serve the embedded world over the rcssserver3d protocol (agents, RoboViz)."""
+    @app.command(
+        context_settings={"allow_extra_args": True, "ignore_unknown_options": True},
+        add_help_option=False,
+    )
+    def serve(ctx: typer.Context) -> None:
+        """Serve the embedded world over the rcssserver3d protocol (agents, RoboViz); the
+        options of `python -m robocup_gym.server` (see robocup-gym serve --help)."""
         try:
-            from robocup_gym.server import serve as run_server
+            from robocup_gym.server.__main__ import main as server_main
         except ImportError as exc:
             _fail(f"the server is not available in this installation (robocup_gym.server: {exc})")
-        kwargs: dict[str, Any] = {}
-        if ground_truth:
-            kwargs["ground_truth"] = True
-        try:
-            run_server(
-                agent_port=agent_port,
-                monitor_port=monitor_port,
-                host=host,
-                sync=sync,
-                real_time=real_time,
-                **kwargs,
-            )
-        except OSError as exc:
-            _fail(str(exc))
+        raise typer.Exit(server_main(list(ctx.args), prog="robocup-gym serve"))
 
     # ------------------------------------------------------------------------------ tasks
     @app.command()

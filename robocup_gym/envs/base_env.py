@@ -27,10 +27,13 @@ import numpy as np
 from robocup_gym.backends import Backend, BackendDivergedError, RobotPose, make_backend
 from robocup_gym.envs.actions import ActionMapper
 from robocup_gym.envs.config import (
+    ON_FIELD_X_M,
+    ON_FIELD_Y_M,
     ActionMode,
     EnvConfig,
     EnvConfigError,
     Normalisation,
+    check_joint_ranges,
     resolve_angles,
     resolve_joints,
 )
@@ -102,6 +105,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}
     config_class: ClassVar[type[EnvConfig]] = EnvConfig
+    _closed = False
     """Config type of this environment (tasks use a subclass with their reward options)."""
 
     @classmethod
@@ -317,6 +321,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                 ``robot_heading_deg``, ``joint_angles_deg`` (by name or canonical array),
                 ``ball_pos`` (x, y[, z]), ``ball_vel`` (x, y, z), ``kick_target`` (m, deg).
         """
+        self._refuse_if_closed("reset")
         super().reset(seed=seed)
         options = dict(options or {})
         bad = sorted(set(options) - _RESET_OPTIONS)
@@ -352,7 +357,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One 20 ms agent cycle. On the last step of an episode the world first runs
         ``wait_steps`` more cycles with zero joint velocities, then the final reward is computed
-        (the returned observation is the one from before the wait, as in the paper)."""
+        (the returned observation is the one from before the wait, as in the paper; ``info``,
+        ``fallen`` included, describes the world after the wait, as the reward does)."""
+        self._refuse_if_closed("step")
         if not self._started:
             raise RuntimeError("call reset() before step()")
         if self.has_completed:
@@ -397,10 +404,16 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         return self.backend.render(*self.render_size)
 
     def close(self) -> None:
-        """Release the backend (if this environment created it)."""
+        """Release the backend (if this environment created it); the environment then refuses
+        :meth:`reset` and :meth:`step`. Closing twice is harmless."""
+        self._closed = True
         backend = getattr(self, "backend", None)
         if backend is not None and getattr(self, "_owns_backend", False):
             backend.close()
+
+    def _refuse_if_closed(self, what: str) -> None:
+        if self._closed:
+            raise RuntimeError(f"{what}() on a closed environment; make a new one")
 
     # ================================================================== overridables
     def _get_reward(self, action: np.ndarray) -> float:
@@ -474,12 +487,36 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             ball_vel = np.asarray(options["ball_vel"], dtype=float).reshape(3)
         if "kick_target" in options:
             target = np.asarray(options["kick_target"], dtype=float).reshape(2)
+        self._check_start(x, y, heading, angles, ball, ball_vel, target)
         return EpisodeStart(
             pose=RobotPose(x=x, y=y, heading_deg=heading, joint_angles_deg=angles),
             ball_pos=ball,
             ball_vel=ball_vel,
             kick_target=target,
         )
+
+    def _check_start(self, x, y, heading, angles, ball, ball_vel, target) -> None:
+        """Refuse a start state the world cannot take (reset options are checked here as the
+        config's values are in :meth:`EnvConfig.validate`)."""
+        values = {
+            "robot_pos": (x, y),
+            "robot_heading_deg": (heading,),
+            "ball_pos": tuple(ball),
+            "ball_vel": tuple(ball_vel),
+            "kick_target": tuple(target),
+        }
+        for name, v in values.items():
+            if not all(math.isfinite(float(c)) for c in v):
+                raise ValueError(f"reset option {name} must be finite numbers, got {v}")
+        for name, (px, py) in (("robot_pos", (x, y)), ("ball_pos", (ball[0], ball[1]))):
+            if abs(px) > ON_FIELD_X_M or abs(py) > ON_FIELD_Y_M:
+                raise ValueError(
+                    f"reset option {name} ({px:g}, {py:g}) is off the field: x must be within "
+                    f"±{ON_FIELD_X_M:g} m and y within ±{ON_FIELD_Y_M:g} m"
+                )
+        if not np.isfinite(angles).all():
+            raise ValueError("reset option joint_angles_deg must be finite (deg)")
+        check_joint_ranges(self.robot_model, angles, "joint_angles_deg")
 
     # ================================================================== state for tasks
     @property
@@ -548,10 +585,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.perception = p
         gt = p.ground_truth
         self.ground_truth = gt
-        if episode_over:
-            # after the wait steps: keep `fallen` as it was when the episode ended
-            pass
-        elif gt is not None:
+        if gt is not None:
             _, x, y, _ = gt.torso_quat
             up_z = 1.0 - 2.0 * (x * x + y * y)
             cfg = self.config

@@ -20,7 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.robot.nao import NaoModel
+from robocup_gym.protocol.constants import PLAY_MODES
+from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim.field import FIELD_LENGTH, FIELD_WIDTH
 from robocup_gym.sim.physics import BALL_RADIUS, SURFACE_LAYER
 
 __all__ = [
@@ -76,6 +78,26 @@ PAPER_STANDING_POSE_DEG: dict[str, float] = {
 """The crouched standing pose the RobocupGym paper drives the joints to before every episode
 (``STANDING_JOINT_ANGLES``), by Nao joint name, degrees. Use it as
 ``EnvConfig(joint_start_deg=PAPER_STANDING_POSE_DEG)``."""
+
+
+ON_FIELD_MARGIN_M = 1.0
+"""How far outside the field's lines a start position may be, m."""
+ON_FIELD_X_M = FIELD_LENGTH / 2 + ON_FIELD_MARGIN_M
+ON_FIELD_Y_M = FIELD_WIDTH / 2 + ON_FIELD_MARGIN_M
+
+
+def _finite(v: Any) -> bool:
+    try:
+        return math.isfinite(float(v)) and not isinstance(v, bool)
+    except (TypeError, ValueError):
+        return False
+
+
+def _pair(v: Any) -> bool:
+    try:
+        return len(v) == 2 and all(_finite(x) for x in v)
+    except TypeError:
+        return False
 
 
 class EnvConfigError(ValueError):
@@ -307,9 +329,58 @@ class EnvConfig:
             f"robot_start_pos must be (x, y) in m, got {self.robot_start_pos!r}",
         )
         need(
-            self.robot_type in (0, 1, 2, 3, 4) and not isinstance(self.robot_type, bool),
-            f"robot_type must be one of 0, 1, 2, 3, 4, got {self.robot_type!r}",
+            isinstance(self.robot_type, int | np.integer)
+            and not isinstance(self.robot_type, bool)
+            and self.robot_type in (0, 1, 2, 3, 4),
+            f"robot_type must be one of the integers 0, 1, 2, 3, 4, got {self.robot_type!r}",
         )
+        for name, pos in (
+            ("robot_start_pos", self.robot_start_pos),
+            ("ball_start_pos", self.ball_start_pos),
+        ):
+            need(
+                abs(pos[0]) <= ON_FIELD_X_M and abs(pos[1]) <= ON_FIELD_Y_M,
+                f"{name} ({pos[0]:g}, {pos[1]:g}) is off the field: x must be within "
+                f"±{ON_FIELD_X_M:g} m and y within ±{ON_FIELD_Y_M:g} m (the field's lines and "
+                f"{ON_FIELD_MARGIN_M:g} m around them)",
+            )
+        need(
+            0.0 <= self.ball_start_pos[2] <= 5.0,
+            f"ball_start_pos z must be between 0 and 5 m, got {self.ball_start_pos[2]!r}",
+        )
+        need(
+            _finite(self.robot_start_heading_deg),
+            f"robot_start_heading_deg must be a finite number (deg), got "
+            f"{self.robot_start_heading_deg!r}",
+        )
+        need(
+            _pair(self.kick_target),
+            f"kick_target must be 2 finite numbers (m, deg), got {self.kick_target!r}",
+        )
+        for name in ("kick_target_distance_range", "kick_target_angle_range"):
+            v = getattr(self, name)
+            need(
+                _pair(v) and float(v[0]) <= float(v[1]),
+                f"{name} must be 2 finite numbers (low, high) with low <= high, got {v!r}",
+            )
+        need(
+            _finite(self.fall_height) and 0.0 <= self.fall_height <= 1.0,
+            f"fall_height must be a torso height between 0 and 1 m (standing: ~0.38), got "
+            f"{self.fall_height!r}",
+        )
+        need(
+            _finite(self.fall_up_z) and -1.0 <= self.fall_up_z <= 1.0,
+            f"fall_up_z must be between -1 and 1 (the world z of the torso's up axis; 0.5 = "
+            f"tilted 60°), got {self.fall_up_z!r}",
+        )
+        need(
+            self.play_mode in PLAY_MODES,
+            f"unknown play_mode {self.play_mode!r}; valid: {', '.join(PLAY_MODES)}",
+        )
+        if self.joint_start_deg is not None:
+            model = nao_model(int(self.robot_type))
+            angles = resolve_angles(model, self.joint_start_deg, "joint_start_deg")
+            check_joint_ranges(model, angles, "joint_start_deg")
         if self.normalise is Normalisation.NONE and self.obs_clip not in (None, math.inf):
             warnings.warn(
                 f"normalise='none' with obs_clip={self.obs_clip} clips raw observations "
@@ -375,6 +446,23 @@ def resolve_joints(model: NaoModel, names: Sequence[str], what: str) -> np.ndarr
     if len(set(out)) != len(out):
         raise EnvConfigError(f"{what} names a joint twice: {list(names)}")
     return np.array(out, dtype=int)
+
+
+def check_joint_ranges(model: NaoModel, angles_deg: np.ndarray, what: str) -> None:
+    """Refuse joint angles outside the robot's limits (the physics would tear the joint apart).
+
+    Raises:
+        EnvConfigError: naming the first such joint, its value and its range in degrees.
+    """
+    lo, hi = model.ranges_deg[:, 0], model.ranges_deg[:, 1]
+    bad = np.flatnonzero((angles_deg < lo - 1e-9) | (angles_deg > hi + 1e-9))
+    if len(bad):
+        i = int(bad[0])
+        raise EnvConfigError(
+            f"{what}: {model.effector_names[i]} ({model.perceptor_names[i]}) = "
+            f"{angles_deg[i]:g}° is outside its range [{lo[i]:g}, {hi[i]:g}]° for robot type "
+            f"{model.robot_type.index}"
+        )
 
 
 def resolve_angles(

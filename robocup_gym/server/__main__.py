@@ -10,39 +10,97 @@ from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_P
 from robocup_gym.server.server import PortInUseError, serve
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="python -m robocup_gym.server",
+def port_number(text: str) -> int:
+    """An argparse type: a TCP port 0–65535 (0 = let the OS choose a free one)."""
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port number") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(
+            f"{port} is not a port number (0-65535; 0 lets the OS choose a free port)"
+        )
+    return port
+
+
+def _positive(kind: type, what: str):
+    """An argparse type: a finite ``kind`` (int or float) > 0 (``what`` names it in errors)."""
+
+    def parse(text: str):
+        try:
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+        if not (v > 0 and v < float("inf")):
+            raise argparse.ArgumentTypeError(f"{text} must be {what} > 0")
+        return v
+
+    return parse
+
+
+positive_seconds = _positive(float, "a finite number of seconds")
+positive_int = _positive(int, "a whole number")
+
+
+class _OneLineErrors(argparse.ArgumentParser):
+    """Usage errors as one line (``prog: error: …; see --help``), exit status 2."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.ArgumentParser:
+    p = _OneLineErrors(
+        prog=prog,
         description="The RoboCup Gym world behind the rcssserver3d 0.7.3 protocol "
         "(agents, RoboViz and trainers connect unchanged).",
     )
-    p.add_argument("--agent-port", type=int, default=DEFAULT_AGENT_PORT, help="agent port (3100)")
+    p.add_argument(
+        "--agent-port",
+        type=port_number,
+        default=DEFAULT_AGENT_PORT,
+        help="agent port (3100; 0 = a free port, printed)",
+    )
     p.add_argument(
         "--monitor-port",
         "--server-port",
         dest="monitor_port",
-        type=int,
+        type=port_number,
         default=DEFAULT_MONITOR_PORT,
-        help="monitor/trainer port (3200); --server-port as rcssserver3d",
+        help="monitor/trainer port (3200; 0 = a free port, printed); --server-port as rcssserver3d",
     )
     p.add_argument("--host", default="0.0.0.0", help="address to listen on (all interfaces)")
-    p.add_argument("--sync", action="store_true", help="sync mode: wait for (syn) from every agent")
+    p.add_argument(
+        "--sync",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="sync mode: wait for (syn) from every agent (default off)",
+    )
     p.add_argument(
         "--real-time",
         action=argparse.BooleanOptionalAction,
         default=True,
         help="20 ms cycles on the wall clock (default on; --no-real-time runs as fast as possible)",
     )
-    p.add_argument("--ground-truth", action="store_true", help="mypos/myorien/ballpos in See")
+    p.add_argument(
+        "--ground-truth",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="mypos/myorien/ballpos in See (default off; `robocup-gym agent` without a monitor "
+        "port needs it)",
+    )
     p.add_argument("--no-vision-noise", action="store_true", help="exact vision, no beam noise")
     p.add_argument("--full-vision", action="store_true", help="360 degree view cones")
     p.add_argument("--no-rules", action="store_true", help="no automatic referee")
     p.add_argument(
-        "--monitor-interval", type=int, default=2, help="cycles per monitor frame (2 = 25 Hz)"
+        "--monitor-interval",
+        type=positive_int,
+        default=2,
+        help="cycles per monitor frame (2 = 25 Hz)",
     )
     p.add_argument(
         "--sync-timeout",
-        type=float,
+        type=positive_seconds,
         default=None,
         help="close agents that send no (syn) for this many seconds (default: wait forever)",
     )
@@ -51,8 +109,16 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.server") -> int:
+    """Run the server with command-line ``argv``; returns the exit status (2: a bad option or a
+    port that cannot be used, each said in one line on stderr)."""
+    parser = build_parser(prog)
+    args = parser.parse_args(argv)
+    if args.agent_port == args.monitor_port and args.agent_port != 0:
+        parser.error(
+            f"--agent-port and --monitor-port are both {args.agent_port}; agents and monitors "
+            "need two different ports"
+        )
     level = logging.WARNING - 10 * min(args.verbose, 2)
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(message)s")
     try:
@@ -71,10 +137,10 @@ def main(argv: list[str] | None = None) -> int:
             seed=args.seed,
         )
     except PortInUseError as exc:
-        print(f"robocup-gym serve: {exc.strerror}", file=sys.stderr)
+        print(f"{prog}: error: {exc.strerror}", file=sys.stderr)
         return 2
-    except OSError as exc:
-        print(f"robocup-gym serve: {exc}", file=sys.stderr)
+    except (OSError, ValueError) as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     return 0
 

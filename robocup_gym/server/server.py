@@ -30,6 +30,7 @@ import contextlib
 import errno
 import logging
 import math
+import re
 import selectors
 import signal
 import socket
@@ -56,6 +57,7 @@ from robocup_gym.server.wire import (
     trainer_commands,
 )
 from robocup_gym.server.worldhost import WorldHost
+from robocup_gym.sim.memory import tune_allocator
 from robocup_gym.sim.vision import VisionConfig
 from robocup_gym.sim.world import SimulationDivergedError
 
@@ -65,6 +67,12 @@ CYCLE_S = 0.02
 SCENE_PATHS = ("rsg/agent/nao/nao_hetero.rsg", "rsg/agent/nao/nao.rsg")
 _POLL_S = 0.25
 """Longest single wait in select (so a stop request or a sync time-out is noticed quickly)."""
+
+
+_CLIPPED = "%s: velocity %g rad/s is beyond the joint's maximum speed ±%g rad/s; clipped"
+_NOT_A_NUMBER = re.compile(rb"\(([a-z]{2,3}\d)\s+([^\s()]+)\s*\)")
+"""``(name value)`` items of an agent message, to find values that are not numbers."""
+_NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:inf|nan)", re.I)
 
 
 class PortInUseError(OSError):
@@ -119,6 +127,18 @@ class SimServer:
     ) -> None:
         if monitor_interval < 1:
             raise ValueError(f"monitor_interval must be >= 1, got {monitor_interval}")
+        for what, port in (("agent", agent_port), ("monitor", monitor_port)):
+            if not 0 <= int(port) <= 65535:
+                raise ValueError(
+                    f"{what} port {port} is not a port number (0-65535; 0 = a free port)"
+                )
+        if int(agent_port) == int(monitor_port) != 0:
+            raise ValueError(
+                f"agent and monitor port are both {agent_port}; they must differ (or be 0)"
+            )
+        if sync_timeout is not None and not (0 < sync_timeout < math.inf):
+            raise ValueError(f"sync_timeout must be a number of seconds > 0, got {sync_timeout}")
+        tune_allocator()  # worlds come and go with the agents: keep the process from growing
         self.host_address = host
         self.requested_ports = (int(agent_port), int(monitor_port))
         self.sync = bool(sync)
@@ -405,13 +425,16 @@ class SimServer:
             fast = fast_joint_message(frame)
             if fast is not None:
                 items, syn = fast
-                effectors = self._effectors(a)
+                limits = self._speed_limits(a)
                 joints = a.joints
                 for name, value in items:
-                    if name in effectors:
+                    vmax = limits.get(name)
+                    if vmax is not None:
                         v = float(value)
                         if math.isfinite(v):  # "1e999" reads as inf
                             joints[name] = v
+                            if v > vmax or v < -vmax:
+                                a.conn.warn(_CLIPPED, name, v, vmax)
                         else:
                             a.conn.warn("ignored non-finite velocity for %s", name)
                     else:
@@ -429,13 +452,23 @@ class SimServer:
                 "malformed message (unbalanced parentheses), complete parts used: %r", frame[:120]
             )
         conn = a.conn
+        for name, value in _NOT_A_NUMBER.findall(frame):
+            if _NUMBER.fullmatch(value) is None:
+                conn.warn(
+                    "%s: %r is not a number; read as 0 rad/s (as rcssserver3d's atof does)",
+                    name.decode("latin-1"),
+                    value.decode("latin-1"),
+                )
         for act in actions:
             if type(act) is fx.Hinge:
                 if a.has_robot and not a.killed:
-                    if act.effector in self._effectors(a):
+                    vmax = self._speed_limits(a).get(act.effector)
+                    if vmax is not None:
                         v = act.velocity
                         if math.isfinite(v):
                             a.joints[act.effector] = v
+                            if v > vmax or v < -vmax:
+                                conn.warn(_CLIPPED, act.effector, v, vmax)
                         else:
                             conn.warn("ignored non-finite velocity for %s", act.effector)
                     else:
@@ -460,7 +493,10 @@ class SimServer:
             if a.killed:
                 continue
             if type(act) is fx.Beam:
-                a.beam = (act.x, act.y, act.rot)
+                if math.isfinite(act.x) and math.isfinite(act.y) and math.isfinite(act.rot):
+                    a.beam = (act.x, act.y, act.rot)
+                else:
+                    conn.warn("beam (%r, %r, %r) ignored: not finite", act.x, act.y, act.rot)
             elif type(act) is fx.Say:
                 i = self.world_host.index(a.key)
                 if i is not None:
@@ -479,14 +515,18 @@ class SimServer:
         if a.has_robot and not a.ever_synced:
             a.synced = True  # handshake: every message counts as (syn), see AgentState
 
-    _eff_cache: ClassVar[dict[int, frozenset[str]]] = {}
+    _limits_cache: ClassVar[dict[int, dict[str, float]]] = {}
 
-    def _effectors(self, a: AgentState) -> frozenset[str]:
+    def _speed_limits(self, a: AgentState) -> dict[str, float]:
+        """Effector name → the joint's maximum speed (rad/s) for the agent's robot type."""
         t = a.robot_type or 0
-        names = self._eff_cache.get(t)
-        if names is None:
-            names = self._eff_cache[t] = frozenset(nao_model(t).effector_names)
-        return names
+        limits = self._limits_cache.get(t)
+        if limits is None:
+            m = nao_model(t)
+            limits = self._limits_cache[t] = {
+                name: float(v) for name, v in zip(m.effector_names, m.max_speeds, strict=True)
+            }
+        return limits
 
     def _scene(self, a: AgentState, act: fx.Scene) -> None:
         path = act.path.lstrip("/")
@@ -529,7 +569,11 @@ class SimServer:
         host, ref = self.world_host, self.referee
         kind = type(cmd)
         if kind is tc.BallCmd:
-            host.set_ball(cmd.pos, cmd.vel)
+            values = [*(cmd.pos or ()), *(cmd.vel or ())]
+            if all(math.isfinite(v) for v in values):
+                host.set_ball(cmd.pos, cmd.vel)
+            else:
+                conn.warn("ball command ignored: not finite (pos %r, vel %r)", cmd.pos, cmd.vel)
         elif kind is tc.AgentCmd:
             if cmd.unum is None or cmd.team is None:
                 self.selected = None
@@ -540,11 +584,16 @@ class SimServer:
                 conn.warn("agent command for unknown player %s %s", cmd.team, cmd.unum)
                 return
             if cmd.pos is not None:
-                host.teleport(i, cmd.pos)
+                if all(math.isfinite(v) for v in cmd.pos):
+                    host.teleport(i, cmd.pos)
+                else:
+                    conn.warn("agent pos %r ignored: not finite", cmd.pos)
             if cmd.move is not None:
                 x, y, z, yaw = cmd.move
                 if all(math.isfinite(v) for v in cmd.move):
                     host.teleport(i, (x, y, z), heading_deg=yaw + 90.0)
+                else:
+                    conn.warn("agent move %r ignored: not finite", cmd.move)
         elif kind is tc.PlayModeCmd:
             ref.set_play_mode(cmd.mode)
         elif kind is tc.KickOffCmd:
@@ -554,6 +603,8 @@ class SimServer:
         elif kind is tc.TimeCmd:
             if cmd.time >= 0 and math.isfinite(cmd.time):
                 self.world.set_game(game_time=cmd.time)
+            else:
+                conn.warn("time %r ignored: the game time must be finite and >= 0", cmd.time)
         elif kind is tc.ScoreCmd:
             self.world.set_game(score_left=cmd.left, score_right=cmd.right)
         elif kind is tc.SelectCmd:
@@ -578,7 +629,7 @@ class SimServer:
         elif kind is tc.InvalidCmd:
             conn.warn("malformed %s command ignored: %s", cmd.name, cmd.reason)
         elif kind is tc.UnknownCmd:
-            log.debug("%r: unknown trainer command %r ignored", conn, cmd.name)
+            conn.warn("unknown trainer command %r ignored", cmd.name)
 
     def _target(self, unum: int | None, team: str | None) -> AgentState | None:
         if unum is None or team is None:
@@ -723,9 +774,14 @@ class SimServer:
         try:
             side, unum = self.referee.teams.register(team, unum, a.robot_type or 0)
         except InitError as exc:
-            # The real server teleports the robot to (0, 0, 10) here; we leave it where it is
-            # (a 10 m drop can destabilise the whole simulation).
-            a.conn.warn("init rejected: %s", exc)
+            # The real server teleports the robot to (0, 0, 10) and keeps it; a 10 m drop can
+            # destabilise the whole simulation and the robot would stay in the world for good.
+            # Here it is removed (next physics step) and the agent's connection closed.
+            log.warning(
+                "%r: init rejected: %s; its robot is removed and the connection closed", a.conn, exc
+            )
+            a.killed = True
+            a.conn.alive = False
             return
         world = self.world
         world.set_team(i, side, team, unum)

@@ -41,8 +41,9 @@ _TOKEN = re.compile(r"\(|\)|[^ \t\n\r\v\f()]+")
 def salvage(text: str, max_depth: int = 64) -> list[SExpr]:
     """Top-level expressions of broken S-expression text, as far as they are complete.
 
-    A ``)`` without a matching ``(`` is skipped, an expression still open at the end is dropped,
-    and anything nested deeper than ``max_depth`` is flattened into its parent (never recursion).
+    A ``)`` without a matching ``(`` is skipped, an expression still open at the end is dropped
+    while the complete expressions inside it are kept at the top level, and anything nested
+    deeper than ``max_depth`` is flattened into its parent (never recursion).
     """
     stack: list[list[SExpr]] = []
     cur: list[SExpr] = []
@@ -63,10 +64,13 @@ def salvage(text: str, max_depth: int = 64) -> list[SExpr]:
                 cur = stack.pop()
         else:
             cur.append(tok)
-    if stack:
-        top = stack[0]
-        top.pop()  # the unfinished last top-level expression
-        cur = top
+    while stack:
+        # an expression still open at the end is dropped (its last value may be cut short),
+        # but the complete expressions inside it are kept: ``(lle3 2.0(syn)`` still syncs
+        parent = stack.pop()
+        parent.pop()
+        parent.extend(x for x in cur if isinstance(x, list))
+        cur = parent
     return cur
 
 

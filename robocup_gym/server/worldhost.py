@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.vision import VisionConfig
 from robocup_gym.sim.world import World
 
@@ -122,6 +123,7 @@ class WorldHost:
             return []
         try:
             self._rebuild(keep + new, new)
+            release_free_memory()  # the old world is gone now
             return [s.key for s in new]
         except Exception as exc:
             if not new:

@@ -36,6 +36,7 @@ except ImportError:  # numpy < 2
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
+from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
 from robocup_gym.sim.scene import (
     FRP_GEOMS,
@@ -262,6 +263,7 @@ class World:
         self.vision_config = vision or VisionConfig()
         self._substeps = self.physics.substeps
         slots = [RobotSlot(f"r{i}_", int(t), teams[i]) for i, t in enumerate(robot_types)]
+        release_free_memory()  # what earlier worlds freed, before this one allocates
         self.xml = scene_xml(slots, self.physics)
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         apply_ode_softness(self.model, self.physics)

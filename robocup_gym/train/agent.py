@@ -317,36 +317,67 @@ def run_onnx_agent(
     team: str = "RoboCupGym",
     unum: int = 0,
     sync: bool = True,
+    monitor_interval: int = 2,
+    seed: int = 100_000,
     on_episode=None,
 ) -> list[EpisodeReport]:
     """Connect to a server and run ``episodes`` episodes of the exported policy.
 
     The task, its configuration and the robot type come from the ONNX file's metadata.
+
+    With a ``monitor_port`` the robot runs on
+    :class:`~robocup_gym.backends.rcssserver3d_backend.Rcssserver3dBackend` in connect mode:
+    ground truth (torso pose, ball) comes from the monitor stream, the episode starts the way
+    that backend starts it (joints driven while held above the ground, then robot and ball
+    placed), and the observation is the one ``robocup-gym eval --backend rcssserver3d`` and the
+    in-process environment build, so the same policy does the same thing on all three paths
+    (docs/training.md gives the measured agreement). ``monitor_interval`` is the server's
+    cycles per monitor frame (2 for rcssserver3d's default and ``robocup-gym serve``).
+
+    Without one, :class:`AgentConnectionBackend` rebuilds ground truth from the ``See``
+    extensions (``mypos``/``ballpos``, every third cycle, torso upright): enough to run a
+    policy on a server the agent cannot reset, but the policy then sees a staler ball and no
+    tilt, and kicks differently.
+
+    Episode ``k`` is reset with seed ``seed + k`` (as ``robocup-gym eval``).
     """
     from robocup_gym.train.export import OnnxPolicy
     from robocup_gym.train.tasks import make_env
 
+    if int(episodes) < 1:
+        raise ValueError(f"episodes must be >= 1, got {episodes}")
+    for what, p in (("port", port), ("monitor port", monitor_port)):
+        if p is not None and not 1 <= int(p) <= 65535:
+            raise ValueError(f"{what} {p} is not a port number (1-65535)")
     policy = OnnxPolicy(onnx_path)
     meta = policy.metadata
     env_kwargs = dict(meta.get("env_kwargs") or {})
     robot_type = int(
         env_kwargs.get("robot_type", (meta.get("env_config") or {}).get("robot_type", 0))
     )
-    backend = AgentConnectionBackend(
-        host,
-        port,
-        robot_type=robot_type,
-        team=team,
-        unum=unum,
-        monitor_port=monitor_port,
-        sync=sync,
-    )
+    backend: Backend
+    if monitor_port is not None:
+        from robocup_gym.backends.rcssserver3d_backend import Rcssserver3dBackend
+
+        backend = Rcssserver3dBackend(
+            robot_type=robot_type,
+            host=host,
+            agent_port=port,
+            monitor_port=monitor_port,
+            monitor_interval=monitor_interval,
+            team=team,
+            unum=unum,
+        )
+    else:
+        backend = AgentConnectionBackend(
+            host, port, robot_type=robot_type, team=team, unum=unum, sync=sync
+        )
     reports = []
     try:
         env = make_env(meta["env_id"], backend=backend, env_kwargs=env_kwargs)
         try:
-            for _ in range(episodes):
-                obs, _ = env.reset()
+            for k in range(episodes):
+                obs, _ = env.reset(seed=seed + k)
                 done, steps, info = False, 0, {}
                 while not done:
                     obs, _, terminated, truncated, info = env.step(policy(obs))

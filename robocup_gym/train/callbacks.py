@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import time
@@ -45,13 +46,16 @@ class EpisodeStatsCallback(BaseCallback):
         curve_every: int = 5_000,
         window: int = 100,
         wall_offset_s: float = 0.0,
+        episodes_offset: int = 0,
     ) -> None:
         super().__init__()
         self.curve_path = curve_path
         self.curve_every = max(1, int(curve_every))
         self.recent: deque[dict[str, float]] = deque(maxlen=window)
-        self.episodes = 0
+        self.episodes = int(episodes_offset)
+        """Episodes finished in the whole run (a resumed run continues its earlier count)."""
         self.wall_offset_s = wall_offset_s
+        self._start_steps = 0
         self._t0 = time.perf_counter()
         self._ep_returns: np.ndarray | None = None
         self._ep_lengths: np.ndarray | None = None
@@ -62,9 +66,11 @@ class EpisodeStatsCallback(BaseCallback):
 
     # ------------------------------------------------------------------ SB3 hooks
     def _on_training_start(self) -> None:
+        # num_timesteps is the model's here (a resumed run's earlier steps included); in
+        # _init_callback it is still 0, which made a resumed run's rate count its earlier steps
         self._t0 = time.perf_counter()
         self._rate_t = self._t0
-        self._rate_steps = self.num_timesteps
+        self._rate_steps = self._start_steps = self.num_timesteps
         n = self.training_env.num_envs
         self._ep_returns = np.zeros(n)
         self._ep_lengths = np.zeros(n, dtype=int)
@@ -117,11 +123,9 @@ class EpisodeStatsCallback(BaseCallback):
         return summarize(self.recent)
 
     def overall_steps_per_s(self) -> float:
+        """Steps per second of this session (a resumed run's earlier steps not counted)."""
         elapsed = time.perf_counter() - self._t0
         return 0.0 if elapsed <= 0 else (self.num_timesteps - self._start_steps) / elapsed
-
-    def _init_callback(self) -> None:
-        self._start_steps = self.num_timesteps
 
     def write_row(self) -> None:
         self._last_row_steps = self.num_timesteps
@@ -143,10 +147,25 @@ class EpisodeStatsCallback(BaseCallback):
             csv.writer(f).writerow(["" if v is None else v for v in row])
 
 
-class RichProgressCallback(BaseCallback):
-    """A rich progress bar: steps, steps/s, recent mean episode reward and ball displacement.
+def format_duration(seconds: float | None) -> str:
+    """``75`` → ``"1:15"``, ``3725`` → ``"1:02:05"``; ``None`` or not finite → ``"?"``."""
+    if seconds is None or not np.isfinite(seconds) or seconds < 0:
+        return "?"
+    s = round(seconds)
+    h, rest = divmod(s, 3600)
+    m, sec = divmod(rest, 60)
+    return f"{h}:{m:02d}:{sec:02d}" if h else f"{m}:{sec:02d}"
 
-    On a terminal it is a live bar; otherwise (logs, CI) a plain line every ``log_every_s``.
+
+class RichProgressCallback(BaseCallback):
+    """What a training run shows while it runs: progress, measured rate, labelled elapsed and
+    remaining time, recent reward and ball displacement, and every periodic evaluation.
+
+    The remaining time is the steps left divided by the rate measured over this session so far
+    (evaluations and checkpoints included), so it settles instead of jumping with each rollout.
+    Once ``estimate_after_s`` have passed it prints one line saying how long the whole run will
+    take. On a terminal the display is two lines that fit the console's width (80 columns too);
+    elsewhere (logs, CI) it prints a plain line every ``log_every_s`` seconds.
     """
 
     def __init__(
@@ -156,6 +175,7 @@ class RichProgressCallback(BaseCallback):
         description: str = "training",
         console=None,
         log_every_s: float = 30.0,
+        estimate_after_s: float = 15.0,
     ) -> None:
         super().__init__()
         from rich.console import Console
@@ -165,83 +185,163 @@ class RichProgressCallback(BaseCallback):
         self.description = description
         self.console = console or Console()
         self.log_every_s = log_every_s
-        self.progress = None
-        self.task = None
-        self._last_update = 0.0
+        self.estimate_after_s = estimate_after_s
+        self.live = None
+        self._t0 = time.perf_counter()
+        self._start_steps = 0
         self._last_log = 0.0
+        self._estimated = False
 
-    def _fields(self) -> dict[str, str]:
+    # ------------------------------------------------------------------ measures
+    def elapsed_s(self) -> float:
+        """Wall-clock seconds of this training session."""
+        return time.perf_counter() - self._t0
+
+    def rate(self) -> float:
+        """Steps per second over this session so far (0 before the first step)."""
+        elapsed = self.elapsed_s()
+        done = self.num_timesteps - self._start_steps
+        return done / elapsed if elapsed > 0 and done > 0 else 0.0
+
+    def remaining_s(self) -> float | None:
+        """Estimated seconds to ``total_timesteps`` at :meth:`rate`; ``None`` while unknown."""
+        r = self.rate()
+        if r <= 0:
+            return None
+        return max(0, self.total - self.num_timesteps) / r
+
+    def parts(self) -> list[str]:
+        """The status fields, most important first (a narrow display drops the last ones)."""
         s = self.stats.summary()
-        return {
-            # the recent rate once a 2-s window has passed, the overall rate before
-            "sps": f"{self.stats.steps_per_s or self.stats.overall_steps_per_s():,.0f}",
-            "rew": _fmt(s["return_mean"]),
-            "dx": _fmt(s["ball_dx_mean"]),
-            "eps": f"{self.stats.episodes:,}",
-        }
+        left = self.remaining_s()
+        return [
+            f"{self.rate():,.0f} steps/s",
+            f"elapsed {format_duration(self.elapsed_s())}",
+            f"left ~{format_duration(left)}" if left is not None else "left ?",
+            f"reward {_fmt(s['return_mean'])}",
+            f"ball Δx {_fmt(s['ball_dx_mean'])} m",
+            f"episodes {self.stats.episodes:,}",
+        ]
 
-    def _on_training_start(self) -> None:
-        from rich.progress import (
-            BarColumn,
-            Progress,
-            SpinnerColumn,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
+    def line(self, width: int | None = None) -> str:
+        """One plain status line (for logs), cut at field boundaries to ``width`` if given."""
+        pct = 100.0 * self.num_timesteps / max(self.total, 1)
+        head = f"{self.description} {pct:3.0f}% {self.num_timesteps:,}/{self.total:,}"
+        return _fit([head, *self.parts()], width)
+
+    # ------------------------------------------------------------------ printing
+    def say(self, text: str) -> None:
+        """Print a line above the live display (or as a plain line); never raises (a closed
+        terminal must not stop training or its final save)."""
+        with contextlib.suppress(Exception):  # e.g. EIO after the terminal went away
+            self.console.print(text, highlight=False)
+
+    def report_eval(self, result: dict[str, Any]) -> None:
+        """Show one periodic evaluation (called by :class:`PeriodicEvalCallback`)."""
+        self.say(
+            f"eval at {result['steps']:,} steps ({result.get('episodes', '?')} episodes, "
+            f"deterministic): ball Δx {_fmt(result.get('ball_dx_mean'))} m, fall rate "
+            f"{_fmt(result.get('fall_rate'))}, return {_fmt(result.get('return_mean'))}"
         )
 
-        self._last_log = time.perf_counter()
-        if not self.console.is_terminal:
-            self.console.print(
-                f"{self.description}: {self.num_timesteps:,}/{self.total:,} steps (progress "
-                f"every {self.log_every_s:.0f} s)"
-            )
+    def _estimate(self) -> None:
+        left = self.remaining_s()
+        if left is None:
             return
-        self.progress = Progress(
-            SpinnerColumn(),
-            TextColumn("[bold]{task.description}"),
-            BarColumn(),
-            TextColumn("{task.completed:,.0f}/{task.total:,.0f}"),
-            TextColumn("[cyan]{task.fields[sps]} steps/s"),
-            TextColumn("reward [green]{task.fields[rew]}"),
-            TextColumn("ball Δx [magenta]{task.fields[dx]} m"),
-            TextColumn("eps {task.fields[eps]}"),
-            TimeElapsedColumn(),
-            TimeRemainingColumn(),
-            console=self.console,
-            refresh_per_second=4,
+        self._estimated = True
+        finish = time.strftime("%H:%M", time.localtime(time.time() + left))
+        self.say(
+            f"measured {self.rate():,.0f} steps/s: {self.total - self.num_timesteps:,} steps "
+            f"left, about {format_duration(left)} (until ~{finish})"
         )
-        self.progress.start()
-        self.task = self.progress.add_task(
-            self.description, total=self.total, completed=self.num_timesteps, **self._fields()
+
+    # ------------------------------------------------------------------ SB3 hooks
+    def _on_training_start(self) -> None:
+        self._t0 = time.perf_counter()
+        self._start_steps = self.num_timesteps
+        self._last_log = self._t0
+        self.say(
+            f"{self.description}: {self.num_timesteps:,}/{self.total:,} steps; the time it "
+            f"takes is estimated after {self.estimate_after_s:.0f} s"
+            + ("" if self.console.is_terminal else f" (progress every {self.log_every_s:.0f} s)")
         )
+        if self.console.is_terminal:
+            from rich.live import Live
+
+            self.live = Live(
+                _Display(self), console=self.console, refresh_per_second=4, transient=False
+            )
+            self.live.start()
 
     def _on_step(self) -> bool:
         now = time.perf_counter()
-        if self.progress is not None:
-            if now - self._last_update >= 0.25:
-                self._last_update = now
-                self.progress.update(self.task, completed=self.num_timesteps, **self._fields())
-        elif now - self._last_log >= self.log_every_s:
+        if not self._estimated and now - self._t0 >= self.estimate_after_s:
+            self._estimate()
+        if self.live is None and now - self._last_log >= self.log_every_s:
             self._last_log = now
-            self.console.print(self.line())
+            self.say(self.line())
         return True
 
-    def line(self) -> str:
-        f = self._fields()
-        pct = 100.0 * self.num_timesteps / max(self.total, 1)
-        return (
-            f"{self.description}: {self.num_timesteps:,}/{self.total:,} steps ({pct:.0f}%)  "
-            f"{f['sps']} steps/s  reward {f['rew']}  ball Δx {f['dx']} m  episodes {f['eps']}  "
-            f"{self.stats.wall_s:.0f} s"
-        )
-
     def _on_training_end(self) -> None:
-        if self.progress is not None:
-            self.progress.update(self.task, completed=self.num_timesteps, **self._fields())
-            self.progress.stop()
+        if self.live is not None:
+            with contextlib.suppress(Exception):  # the terminal may be gone
+                self.live.stop()
+            self.live = None
         else:
-            self.console.print(self.line())
+            self.say(self.line())
+
+
+def _fit(parts: list[str], width: int | None, sep: str = " · ") -> str:
+    """``parts`` joined by ``sep``, dropping trailing parts that do not fit in ``width``."""
+    out = parts[0]
+    for p in parts[1:]:
+        if width is not None and len(out) + len(sep) + len(p) > width:
+            break
+        out += sep + p
+    return out if width is None else out[:width]
+
+
+class _Display:
+    """The live two-line display of :class:`RichProgressCallback`, laid out for the console's
+    width at every refresh: ``description ━━━━━━╸─── 45% 450,000/1,000,000`` and the status."""
+
+    def __init__(self, cb: RichProgressCallback) -> None:
+        self.cb = cb
+
+    def __rich_console__(self, console, options):
+        from rich.progress_bar import ProgressBar
+        from rich.table import Table
+        from rich.text import Text
+
+        cb = self.cb
+        width = max(20, options.max_width)
+        pct = 100.0 * cb.num_timesteps / max(cb.total, 1)
+        counts = f" {pct:3.0f}% {cb.num_timesteps:,}/{cb.total:,}"
+        desc = cb.description[: max(4, width // 4)] + " "
+        grid = Table.grid(expand=True)
+        grid.add_column(no_wrap=True)
+        grid.add_column(ratio=1)
+        grid.add_column(no_wrap=True)
+        grid.add_row(
+            Text(desc, style="bold"),
+            ProgressBar(total=max(cb.total, 1), completed=min(cb.num_timesteps, cb.total)),
+            Text(counts),
+        )
+        yield grid
+        yield Text(_fit(cb.parts(), width - 1), style="cyan", no_wrap=True)
+
+
+class StopOnSignal(BaseCallback):
+    """Ends training cleanly at the next environment step once :attr:`signal` is set (by the
+    SIGTERM/SIGHUP handlers of :func:`robocup_gym.train.trainer.train`), so that the run is
+    saved exactly as after Ctrl-C."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.signal: int | None = None
+
+    def _on_step(self) -> bool:
+        return self.signal is None
 
 
 class TorchThreadsCallback(BaseCallback):
@@ -276,28 +376,51 @@ class TorchThreadsCallback(BaseCallback):
 
 
 class CheckpointCallback(BaseCallback):
-    """Saves ``checkpoints/model_<steps>_steps.zip`` every ``every`` environment steps.
+    """Saves ``checkpoints/model_<steps>_steps.zip`` every ``every`` environment steps, and
+    every ``every_s`` seconds of wall-clock time (so that a slow run has something saved within
+    its first minutes; a time-triggered checkpoint replaces the previous time-triggered one).
 
     Also keeps the newest ``vecnormalize.pkl`` (when observations are normalised) and, for
     off-policy algorithms, the newest replay buffer (``checkpoints/replay_buffer.pkl``) so that
-    ``--resume`` continues exactly.
+    ``--resume`` continues exactly. ``on_save(path, first)`` is told about every save.
     """
 
-    def __init__(self, directory: Path, every: int, save_replay_buffer: bool = False) -> None:
+    def __init__(
+        self,
+        directory: Path,
+        every: int,
+        save_replay_buffer: bool = False,
+        every_s: float = 0.0,
+        on_save=None,
+    ) -> None:
         super().__init__()
         self.directory = Path(directory)
         self.every = int(every)
+        self.every_s = float(every_s)
         self.save_replay_buffer = save_replay_buffer
+        self.on_save = on_save
         self._next = 0
+        self._next_t = 0.0
+        self._timed: Path | None = None
+        self.saved = 0
 
     def _on_training_start(self) -> None:
         self.directory.mkdir(parents=True, exist_ok=True)
-        self._next = (self.num_timesteps // self.every + 1) * self.every
+        if self.every > 0:
+            self._next = (self.num_timesteps // self.every + 1) * self.every
+        self._next_t = time.perf_counter() + self.every_s
 
     def _on_step(self) -> bool:
-        if self.num_timesteps >= self._next:
+        if self.every > 0 and self.num_timesteps >= self._next:
             self.save()
             self._next = (self.num_timesteps // self.every + 1) * self.every
+            self._next_t = time.perf_counter() + self.every_s
+        elif self.every_s > 0 and time.perf_counter() >= self._next_t:
+            previous = self._timed
+            self._timed = self.save()
+            if previous is not None and previous != self._timed:
+                previous.unlink(missing_ok=True)
+            self._next_t = time.perf_counter() + self.every_s
         return True
 
     def save(self) -> Path:
@@ -308,6 +431,9 @@ class CheckpointCallback(BaseCallback):
             vn.save(str(self.directory / "vecnormalize.pkl"))
         if self.save_replay_buffer and hasattr(self.model, "save_replay_buffer"):
             self.model.save_replay_buffer(self.directory / "replay_buffer.pkl")
+        self.saved += 1
+        if self.on_save is not None:
+            self.on_save(path, self.saved == 1)
         return path
 
 
@@ -317,8 +443,18 @@ class PeriodicEvalCallback(BaseCallback):
     Logs ``eval/*`` to TensorBoard and appends one JSON line per evaluation to ``log_path``.
     """
 
-    def __init__(self, make_env, every: int, episodes: int, log_path: Path, seed: int = 10_000):
+    def __init__(
+        self,
+        make_env,
+        every: int,
+        episodes: int,
+        log_path: Path,
+        seed: int = 10_000,
+        on_result=None,
+    ):
         super().__init__()
+        self.on_result = on_result
+        """Called with each evaluation's result (e.g. to show it in the progress display)."""
         self.make_env = make_env
         self.every = int(every)
         self.episodes = int(episodes)
@@ -357,6 +493,8 @@ class PeriodicEvalCallback(BaseCallback):
         self.last = {"steps": self.num_timesteps, **s}
         with self.log_path.open("a") as f:
             f.write(json.dumps(self.last) + "\n")
+        if self.on_result is not None:
+            self.on_result(self.last)
         return self.last
 
     def _on_training_end(self) -> None:

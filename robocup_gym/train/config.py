@@ -103,6 +103,10 @@ class TrainConfig:
     """Wrap in ``VecNormalize`` (observations only); off in the paper."""
     checkpoint_freq: int = 100_000
     """Save a checkpoint every this many environment steps (0 = never)."""
+    checkpoint_every_s: float = 120.0
+    """Also save one every this many seconds of wall-clock time (0 = never), so that a run has
+    something saved within its first minutes whatever its speed; each time-triggered
+    checkpoint replaces the previous time-triggered one."""
     eval_freq: int = 100_000
     """Evaluate deterministically every this many environment steps (0 = never)."""
     eval_episodes: int = 5
@@ -136,6 +140,11 @@ class TrainConfig:
             raise ValueError(f"n_envs must be >= 1, got {self.n_envs}")
         if self.timesteps < 1:
             raise ValueError(f"timesteps must be >= 1, got {self.timesteps}")
+        for name in ("checkpoint_freq", "eval_freq", "eval_episodes", "n_workers"):
+            if int(getattr(self, name)) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+        if not self.checkpoint_every_s >= 0:  # also refuses NaN
+            raise ValueError(f"checkpoint_every_s must be >= 0, got {self.checkpoint_every_s}")
         if self.vec_env not in ("auto", "subproc", "dummy"):
             raise ValueError(f"vec_env must be auto, subproc or dummy, got {self.vec_env!r}")
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -65,6 +66,41 @@ def ensure_gl_backend() -> str:
         os.environ["MUJOCO_GL"] = "egl"
         os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     return os.environ.get("MUJOCO_GL", "glfw")
+
+
+def _tiny_render() -> None:
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string(
+        "<mujoco><worldbody><geom size='.1'/></worldbody></mujoco>"
+    )
+    renderer = mujoco.Renderer(model, 16, 16)
+    renderer.close()
+
+
+def check_renderer() -> None:
+    """Make sure MuJoCo can render here (a tiny offscreen frame), before any episode runs.
+
+    Raises:
+        RuntimeError: one sentence naming ``MUJOCO_GL``/``DISPLAY`` as found, what failed, and
+            what works instead.
+    """
+    gl = os.environ.get("MUJOCO_GL") or "glfw (default)"
+    display = os.environ.get("DISPLAY")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # GLFW's warnings repeat what the error says
+            _tiny_render()
+    except Exception as exc:  # every GL failure becomes one clear error
+        where = f"MUJOCO_GL={gl}" + (f", DISPLAY={display}" if display else ", no DISPLAY")
+        detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        raise RuntimeError(
+            f"cannot render the video with {where} ({type(exc).__name__}"
+            + (f": {detail}" if detail else "")
+            + "). Headless: MUJOCO_GL=egl (libEGL and a GPU driver) or MUJOCO_GL=osmesa "
+            "(apt-get install libosmesa6); with a desktop, a DISPLAY whose X server is running; "
+            "or leave out --video"
+        ) from None
 
 
 class FrameRecorder:
@@ -189,6 +225,10 @@ def evaluate_run(
     own backend."""
     from robocup_gym.train.tasks import make_env
 
+    if int(episodes) < 1:
+        raise ValueError(f"episodes must be >= 1, got {episodes}")
+    if video is not None and int(video_episodes) < 1:
+        raise ValueError(f"video episodes must be >= 1, got {video_episodes}")
     info: RunInfo = load_run(run)
     cfg = info.config
     model = load_model(info, checkpoint=checkpoint)
@@ -216,6 +256,7 @@ def evaluate_run(
         summary["video"] = str(record_video(info, model, video, episodes=video_episodes, seed=seed))
     if write:
         name = "eval.json" if backend == cfg.backend else f"eval-{backend}.json"
+        summary["written"] = str(info.path / name)
         (info.path / name).write_text(json.dumps(summary, indent=2) + "\n")
     return summary
 

@@ -282,8 +282,17 @@ class OnnxPolicy:
         import onnxruntime as ort
 
         self.path = Path(onnx_path)
-        self.session = ort.InferenceSession(str(self.path), providers=["CPUExecutionProvider"])
-        self.metadata = read_metadata(self.path)
+        try:
+            self.session = ort.InferenceSession(str(self.path), providers=["CPUExecutionProvider"])
+            self.metadata = read_metadata(self.path)
+        except ValueError:
+            raise
+        except Exception as exc:  # protobuf/runtime errors of a bad file
+            first = (str(exc).strip().splitlines() or [""])[0]
+            raise ValueError(
+                f"{self.path} is not a valid ONNX policy ({type(exc).__name__}: {first[:200]}); "
+                "make one with `robocup-gym export RUN --onnx FILE`"
+            ) from None
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
         x = np.asarray(obs, dtype=np.float32)

@@ -96,3 +96,66 @@ def make_env(
     if render_mode is not None:
         kwargs["render_mode"] = render_mode
     return gym.make(env_id, **kwargs)
+
+
+_NOT_CONFIG = ("backend", "render_mode", "render_size", "config")
+"""``gymnasium.make`` keywords of the tasks that are not config fields."""
+
+
+def validate_env_kwargs(env_id: str, env_kwargs: dict[str, Any] | None) -> None:
+    """Check a RobocupGym task's options without starting any simulator, so that a typo fails
+    before a run folder or a worker process exists.
+
+    Raises:
+        ValueError: (:class:`~robocup_gym.envs.config.EnvConfigError`) naming the option and the
+            valid ones, or the value and what it must be.
+    """
+    if not is_robocup_task(env_id) or not env_kwargs:
+        return
+    _register_tasks()
+    entry = gym.registry[env_id].entry_point
+    if isinstance(entry, str):
+        module, _, attr = entry.partition(":")
+        import importlib
+
+        cls = getattr(importlib.import_module(module), attr)
+    else:
+        cls = entry
+    default_config = getattr(cls, "default_config", None)
+    if default_config is None:
+        return
+    options = {k: v for k, v in env_kwargs.items() if k not in _NOT_CONFIG}
+    default_config().replace(**options)
+
+
+def validate_algo_kwargs(algo: str, algo_kwargs: dict[str, Any]) -> None:
+    """Check that every hyperparameter is a keyword of the algorithm's class.
+
+    Raises:
+        ValueError: naming the unknown keys and listing the valid ones.
+    """
+    import inspect
+
+    from robocup_gym.train.run import algo_class
+
+    valid: set[str] = set()
+    for klass in algo_class(algo).__mro__:
+        init = klass.__dict__.get("__init__")
+        if init is None:
+            continue
+        for p in inspect.signature(init).parameters.values():
+            if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.name != "self":
+                valid.add(p.name)
+    valid = {n for n in valid if not n.startswith("_")} - {
+        "policy",
+        "env",
+        "support_multi_env",
+        "supported_action_spaces",
+        "monitor_wrapper",
+    }
+    unknown = sorted(set(algo_kwargs) - valid)
+    if unknown:
+        raise ValueError(
+            f"unknown {algo.upper()} hyperparameter(s) {', '.join(map(repr, unknown))}; "
+            f"valid: {', '.join(sorted(valid))}"
+        )

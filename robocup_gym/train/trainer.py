@@ -5,6 +5,9 @@ from __future__ import annotations
 import contextlib
 import csv
 import os
+import shutil
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,7 +15,13 @@ from typing import Any
 
 from robocup_gym.train.config import TrainConfig
 from robocup_gym.train.run import checkpoints, load_run, new_run_dir
-from robocup_gym.train.tasks import make_env, resolve_task, task_name
+from robocup_gym.train.tasks import (
+    make_env,
+    resolve_task,
+    task_name,
+    validate_algo_kwargs,
+    validate_env_kwargs,
+)
 
 
 @dataclass
@@ -22,23 +31,60 @@ class TrainResult:
     wall_s: float
     steps_per_s: float
     interrupted: bool = False
+    """Stopped before ``timesteps`` by Ctrl-C, SIGTERM or SIGHUP (the model was saved)."""
+    signal: int | None = None
+    """The signal (SIGTERM/SIGHUP) that stopped the run, if one did."""
     recent: dict[str, Any] = field(default_factory=dict)
     """Running means over the last 100 training episodes."""
     last_eval: dict[str, Any] | None = None
 
 
-def _previous_wall_s(curve: Path) -> float:
-    """Wall-clock seconds already spent by a resumed run (last row of progress.csv)."""
+def _previous_curve(curve: Path) -> tuple[float, int]:
+    """Wall-clock seconds and episodes of a resumed run so far (last row of progress.csv)."""
     if not curve.exists():
-        return 0.0
+        return 0.0, 0
     last = None
     with curve.open() as f:
         for row in csv.DictReader(f):
             last = row
+    if not last:
+        return 0.0, 0
     try:
-        return float(last["wall_s"]) if last else 0.0
+        wall = float(last["wall_s"])
     except (KeyError, TypeError, ValueError):
-        return 0.0
+        wall = 0.0
+    try:
+        episodes = int(float(last["episodes"]))
+    except (KeyError, TypeError, ValueError):
+        episodes = 0
+    return wall, episodes
+
+
+STOP_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+"""Signals that end a run the way Ctrl-C does: the model is saved and the run can resume."""
+
+
+@contextlib.contextmanager
+def _stop_on_signals(stopper):
+    """While training, SIGTERM/SIGHUP set ``stopper.signal`` (training then stops at the next
+    step and saves); the previous handlers come back afterwards. Only in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {}
+
+    def handler(signum, frame):
+        stopper.signal = signum
+
+    for sig in STOP_SIGNALS:
+        previous[sig] = signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
 
 
 def _console(console):
@@ -52,9 +98,12 @@ def _console(console):
 def prepare_run(
     config: TrainConfig, out: str | os.PathLike = "runs", run_dir: str | os.PathLike | None = None
 ) -> tuple[TrainConfig, Path]:
-    """Resolve the task, create the run folder and write ``config.yaml``."""
+    """Resolve the task, check its options and hyperparameters, create the run folder and write
+    ``config.yaml``. Nothing is created when a check fails."""
     env_id = resolve_task(config.task)
     config = config.merged(env_id=env_id)
+    validate_env_kwargs(env_id, config.env_kwargs)
+    validate_algo_kwargs(config.algo, config.algo_kwargs)
     if run_dir is None:
         path = new_run_dir(out, task_name(env_id), config.algo)
     else:
@@ -111,6 +160,7 @@ def train(
         curve_every: Steps between rows of ``progress.csv`` (default: 1/200 of the run, >= 1000).
     """
     console = _console(console)
+    created = False
     if resume is not None:
         info = load_run(resume)
         cfg, path = info.config, info.path
@@ -119,6 +169,7 @@ def train(
             cfg.save(path / "config.yaml")
         start_from = info.latest_model_path()
     else:
+        created = run_dir is None or not Path(run_dir).exists()
         cfg, path = prepare_run(config or TrainConfig(), out=out, run_dir=run_dir)
         start_from = None
 
@@ -128,20 +179,151 @@ def train(
         f"seed {cfg.seed} · backend {cfg.backend}"
     )
     console.print(f"run folder: [cyan]{path}[/cyan]" + (" (resuming)" if start_from else ""))
+    saves = []
+    if cfg.checkpoint_every_s > 0:
+        t = cfg.checkpoint_every_s
+        saves.append(f"every {t / 60:g} min" if t >= 60 else f"every {t:g} s")
+    if cfg.checkpoint_freq > 0:
+        saves.append(f"every {cfg.checkpoint_freq:,} steps")
+    console.print(
+        "checkpoints "
+        + (" and ".join(saves) if saves else "off")
+        + "; Ctrl-C, SIGTERM or SIGHUP stops and saves (continue with --resume)"
+    )
 
+    try:
+        model, venv = _setup(cfg, path, start_from, console)
+    except BaseException:
+        if created:  # leave no half-made run folder behind
+            shutil.rmtree(path, ignore_errors=True)
+        raise
+
+    remaining = cfg.timesteps - int(model.num_timesteps)
+    curve = path / "progress.csv"
+    wall0, episodes0 = _previous_curve(curve) if start_from is not None else (0.0, 0)
+    from robocup_gym.train.callbacks import (
+        CheckpointCallback,
+        EpisodeStatsCallback,
+        PeriodicEvalCallback,
+        RichProgressCallback,
+        StopOnSignal,
+        TorchThreadsCallback,
+    )
+
+    stats = EpisodeStatsCallback(
+        curve_path=curve,
+        curve_every=curve_every or max(1000, cfg.timesteps // 200),
+        wall_offset_s=wall0,
+        episodes_offset=episodes0,
+    )
+    stopper = StopOnSignal()
+    callbacks: list = [stopper, stats]
+    if cfg.torch_threads != 1 and cfg.n_envs > 1 and cfg.vec_env != "dummy":
+        # several threads for the gradient steps only, one while the environments run
+        callbacks.append(TorchThreadsCallback(rollout_threads=1, train_threads=cfg.torch_threads))
+    bar = None
+    if progress:
+        bar = RichProgressCallback(
+            stats,
+            cfg.timesteps,
+            description=cfg.task,
+            console=console,
+            log_every_s=log_every_s,
+        )
+        callbacks.append(bar)
+
+    def say(text: str) -> None:
+        if bar is not None:
+            bar.say(text)
+        else:
+            with contextlib.suppress(Exception):
+                console.print(text, highlight=False)
+
+    def saved(ckpt: Path, first: bool) -> None:
+        say(("first checkpoint: " if first else "checkpoint: ") + str(ckpt))
+
+    if cfg.checkpoint_freq > 0 or cfg.checkpoint_every_s > 0:
+        callbacks.append(
+            CheckpointCallback(
+                path / "checkpoints",
+                cfg.checkpoint_freq,
+                cfg.algo == "sac",
+                every_s=cfg.checkpoint_every_s,
+                on_save=saved,
+            )
+        )
+    evaluator = None
+    if cfg.eval_freq > 0 and cfg.eval_episodes > 0:
+        evaluator = PeriodicEvalCallback(
+            lambda: make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs),
+            cfg.eval_freq,
+            cfg.eval_episodes,
+            path / "evaluations.jsonl",
+            on_result=bar.report_eval if bar is not None else None,
+        )
+        callbacks.append(evaluator)
+
+    interrupted = False
+    t0 = time.perf_counter()
+    try:
+        with _stop_on_signals(stopper):
+            if remaining > 0:
+                model.learn(
+                    total_timesteps=remaining, callback=callbacks, reset_num_timesteps=False
+                )
+            else:
+                say(f"nothing to do: the run already has {model.num_timesteps:,} steps")
+    except KeyboardInterrupt:
+        interrupted = True
+        say("[yellow]interrupted (Ctrl-C): saving the model…[/yellow]")
+    finally:
+        model.save(path / "model.zip")
+        vn = model.get_vec_normalize_env()
+        if vn is not None:
+            vn.save(str(path / "vecnormalize.pkl"))
+        with contextlib.suppress(Exception):
+            venv.close()
+    stopped_by = stopper.signal
+    if stopped_by is not None:
+        interrupted = True
+        say(f"[yellow]stopped by {signal.Signals(stopped_by).name}: model saved[/yellow]")
+    wall = time.perf_counter() - t0
+    steps_done = int(model.num_timesteps)
+    result = TrainResult(
+        run_dir=path,
+        timesteps=steps_done,
+        wall_s=wall,
+        steps_per_s=stats.overall_steps_per_s() if remaining > 0 else 0.0,
+        interrupted=interrupted,
+        signal=stopped_by,
+        recent=stats.summary(),
+        last_eval=evaluator.last if evaluator is not None else None,
+    )
+    s = result.recent
+    dx = s.get("ball_dx_mean")
+    say(
+        f"[bold green]{'stopped' if interrupted else 'done'}[/bold green]: {steps_done:,} steps; "
+        f"this session {steps_done - (cfg.timesteps - remaining):,} steps in {wall:,.0f} s "
+        f"({result.steps_per_s:,.0f} steps/s)"
+        + (f" · recent ball Δx {dx:.2f} m" if dx is not None else "")
+        + (f" · recent reward {s['return_mean']:.2f}" if s.get("return_mean") is not None else "")
+    )
+    say(f"model: [cyan]{path / 'model.zip'}[/cyan]")
+    if interrupted and steps_done < cfg.timesteps:
+        say(f"continue: robocup-gym train --resume {path}")
+    say(f"next: robocup-gym eval {path}")
+    return result
+
+
+def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
+    """Start the environments and the learner (a fresh model, one from ``init_from``, or the
+    run's newest checkpoint when resuming); returns ``(model, venv)``."""
     with console.status(f"starting {cfg.n_envs} environment(s) and the learner…"):
         import torch
         from stable_baselines3.common.logger import configure
         from stable_baselines3.common.utils import set_random_seed
         from stable_baselines3.common.vec_env import VecNormalize
 
-        from robocup_gym.train.callbacks import (
-            CheckpointCallback,
-            EpisodeStatsCallback,
-            PeriodicEvalCallback,
-            RichProgressCallback,
-            TorchThreadsCallback,
-        )
         from robocup_gym.train.run import algo_class
         from robocup_gym.train.vecenv import make_vec_env
 
@@ -164,114 +346,42 @@ def train(
             start_method=cfg.start_method,
             n_workers=cfg.n_workers,
         )
-        if cfg.normalize_obs:
-            vn_path = path / "checkpoints" / "vecnormalize.pkl"
-            if start_from is not None and (path / "vecnormalize.pkl").exists():
-                vn_path = path / "vecnormalize.pkl"
-            if init is not None and init.vecnormalize_path is not None:
-                venv = VecNormalize.load(str(init.vecnormalize_path), venv)
-                venv.training = True
-            elif start_from is not None and vn_path.exists():
-                venv = VecNormalize.load(str(vn_path), venv)
-                venv.training = True
-            else:
-                venv = VecNormalize(venv, norm_obs=True, norm_reward=False)
-        cls = algo_class(cfg.algo)
-        if start_from is None:
-            model = cls(
-                "MlpPolicy",
-                venv,
-                seed=cfg.seed,
-                device=cfg.device,
-                verbose=0,
-                **cfg.resolved_algo_kwargs(),
-            )
-            if init is not None:
-                try:
+        try:
+            if cfg.normalize_obs:
+                vn_path = path / "checkpoints" / "vecnormalize.pkl"
+                if start_from is not None and (path / "vecnormalize.pkl").exists():
+                    vn_path = path / "vecnormalize.pkl"
+                if init is not None and init.vecnormalize_path is not None:
+                    venv = VecNormalize.load(str(init.vecnormalize_path), venv)
+                    venv.training = True
+                elif start_from is not None and vn_path.exists():
+                    venv = VecNormalize.load(str(vn_path), venv)
+                    venv.training = True
+                else:
+                    venv = VecNormalize(venv, norm_obs=True, norm_reward=False)
+            cls = algo_class(cfg.algo)
+            if start_from is None:
+                model = cls(
+                    "MlpPolicy",
+                    venv,
+                    seed=cfg.seed,
+                    device=cfg.device,
+                    verbose=0,
+                    **cfg.resolved_algo_kwargs(),
+                )
+                if init is not None:
                     _start_from_run(model, init, cfg)
-                except ValueError:
-                    venv.close()  # the environment workers go with the refused run
-                    raise
-        else:
-            model = cls.load(start_from, env=venv, device=cfg.device)
-            rb = path / "checkpoints" / "replay_buffer.pkl"
-            if hasattr(model, "load_replay_buffer") and rb.exists():
-                model.load_replay_buffer(rb)
-        model.set_logger(configure(str(path / "tb"), ["tensorboard"]))
-
-    remaining = cfg.timesteps - int(model.num_timesteps)
-    curve = path / "progress.csv"
-    stats = EpisodeStatsCallback(
-        curve_path=curve,
-        curve_every=curve_every or max(1000, cfg.timesteps // 200),
-        wall_offset_s=_previous_wall_s(curve) if start_from is not None else 0.0,
-    )
-    callbacks: list = [stats]
-    if cfg.torch_threads != 1 and cfg.n_envs > 1 and cfg.vec_env != "dummy":
-        # several threads for the gradient steps only, one while the environments run
-        callbacks.append(TorchThreadsCallback(rollout_threads=1, train_threads=cfg.torch_threads))
-    if progress:
-        callbacks.append(
-            RichProgressCallback(
-                stats,
-                cfg.timesteps,
-                description=cfg.task,
-                console=console,
-                log_every_s=log_every_s,
-            )
-        )
-    if cfg.checkpoint_freq > 0:
-        callbacks.append(
-            CheckpointCallback(path / "checkpoints", cfg.checkpoint_freq, cfg.algo == "sac")
-        )
-    evaluator = None
-    if cfg.eval_freq > 0 and cfg.eval_episodes > 0:
-        evaluator = PeriodicEvalCallback(
-            lambda: make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs),
-            cfg.eval_freq,
-            cfg.eval_episodes,
-            path / "evaluations.jsonl",
-        )
-        callbacks.append(evaluator)
-
-    interrupted = False
-    t0 = time.perf_counter()
-    try:
-        if remaining > 0:
-            model.learn(total_timesteps=remaining, callback=callbacks, reset_num_timesteps=False)
-        else:
-            console.print(f"nothing to do: the run already has {model.num_timesteps:,} steps")
-    except KeyboardInterrupt:
-        interrupted = True
-        console.print("[yellow]interrupted: saving the model…[/yellow]")
-    finally:
-        model.save(path / "model.zip")
-        vn = model.get_vec_normalize_env()
-        if vn is not None:
-            vn.save(str(path / "vecnormalize.pkl"))
-        with contextlib.suppress(Exception):
-            venv.close()
-    wall = time.perf_counter() - t0
-    steps_done = int(model.num_timesteps)
-    result = TrainResult(
-        run_dir=path,
-        timesteps=steps_done,
-        wall_s=wall,
-        steps_per_s=stats.overall_steps_per_s() if remaining > 0 else 0.0,
-        interrupted=interrupted,
-        recent=stats.summary(),
-        last_eval=evaluator.last if evaluator is not None else None,
-    )
-    s = result.recent
-    dx = s.get("ball_dx_mean")
-    console.print(
-        f"[bold green]done[/bold green]: {steps_done:,} steps in {wall:,.0f} s "
-        f"({result.steps_per_s:,.0f} steps/s)"
-        + (f" · recent ball Δx {dx:.2f} m" if dx is not None else "")
-        + (f" · recent reward {s['return_mean']:.2f}" if s.get("return_mean") is not None else "")
-    )
-    console.print(f"model: [cyan]{path / 'model.zip'}[/cyan]  next: robocup-gym eval {path}")
-    return result
+            else:
+                model = cls.load(start_from, env=venv, device=cfg.device)
+                rb = path / "checkpoints" / "replay_buffer.pkl"
+                if hasattr(model, "load_replay_buffer") and rb.exists():
+                    model.load_replay_buffer(rb)
+            model.set_logger(configure(str(path / "tb"), ["tensorboard"]))
+        except BaseException:
+            with contextlib.suppress(Exception):
+                venv.close()  # the environment workers go with the refused run
+            raise
+    return model, venv
 
 
 def _n_ckpt(path: Path) -> int:

@@ -13,6 +13,7 @@ import contextlib
 import multiprocessing as mp
 import multiprocessing.connection as mp_connection
 import os
+import signal
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -126,6 +127,12 @@ def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0
     from stable_baselines3.common.vec_env.patch_gym import _patch_env
 
     parent_remote.close()
+    # SIGTERM/SIGHUP sent to the whole process group (a job scheduler, a closed terminal) are
+    # the parent's to handle: it saves the run and then closes the workers. A worker whose
+    # parent dies ends anyway: its pipe reaches end-of-file.
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), signal.SIG_IGN)
     envs: list = []
     broken: _WorkerError | None = None
     for k, fn in enumerate(env_fns_wrapper.var):

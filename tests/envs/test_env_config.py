@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import gymnasium as gym
+import numpy as np
 import pytest
 
 from robocup_gym.envs import (
@@ -89,7 +90,21 @@ def test_joint_names_in_any_naming(make_env):
         ({"frame_stack": 0}, r"frame_stack must be an integer >= 1"),
         ({"max_episode_steps": 0}, r"max_episode_steps"),
         ({"wait_steps": -1}, r"wait_steps must be an integer >= 0"),
-        ({"robot_type": 5}, r"robot_type must be one of 0, 1, 2, 3, 4"),
+        ({"robot_type": 5}, r"robot_type must be one of the integers 0, 1, 2, 3, 4"),
+        ({"robot_type": 2.0}, r"robot_type must be one of the integers.*got 2.0"),
+        ({"robot_type": True}, r"robot_type must be one of the integers"),
+        ({"kick_target": (float("nan"), 0.0)}, r"kick_target must be 2 finite numbers"),
+        ({"kick_target_angle_range": (45.0, -45.0)}, r"low <= high"),
+        ({"fall_height": float("nan")}, r"fall_height must be a torso height"),
+        ({"fall_up_z": 5.0}, r"fall_up_z must be between -1 and 1"),
+        ({"play_mode": "NoSuchMode"}, r"unknown play_mode 'NoSuchMode'; valid: BeforeKickOff"),
+        ({"robot_start_pos": (100.0, 100.0)}, r"robot_start_pos \(100, 100\) is off the field"),
+        ({"ball_start_pos": (0.0, 30.0)}, r"ball_start_pos \(0, 30\) is off the field"),
+        ({"robot_start_heading_deg": float("inf")}, r"robot_start_heading_deg must be a finite"),
+        (
+            {"joint_start_deg": {"rlj3": 1000.0}},
+            r"joint_start_deg: rle3 \(rlj3\) = 1000° is outside its range \[-25, 100\]°",
+        ),
         ({"obs_clip": -1.0}, r"obs_clip"),
         ({"observation_noise_std": -0.1}, r"observation_noise_std"),
         ({"ball_start_pos": (1.0,)}, r"ball_start_pos"),
@@ -104,6 +119,46 @@ def test_joint_names_in_any_naming(make_env):
 def test_bad_config_is_a_clear_error(options, match):
     with pytest.raises(EnvConfigError, match=match):
         BaseEnv(**options)
+
+
+@pytest.mark.parametrize(
+    "options, match",
+    [
+        ({"robot_pos": (100.0, 0.0)}, r"robot_pos \(100, 0\) is off the field"),
+        ({"ball_pos": (0.0, float("nan"))}, r"ball_pos must be finite"),
+        ({"joint_angles_deg": {"lae1": 500.0}}, r"lae1 .* = 500° is outside its range"),
+        ({"kick_target": (float("inf"), 0.0)}, r"kick_target must be finite"),
+        ({"robot_heading_deg": float("nan")}, r"robot_heading_deg must be finite"),
+    ],
+)
+def test_bad_reset_options_are_clear_errors_and_the_env_goes_on(options, match):
+    env = BaseEnv()
+    try:
+        env.reset(seed=0)
+        with pytest.raises(ValueError, match=match):
+            env.reset(options=options)
+        env.reset(seed=1)  # nothing broke: the next episode starts normally
+        env.step(np.zeros(env.action_space.shape))
+    finally:
+        env.close()
+
+
+def test_a_closed_environment_refuses_to_step_or_reset():
+    env = BaseEnv()
+    env.reset(seed=0)
+    env.close()
+    with pytest.raises(RuntimeError, match=r"step\(\) on a closed environment"):
+        env.step(np.zeros(env.action_space.shape))
+    with pytest.raises(RuntimeError, match=r"reset\(\) on a closed environment"):
+        env.reset()
+    env.close()  # closing twice is harmless
+
+
+def test_the_paper_pose_is_within_every_types_joint_ranges():
+    from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG
+
+    for robot_type in range(5):
+        EnvConfig(joint_start_deg=PAPER_STANDING_POSE_DEG, robot_type=robot_type)
 
 
 def test_task_options_are_validated():

@@ -161,7 +161,7 @@ def test_fall_terminates(make_env):
     env.reset(seed=0)
     _, _, terminated, truncated, info = env.step(_zero(env))
     assert not terminated and not truncated and info["fallen"]
-    env = make_env(fall_up_z=1.01)  # upright counts as tilted
+    env = make_env(fall_up_z=1.0)  # the slightest tilt counts as fallen
     env.reset(seed=0)
     assert env.step(_zero(env))[2]
 
@@ -271,3 +271,22 @@ def test_custom_task_is_one_small_subclass(make_env):
     env.step(_zero(env))
     reward = env.step(_zero(env))[1]
     assert _rolled(reward, 1.0, 7)
+
+
+def test_info_fallen_describes_the_world_after_the_wait_cycles():
+    """A robot that falls during the wait cycles is down in ``info`` (and for the fall
+    penalty), as the video and the reward's ball state show it."""
+    from robocup_gym.envs.base_env import BaseEnv
+
+    leaning = {"rle3": 60.0, "lle3": 60.0}  # hips bent: the robot topples over in ~1 s
+    results = {}
+    for wait in (0, 100):
+        env = BaseEnv(
+            max_episode_steps=1, wait_steps=wait, joint_start_deg=leaning, terminate_on_fall=False
+        )
+        env.reset(seed=0)
+        info = env.step(np.zeros(env.action_space.shape))[4]
+        results[wait] = (info["fallen"], float(info["torso_pos"][2]))
+        env.close()
+    assert results[0][0] is False and results[0][1] > 0.25  # still up when the episode ends
+    assert results[100][0] is True and results[100][1] < 0.15  # down after the wait

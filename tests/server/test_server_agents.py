@@ -89,13 +89,13 @@ def test_init_rules(make_server):
     # sides: the first team name that initialises is left, the second right (kept for good)
     assert "(unum 4) (team left)" in "".join(run_agents(server, [("A", 4, 0)], 1)[0])
     assert "(unum 1) (team right)" in "".join(run_agents(server, [("B", 0, 2)], 1)[0])
-    out = run_agents(server, [("A", 3, 0), ("A", 3, 1), ("C", 1, 0), ("B", 0, 4)], 2)
-    joined = ["".join(msgs) for msgs in out]
-    got_3 = ["(unum 3) (team left)" in j for j in joined[:2]]
-    assert sorted(got_3) == [False, True]  # the number is taken by whoever came first
-    assert "(unum" not in joined[got_3.index(False)]
-    assert "(unum" not in joined[2]  # a third team is rejected
-    assert "(unum 1) (team right)" in joined[3]  # the first free number again
+    # refused: a number that is taken (by whoever came first), a third team; the refused robot
+    # leaves the world and its connection is closed
+    with pytest.raises(ConnectionError):
+        run_agents(server, [("A", 3, 0), ("A", 3, 1)], 5)
+    with pytest.raises(ConnectionError):
+        run_agents(server, [("C", 1, 0)], 3)
+    assert "(unum 1) (team right)" in "".join(run_agents(server, [("B", 0, 4)], 2)[0])
     assert server.referee.teams.names == {"left": "A", "right": "B"}
 
 

@@ -266,10 +266,11 @@ def test_experiments_writes_csv_and_plots(tmp_path):
 
 
 def test_serve_is_wired_lazily(monkeypatch):
-    import robocup_gym.server as server_pkg
+    """``robocup-gym serve`` is ``python -m robocup_gym.server``: same options, same values."""
+    import robocup_gym.server.__main__ as server_main
 
     seen = {}
-    monkeypatch.setattr(server_pkg, "serve", lambda **kw: seen.update(kw))
+    monkeypatch.setattr(server_main, "serve", lambda **kw: seen.update(kw))
     invoke(
         [
             "serve",
@@ -281,15 +282,15 @@ def test_serve_is_wired_lazily(monkeypatch):
             "127.0.0.1",
             "--sync",
             "--no-real-time",
+            "--sync-timeout",
+            "2.5",
+            "--seed",
+            "7",
         ]
     )
-    assert seen == {
-        "agent_port": 3111,
-        "monitor_port": 3211,
-        "host": "127.0.0.1",
-        "sync": True,
-        "real_time": False,
-    }
+    assert seen["agent_port"] == 3111 and seen["monitor_port"] == 3211
+    assert seen["host"] == "127.0.0.1" and seen["sync"] is True and seen["real_time"] is False
+    assert seen["sync_timeout"] == 2.5 and seen["seed"] == 7
 
 
 def test_serve_missing_module_is_a_clear_error(monkeypatch):
@@ -297,7 +298,7 @@ def test_serve_missing_module_is_a_clear_error(monkeypatch):
 
     from robocup_gym.cli import app
 
-    monkeypatch.setitem(sys.modules, "robocup_gym.server", None)
+    monkeypatch.setitem(sys.modules, "robocup_gym.server.__main__", None)
     result = CliRunner().invoke(app, ["serve"])
     assert result.exit_code == 1
     assert "server is not available" in result.output
@@ -381,7 +382,7 @@ def test_progress_lines_report_the_rate_of_a_short_run(tmp_path):
             *TINY_PPO,
         ]
     )
-    final = [line for line in result.stdout.splitlines() if "(100%)" in line]
+    final = [line for line in result.stdout.splitlines() if " 100% " in line]
     assert final, result.stdout
     rate = re.search(r"(\d[\d,]*) steps/s", final[-1])
     assert rate and int(rate.group(1).replace(",", "")) > 0, final[-1]

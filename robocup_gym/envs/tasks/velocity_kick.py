@@ -30,8 +30,8 @@ class VelocityKickConfig(EnvConfig):
     square_lateral_penalty: bool = False
     """Square the lateral penalty (paper: ``square_y``)."""
     fall_penalty: float = 0.0
-    """d: subtracted when the robot is down at the episode's end (paper: 0, no penalty: PPO then
-    often learns a kick that throws the robot at the ball)."""
+    """d: subtracted when the robot is down at the episode's end, after the wait cycles (paper: 0,
+    no penalty: PPO then often learns a kick that throws the robot at the ball)."""
     lateral_reference: str = "spawn"
     """``"spawn"``: |y| is measured from the ball's spawn y (the kick line through the ball);
     ``"field"``: from the field's x axis y = 0 (the paper's literal ``|ball y|``; identical when
@@ -60,7 +60,7 @@ class VelocityKick(BaseEnv):
 
         lateral = |y − y_ref|  (+ |v_y|  if penalise_y_velocity)
         reward  = a · (x − s_x)  +  b · √(v_x² + v_z²)  −  c · lateral  (or c · lateral²)
-                  −  d  (if the robot is down when the episode ends)
+                  −  d  (if the robot is down after the wait cycles)
 
     ==========================  =======  ========  ===========================================
     option                      symbol   default   meaning
@@ -71,7 +71,7 @@ class VelocityKick(BaseEnv):
     ``penalise_y_velocity``     –        False     add |v_y| to the lateral error
     ``square_lateral_penalty``  –        False     square the lateral error
     ``lateral_reference``       y_ref    "spawn"   ``"spawn"``: s_y; ``"field"``: 0
-    ``fall_penalty``            d        0.0       paid when fallen at the end (paper: none)
+    ``fall_penalty``            d        0.0       paid when down after the wait (paper: none)
     ``wait_steps``              –        20        cycles between episode end and reward
     ==========================  =======  ========  ===========================================
 
@@ -96,6 +96,6 @@ class VelocityKick(BaseEnv):
         if c.square_lateral_penalty:
             lateral = lateral * lateral
         reward = c.displacement_weight * dx + c.speed_weight * speed - c.lateral_weight * lateral
-        if self.fallen:  # as it was when the episode ended (before the wait cycles)
+        if self.fallen:  # after the wait cycles, when the ball state is measured
             reward -= c.fall_penalty
         return reward
