@@ -1,7 +1,8 @@
 """Does PPO really learn to kick? Train on VelocityKick and print the learning curve.
 
 Trains with the paper's PPO hyperparameters (``robocup-gym train velocity-kick`` defaults) on
-the embedded simulator, then prints the learning curve — mean ball x-displacement of the recent
+the default engine (SimSpark's physics on ODE; ``--engine mujoco`` for the fast approximation),
+then prints the learning curve — mean ball x-displacement of the recent
 training episodes against environment steps and wall-clock time — a final deterministic
 evaluation, and, as the last line, one JSON summary.
 
@@ -10,6 +11,7 @@ Targets on the 2-core reference machine: 1M steps in <= 15 minutes; mean ball x-
 
     python benchmarks/learning.py                      # 1M steps (the benchmark)
     python benchmarks/learning.py --timesteps 100000   # a short learning-signal check
+    python benchmarks/learning.py --engine mujoco      # the same on the MuJoCo engine
 """
 
 from __future__ import annotations
@@ -51,6 +53,7 @@ def main(argv: list[str] | None = None) -> dict:
         metavar="KEY=VALUE",
         help="environment option (YAML value), repeatable",
     )
+    p.add_argument("--engine", choices=("ode", "mujoco"), default="ode", help="physics engine")
     p.add_argument("--no-progress", action="store_true")
     args = p.parse_args(argv)
 
@@ -70,6 +73,7 @@ def main(argv: list[str] | None = None) -> dict:
         algo="ppo",
         timesteps=args.timesteps,
         seed=args.seed,
+        backend=args.engine,
         checkpoint_freq=max(args.timesteps // 4, 1),
         eval_freq=0,
         algo_kwargs=kv(args.hp),
@@ -108,6 +112,7 @@ def main(argv: list[str] | None = None) -> dict:
     wall_1m = result.wall_s * TARGET_STEPS / max(result.timesteps, 1)
     summary = {
         "task": args.task,
+        "engine": args.engine,
         "run": str(result.run_dir),
         "timesteps": result.timesteps,
         "n_envs": cfg.n_envs,

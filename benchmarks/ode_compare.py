@@ -1,9 +1,11 @@
 """The embedded MuJoCo world against SimSpark's physics on ODE itself, motion by motion.
 
-rcssserver3d steps ODE 0.16 once per 20 ms cycle. ``robocup_gym.sim.ode.OdeWorld`` re-creates
+rcssserver3d steps ODE 0.16 once per 20 ms cycle. ``robocup_gym.sim.engines.ode.OdeWorld``
+re-creates
 that step from the spec on the same engine (the system library ``libode``; Debian/Ubuntu:
 ``apt-get install libode8``), and reproduces the real server's kick D (2.31 m) and standing
-height. This script replays a library of scripted motions (``robocup_gym.sim.ode.compare``) on
+height. This script replays a library of scripted motions (``robocup_gym.sim.engines.ode.compare``)
+on
 both and prints, per motion, how far the MuJoCo world drifts from the reference; the last line
 is one JSON object.
 
@@ -17,9 +19,9 @@ import argparse
 import json
 import sys
 
+from robocup_gym.sim.engines.ode import OdeUnavailableError, OdeWorld
+from robocup_gym.sim.engines.ode.compare import compare, motions
 from robocup_gym.sim.fidelity import scripted_kick
-from robocup_gym.sim.ode import OdeUnavailableError, OdeWorld
-from robocup_gym.sim.ode.compare import compare, motions
 
 QUICK = ("stand", "kick_D", "ball_roll")
 

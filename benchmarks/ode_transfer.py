@@ -1,8 +1,11 @@
-"""Does a policy learnt on the embedded world kick on SimSpark's physics? Open- and closed-loop.
+"""Does what a policy does on the MuJoCo engine kick on SimSpark's physics? Open- and closed-loop.
 
-Runs deterministic episodes of a trained run (``robocup-gym train`` folder) on the embedded
-MuJoCo world, records every placement and joint command the environment sent to its world, and
-replays the same commands, cycle for cycle, on ``robocup_gym.sim.ode.OdeWorld`` (SimSpark's step
+A diagnostic of the engines' difference (the closed-loop table of every engine is
+``benchmarks/transfer.py``). Runs deterministic episodes of a trained run (``robocup-gym train``
+folder, trained on either engine) on the MuJoCo engine's world, records every placement and
+joint command the environment sent to its world, and
+replays the same commands, cycle for cycle, on ``robocup_gym.sim.engines.ode.OdeWorld`` (SimSpark's
+step
 on ODE itself, which reproduces the real server's kick D; needs ``libode8``). The replay is
 open-loop: the policy does not see the ODE world's state. Also replays on a fresh MuJoCo world,
 which must give the environment's own result (a check of the recording). Then runs the same
@@ -30,20 +33,20 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--seed", type=int, default=100_000)
     args = parser.parse_args(argv)
 
-    from robocup_gym.sim.ode import OdeUnavailableError, OdeWorld
-    from robocup_gym.sim.ode.compare import record_world, replay_recording
-    from robocup_gym.sim.world import World
+    from robocup_gym.sim.engines.mujoco.world import World
+    from robocup_gym.sim.engines.ode import OdeUnavailableError, OdeWorld
+    from robocup_gym.sim.engines.ode.compare import record_world, replay_recording
     from robocup_gym.train.evaluate import run_episodes
     from robocup_gym.train.run import load_model, load_run
     from robocup_gym.train.tasks import make_env
 
     info = load_run(args.run)
     cfg = info.config
-    if cfg.backend != "mujoco":
-        raise SystemExit(f"ode_transfer: {args.run} was trained on {cfg.backend}, not mujoco")
+    if cfg.backend not in ("mujoco", "ode"):
+        raise SystemExit(f"ode_transfer: {args.run} was trained on {cfg.backend}, not an engine")
     model = load_model(info)
     normalizer = info.obs_normalizer()
-    env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs)
+    env = make_env(cfg.env_id, backend="mujoco", env_kwargs=cfg.env_kwargs)  # recorded there
     world = env.unwrapped.backend.world
     rows = []
     try:

@@ -26,7 +26,19 @@ Prints one line per measurement and, as its LAST line, one JSON object:
   ``env_steps_per_s``;
 * ratios ``world_vs_raw`` and ``env_vs_world``.
 
-Timings depend on the machine and its load; ``loadavg`` is recorded with them.
+The same for SimSpark's physics on ODE (the default engine), where libode is installed:
+
+* ``ode_world_cycles_per_s``: ``OdeWorld.step`` on the workload of ``world_cycles_per_s``;
+* ``ode_raw_cycles_per_s``: ODE's own work alone (contact generation and ``dWorldStep``) on the
+  same steps, so ``ode_world_vs_raw`` is what the world adds to the engine;
+* ``ode_env_steps_per_s`` (and ``ode_env_agent_steps_per_s``): ``VelocityKick(engine="ode")``,
+  counted like ``env_steps_per_s``; ``ode_env_vs_world`` its ratio to the world;
+* ``ode_vs_mujoco_world``: the ODE world's cycle rate over the MuJoCo world's;
+* ``ode_22_robots_cycles_per_s``: 22 robots of mixed types flailing on the full field with the
+  ball (a game's physics; 50 cycles/s is real time), one core.
+
+The MuJoCo keys above measure ``engine="mujoco"`` explicitly. Timings depend on the machine and
+its load; ``loadavg`` is recorded with them.
 """
 
 from __future__ import annotations
@@ -44,7 +56,8 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from robocup_gym.sim.world import SimulationDivergedError, World
+from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError, World
+from robocup_gym.sim.engines.ode import available as ode_available
 
 EPISODE_CYCLES = 60
 """Cycles between re-placements in the world/raw measurements (≈ one VelocityKick episode:
@@ -71,7 +84,7 @@ EXTRA_MEASUREMENTS["serve_sync_cycles_per_s"] = _serve_sync_cycles_per_s
 # ----------------------------------------------------------------------------------------------
 
 
-def _place(world: World) -> None:
+def _place(world) -> None:
     world.place_robot(0, -1.0, 0.0, joint_angles_deg=np.zeros(len(world.robots[0].model.joints)))
     world.place_ball((-0.8, -0.055))
     world.set_game(play_mode="PlayOn", game_time=0.0)
@@ -120,8 +133,76 @@ class WorldRunner:
         self.cycles += done
 
 
+class OdeWorldRunner:
+    """The ODE engine's world (SimSpark's step) on the same workload as :class:`WorldRunner`:
+    one robot and the ball, random joint velocities on every joint, re-placed upright every
+    ``EPISODE_CYCLES`` cycles (not timed). It also measures ODE's own share of each step
+    (contact generation and ``dWorldStep``: ``OdeWorld.engine_seconds``) on the same states."""
+
+    def __init__(self, seed: int = 0) -> None:
+        from robocup_gym.sim.engines.ode import OdeWorld
+
+        self.world = OdeWorld([0], seed=seed)
+        rng = np.random.default_rng(seed)
+        vmax = self.world.robots[0].model.max_speeds
+        self.commands = rng.uniform(-1.0, 1.0, (4096, len(vmax))) * vmax
+        self.k = 0
+        self.cycles = self.busy = 0.0
+        _place(self.world)
+        self.run(20)  # warm up
+        self.cycles = self.busy = 0.0
+        self.world.engine_seconds = 0.0
+
+    def run(self, cycles: int) -> None:
+        world = self.world
+        done = 0
+        while done < cycles:
+            n = min(EPISODE_CYCLES, cycles - done)
+            batch = []
+            for _ in range(n):
+                self.k = (self.k + 1) % len(self.commands)
+                batch.append({0: self.commands[self.k]})
+            t0 = time.perf_counter()
+            for c in batch:
+                world.step(c)
+            self.busy += time.perf_counter() - t0
+            done += n
+            _place(world)
+        self.cycles += done
+
+
+def ode_22_robots_cycles_per_s(cycles: int, seed: int = 0) -> float:
+    """22 robots of mixed types (0–4 in turn) flailing on the full field with the ball, on the
+    ODE engine, one core: cycles per second (a game's worth of physics)."""
+    from robocup_gym.sim.engines.ode import OdeWorld
+
+    w = OdeWorld([i % 5 for i in range(22)], seed=seed)
+    for i in range(22):
+        side, k = (-1, i) if i < 11 else (1, i - 11)
+        x, y = side * (1.0 + 1.2 * (k % 4)), -6.0 + 1.5 * k
+        w.place_robot(i, x, y, heading_deg=0.0 if side < 0 else 180.0)
+    w.place_ball((0.0, 0.0))
+    rng = np.random.default_rng(seed)
+    commands = [
+        {
+            i: rng.uniform(-1, 1, len(r.model.max_speeds)) * r.model.max_speeds
+            for i, r in enumerate(w.robots)
+        }
+        for _ in range(50)
+    ]
+    for c in range(10):  # warm up
+        w.step(commands[c])
+    t0 = time.perf_counter()
+    for c in range(cycles):
+        w.step(commands[c % len(commands)])
+    elapsed = time.perf_counter() - t0
+    w.close()
+    return cycles / elapsed
+
+
 class _RecordingMujoco:
-    """Stands in for the ``mujoco`` module inside :mod:`robocup_gym.sim.world` while recording:
+    """Stands in for the ``mujoco`` module inside :mod:`robocup_gym.sim.engines.mujoco.world` while
+    recording:
     captures the complete input of every physics step the world makes (untimed): the state, the
     model fields the world retunes per cycle, and the motor rows' reference shift."""
 
@@ -155,7 +236,7 @@ def replay_cycles_per_s(runner: WorldRunner, cycles: int) -> tuple[float, float]
     add, the only thing the motor model needs between the two halves) + ``mj_step2``; ``bare``
     = plain ``mj_step`` from the same states (the motors then hold their joints instead of
     following the commands, so the solve differs a little)."""
-    from robocup_gym.sim import world as world_module
+    from robocup_gym.sim.engines.mujoco import world as world_module
 
     states: list = []
     saved = world_module.mujoco
@@ -194,10 +275,10 @@ class EnvRunner:
     """VelocityKick with random actions; counts every simulated cycle (wait steps included) over
     the whole time, resets included."""
 
-    def __init__(self, seed: int = 0) -> None:
+    def __init__(self, seed: int = 0, engine: str = "mujoco") -> None:
         from robocup_gym.envs import VelocityKick
 
-        self.env = env = VelocityKick()
+        self.env = env = VelocityKick(engine=engine)
         env.reset(seed=seed)
         env.action_space.seed(seed)
         self.actions = [env.action_space.sample() for _ in range(1000)]
@@ -234,7 +315,7 @@ class EnvRunner:
 def _make_velocity_kick():
     from robocup_gym.envs import VelocityKick
 
-    return VelocityKick()
+    return VelocityKick(engine="mujoco")
 
 
 def measure_vector_env(steps_per_worker: int, workers: int = 2, seed: int = 0) -> float:
@@ -280,6 +361,8 @@ def main(argv: list[str] | None = None) -> dict:
     # hit all three alike
     world, env = WorldRunner(), EnvRunner()
     world_numpy = WorldRunner(compiled=False)
+    ode = OdeWorldRunner() if ode_available() else None
+    ode_env = EnvRunner(engine="ode") if ode is not None else None
     results["stepper"] = world.world.stepper
     if world.world.compiled_unavailable:
         results["compiled_unavailable"] = world.world.compiled_unavailable
@@ -292,6 +375,9 @@ def main(argv: list[str] | None = None) -> dict:
         raw.append(r)
         bare.append(b)
         env.run(chunk)
+        if ode is not None:
+            ode.run(chunk // 2)
+            ode_env.run(chunk // 2)
     results["world_cycles_per_s"] = world.cycles / world.busy
     results["world_numpy_cycles_per_s"] = world_numpy.cycles / world_numpy.busy
     results["raw_cycles_per_s"] = float(np.median(raw))
@@ -299,6 +385,35 @@ def main(argv: list[str] | None = None) -> dict:
     results["env_steps_per_s"] = env.cycles / env.busy
     results["env_agent_steps_per_s"] = env.steps / env.busy
     results["reset_ms"] = env.reset_ms(20 if quick else 500)
+    if ode is not None:
+        results["ode_world_cycles_per_s"] = ode.cycles / ode.busy
+        results["ode_raw_cycles_per_s"] = ode.cycles / ode.world.engine_seconds
+        results["ode_world_vs_raw"] = (
+            results["ode_world_cycles_per_s"] / results["ode_raw_cycles_per_s"]
+        )
+        results["ode_stepper"] = ode.world.stepper
+        results["ode_env_steps_per_s"] = ode_env.cycles / ode_env.busy
+        results["ode_env_agent_steps_per_s"] = ode_env.steps / ode_env.busy
+        results["ode_env_vs_world"] = (
+            results["ode_env_steps_per_s"] / results["ode_world_cycles_per_s"]
+        )
+        results["ode_vs_mujoco_world"] = (
+            results["ode_world_cycles_per_s"] / results["world_cycles_per_s"]
+        )
+        ode_env.env.close()
+        results["ode_22_robots_cycles_per_s"] = ode_22_robots_cycles_per_s(20 if quick else 300)
+        print(
+            f"ode22  {results['ode_22_robots_cycles_per_s']:9.0f} cycles/s (22 robots)",
+            file=sys.stderr,
+        )
+        print(
+            f"ode    {results['ode_world_cycles_per_s']:9.0f} cycles/s "
+            f"(ODE's own work alone: {results['ode_raw_cycles_per_s']:.0f})",
+            file=sys.stderr,
+        )
+        print(f"odeenv {results['ode_env_steps_per_s']:9.0f} cycles/s", file=sys.stderr)
+    else:
+        results["ode_unavailable"] = "no double-precision libode here (apt-get install libode8)"
     results["world_divergences"] = world.diverged
     results["env_episodes"] = env.episodes
     results["env_diverged_episodes"] = env.env.diverged_episodes

@@ -51,6 +51,18 @@ def _single_thread_torch() -> None:
     torch.set_num_threads(1)
 
 
+def _backend(backend: str | None, engine: str | None) -> str | None:
+    """``--backend``/``--engine`` as one backend name (``None`` when neither is given)."""
+    if backend is None and engine is None:
+        return None
+    from robocup_gym.backends import BackendNotAvailableError, resolve_backend
+
+    try:
+        return resolve_backend(backend, engine)
+    except BackendNotAvailableError as exc:
+        _fail(str(exc))
+
+
 def _parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
     """``["a=1", "b=[1, 2]"]`` → ``{"a": 1, "b": [1, 2]}`` (values read as YAML)."""
     import yaml
@@ -67,8 +79,9 @@ def _parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
 if typer is not None:
     app = typer.Typer(
         name="robocup-gym",
-        help="Train RoboCup 3D Nao skills on the embedded SimSpark world (MuJoCo): train, eval, "
-        "export to ONNX, reproduce the paper, serve the rcssserver3d protocol.",
+        help="Train RoboCup 3D Nao skills on SimSpark's physics (ODE; MuJoCo as the fast "
+        "approximation): train, eval, export to ONNX, reproduce the paper, serve the "
+        "rcssserver3d protocol.",
         no_args_is_help=True,
         add_completion=False,
         pretty_exceptions_enable=False,
@@ -83,7 +96,9 @@ if typer is not None:
     def train(
         task: Annotated[
             str | None,
-            typer.Argument(help="Task: velocity-kick, simple-kick (see `robocup-gym tasks`)."),
+            typer.Argument(
+                help="Task: velocity-kick, simple-kick, walk, getup (see `robocup-gym tasks`)."
+            ),
         ] = None,
         algo: Annotated[str | None, typer.Option(help="ppo or sac.")] = None,
         n_envs: Annotated[
@@ -94,11 +109,16 @@ if typer is not None:
         ] = None,
         seed: Annotated[int | None, typer.Option(help="Random seed (default 0).")] = None,
         out: Annotated[Path, typer.Option(help="Parent folder of run folders.")] = Path("runs"),
-        backend: Annotated[
+        engine: Annotated[
             str | None,
             typer.Option(
-                help="Simulator: mujoco (embedded), rcssserver3d, or ode (SimSpark's step on ODE)."
+                help="Physics engine: ode (SimSpark's own step, exact; the default) or mujoco "
+                "(fast; its kicks do not work on rcssserver3d)."
             ),
+        ] = None,
+        backend: Annotated[
+            str | None,
+            typer.Option(help="Instead of --engine: ode, mujoco or rcssserver3d (a real server)."),
         ] = None,
         config: Annotated[
             Path | None,
@@ -192,7 +212,7 @@ if typer is not None:
                     n_envs=n_envs,
                     timesteps=timesteps,
                     seed=seed,
-                    backend=backend,
+                    backend=_backend(backend, engine),
                     n_workers=n_workers,
                     checkpoint_freq=checkpoint_freq,
                     checkpoint_every_s=checkpoint_every_s,
@@ -224,11 +244,18 @@ if typer is not None:
         deterministic: Annotated[
             bool, typer.Option(help="Deterministic actions (the policy's mean).")
         ] = True,
+        engine: Annotated[
+            str | None,
+            typer.Option(
+                help="Evaluate on this physics engine instead of the run's: ode (SimSpark's "
+                "own step) or mujoco."
+            ),
+        ] = None,
         backend: Annotated[
             str | None,
             typer.Option(
-                help="Evaluate on this simulator instead of the run's: mujoco, rcssserver3d, "
-                "or ode (SimSpark's physics on ODE itself, closed-loop; needs libode8)."
+                help="Instead of --engine: ode, mujoco or rcssserver3d (a real server, "
+                "closed-loop)."
             ),
         ] = None,
     ) -> None:
@@ -252,7 +279,7 @@ if typer is not None:
                     video=video,
                     video_episodes=video_episodes,
                     checkpoint=checkpoint,
-                    backend=backend,
+                    backend=_backend(backend, engine),
                 )
         except (ValueError, FileNotFoundError, RuntimeError) as exc:
             _fail(str(exc))
@@ -421,6 +448,9 @@ if typer is not None:
         timesteps: Annotated[
             int | None, typer.Option(help="Override the steps per run of the scale.")
         ] = None,
+        engine: Annotated[
+            str, typer.Option(help="Physics engine: ode (the default) or mujoco.")
+        ] = "ode",
     ) -> None:
         """Reproduce the paper's three figures as CSV + PNG (PPO vs SAC, SimpleKick vs
         VelocityKick, wall-clock vs workers)."""
@@ -430,7 +460,13 @@ if typer is not None:
             _fail(f"--scale must be one of {', '.join(SCALES)}")
         try:
             summary = run_paper(
-                scale, out, only=only, seeds=seeds, timesteps=timesteps, console=_console()
+                scale,
+                out,
+                only=only,
+                seeds=seeds,
+                timesteps=timesteps,
+                engine=engine,
+                console=_console(),
             )
         except (ValueError, FileNotFoundError) as exc:
             _fail(str(exc))

@@ -1,10 +1,13 @@
 """Simulators behind the environments, resolved by name.
 
 >>> from robocup_gym.backends import make_backend
->>> backend = make_backend("mujoco", robot_type=0)   # the embedded SimSpark world (default)
+>>> backend = make_backend("ode", robot_type=0)   # SimSpark's physics on ODE (the default)
 
-``"rcssserver3d"`` drives the real server; ``"ode"`` steps SimSpark's physics on ODE itself
-(needs ``libode``), to check closed-loop that a policy learnt on the embedded world works there.
+Two of them are the in-process world on its two physics engines (:data:`ENGINES`): ``"ode"``,
+SimSpark's own step on the Open Dynamics Engine, exact and the default (needs the system library
+``libode``), and ``"mujoco"``, the fast approximation (matches slow motions and walking, not
+impacts: a kick learnt there does not kick on rcssserver3d). ``"rcssserver3d"`` drives a real
+server.
 
 Backends are looked up in a small registry of ``name -> "module:Class"`` entries and imported
 only when asked for. Adding a backend is one line here (or one call to :func:`register_backend`).
@@ -23,8 +26,11 @@ from robocup_gym.backends.base import (
     BackendNotAvailableError,
     RobotPose,
 )
+from robocup_gym.sim import ENGINES
 
 __all__ = [
+    "DEFAULT_ENGINE",
+    "ENGINES",
     "Backend",
     "BackendDivergedError",
     "BackendError",
@@ -33,6 +39,7 @@ __all__ = [
     "available_backends",
     "make_backend",
     "register_backend",
+    "resolve_backend",
 ]
 
 _REGISTRY: dict[str, str | Callable[..., Backend]] = {
@@ -41,6 +48,31 @@ _REGISTRY: dict[str, str | Callable[..., Backend]] = {
     "ode": "robocup_gym.backends.ode_backend:OdeBackend",
 }
 """Implemented backends: name -> ``"module:Class"`` (imported lazily) or a factory."""
+
+DEFAULT_ENGINE = ENGINES[0]
+"""SimSpark's own step on ODE: what is learnt on it works on rcssserver3d."""
+
+
+def resolve_backend(backend: str | None = None, engine: str | None = None) -> str:
+    """The backend name for the ``backend=`` and ``engine=`` arguments (one of them, or none
+    for :data:`DEFAULT_ENGINE`).
+
+    Raises:
+        BackendNotAvailableError: an unknown engine, or both given and disagreeing.
+    """
+    if engine is not None and engine not in ENGINES:
+        raise BackendNotAvailableError(
+            f"unknown engine {engine!r}; engines: {', '.join(map(repr, ENGINES))} "
+            "(a real server is backend='rcssserver3d')"
+        )
+    if backend is None:
+        return engine or DEFAULT_ENGINE
+    if engine is not None and backend != engine:
+        raise BackendNotAvailableError(
+            f"backend={backend!r} and engine={engine!r} disagree; give one of them"
+        )
+    return backend
+
 
 _PLANNED: dict[str, str] = {}
 """Backends that are designed but not implemented yet: name -> what it will be."""

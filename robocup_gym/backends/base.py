@@ -64,6 +64,9 @@ class RobotPose:
         joint_angles_deg: Joint angles in degrees, canonical order (see
             :mod:`robocup_gym.robot.nao`) or by effector/perceptor name (others 0).
         z: Torso centre height, m; ``None`` puts the robot's lowest point on the ground.
+        quat: Full torso orientation ``(w, x, y, z)`` instead of an upright robot facing
+            ``heading_deg`` (e.g. lying on its back); the in-process engines place it, a real
+            server cannot (only upright).
     """
 
     x: float
@@ -71,6 +74,7 @@ class RobotPose:
     heading_deg: float = 0.0
     joint_angles_deg: np.ndarray | Mapping[str, float] | None = None
     z: float | None = None
+    quat: np.ndarray | None = None
 
 
 class Backend(abc.ABC):

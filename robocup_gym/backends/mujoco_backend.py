@@ -1,4 +1,5 @@
-"""The embedded SimSpark world on MuJoCo (:class:`robocup_gym.sim.world.World`) as a backend.
+"""The embedded SimSpark world on MuJoCo (:class:`robocup_gym.sim.engines.mujoco.world.World`) as a
+backend.
 
 Resets are instant: the robot (joint angles included) and the ball are teleported with
 :meth:`World.place_robot` / :meth:`World.place_ball`; no warm-up cycles, no controller loop.
@@ -13,9 +14,10 @@ import numpy as np
 
 from robocup_gym.backends.base import Backend, BackendDivergedError, RobotPose
 from robocup_gym.robot.nao import NaoModel
+from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError, World
 from robocup_gym.sim.physics import PhysicsConfig
+from robocup_gym.sim.render import FollowCamera
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import SimulationDivergedError, World
 from robocup_gym.types import AgentCommand, Perception
 
 __all__ = ["MujocoBackend"]
@@ -58,8 +60,7 @@ class MujocoBackend(Backend):
         self._n_joints = len(self._model.joints)
         self._zero = np.zeros(self._n_joints)
         self._diverged = False
-        self._renderer: Any = None
-        self._camera: Any = None
+        self._camera = FollowCamera()
 
     @property
     def robot_model(self) -> NaoModel:
@@ -86,7 +87,13 @@ class MujocoBackend(Backend):
         if angles is None:
             angles = self._zero
         w.place_robot(
-            0, pose.x, pose.y, heading_deg=pose.heading_deg, z=pose.z, joint_angles_deg=angles
+            0,
+            pose.x,
+            pose.y,
+            heading_deg=pose.heading_deg,
+            z=pose.z,
+            joint_angles_deg=angles,
+            quat=pose.quat,
         )
         w.place_ball(ball_pos, ball_vel)
         w.set_game(play_mode=play_mode, game_time=0.0)
@@ -115,31 +122,17 @@ class MujocoBackend(Backend):
         return w.perceive(0, vision=None if self.vision else False)
 
     # ------------------------------------------------------------------ misc
+    def scene_world(self):
+        """The MuJoCo world itself (what videos draw)."""
+        return self.world
+
     def render(self, width: int = 480, height: int = 360) -> np.ndarray:
         """RGB image of the scene from a camera that follows the robot (needs an OpenGL context,
         e.g. ``MUJOCO_GL=egl`` on a headless machine)."""
-        import mujoco
-
-        w = self.world
-        if self._renderer is None or (self._renderer.width, self._renderer.height) != (
-            width,
-            height,
-        ):
-            if self._renderer is not None:
-                self._renderer.close()
-            self._renderer = mujoco.Renderer(w.model, height, width)
-            self._camera = mujoco.MjvCamera()
-            self._camera.distance = 1.6
-            self._camera.elevation = -20.0
-            self._camera.azimuth = 135.0
-        self._camera.lookat[:] = w.torso_position(0) * (1.0, 1.0, 0.0) + (0.0, 0.0, 0.25)
-        self._renderer.update_scene(w.data, self._camera)
-        return self._renderer.render().copy()
+        return self._camera.render(self.world, width, height)
 
     def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        self._camera.close()
 
     def describe(self) -> dict[str, Any]:
         d = super().describe()

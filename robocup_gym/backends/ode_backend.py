@@ -1,4 +1,4 @@
-"""SimSpark's physics step on ODE itself (:class:`robocup_gym.sim.ode.world.OdeWorld`) as a
+"""SimSpark's physics step on ODE itself (:class:`robocup_gym.sim.engines.ode.world.OdeWorld`) as a
 backend: run a policy closed-loop on the engine rcssserver3d runs on.
 
 The embedded MuJoCo world is the fast simulator (~4× the environment steps per second, PPO
@@ -32,8 +32,10 @@ from robocup_gym.backends.base import (
     RobotPose,
 )
 from robocup_gym.robot.nao import NaoModel
-from robocup_gym.sim.world import PAUSED_MODES
-from robocup_gym.types import AgentCommand, GameState, GroundTruth, Perception
+from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError
+from robocup_gym.sim.render import FollowCamera, ScenePoser
+from robocup_gym.sim.vision import VisionConfig
+from robocup_gym.types import AgentCommand, Perception
 
 __all__ = ["OdeBackend"]
 
@@ -43,13 +45,15 @@ class OdeBackend(Backend):
 
     Args:
         robot_type: Nao type 0–4.
-        seed: Accepted for interface compatibility; the backend has no randomness.
-        vision: Must be False: the backend has no ``See`` perceptor.
+        seed: Seed of the vision noise and calibration offsets.
+        vision: Compute the ``See`` perceptor (every ``vision_config.interval``-th cycle, and
+            once at every reset), as on the MuJoCo backend.
+        vision_config: Noise, view cone, interval and ground-truth extensions of ``See``.
         dead_time_cycles: Cycles between a command and its effect (1 as on rcssserver3d).
 
     Raises:
-        BackendNotAvailableError: ``libode`` is missing (the message says how to install it),
-            or vision was asked for.
+        BackendNotAvailableError: ``libode`` is missing or unsuitable (the message says how to
+            install it and that ``engine="mujoco"`` needs no libode).
     """
 
     name = "ode"
@@ -60,22 +64,24 @@ class OdeBackend(Backend):
         robot_type: int = 0,
         seed: int | None = None,
         vision: bool = False,
+        vision_config: VisionConfig | None = None,
         dead_time_cycles: int = 1,
     ) -> None:
         super().__init__(robot_type=robot_type, seed=seed, vision=vision)
-        if vision:
-            raise BackendNotAvailableError(
-                "the 'ode' backend has no vision (See) perceptor; use observations without "
-                "vision, or the 'mujoco' or 'rcssserver3d' backend"
-            )
-        from robocup_gym.sim.ode import OdeUnavailableError, OdeWorld
+        from robocup_gym.sim.engines.ode import OdeUnavailableError, OdeWorld
 
         try:
-            self.world = OdeWorld([robot_type], dead_time_cycles=dead_time_cycles)
+            self.world = OdeWorld(
+                [robot_type], dead_time_cycles=dead_time_cycles, vision=vision_config, seed=seed
+            )
         except OdeUnavailableError as exc:
-            raise BackendNotAvailableError(f"backend 'ode' is not available here: {exc}") from exc
+            raise BackendNotAvailableError(
+                f"the ODE engine (SimSpark's physics, the default) is not available here: {exc}. "
+                "Or choose the MuJoCo engine: engine='mujoco' (--engine mujoco)"
+            ) from exc
         self._model = self.world.robots[0].model
-        self._game = GameState(play_mode="PlayOn")
+        self._poser: ScenePoser | None = None
+        self._camera = FollowCamera()
 
     @property
     def robot_model(self) -> NaoModel:
@@ -92,6 +98,8 @@ class OdeBackend(Backend):
         seed: int | None = None,
     ) -> Perception:
         w = self.world
+        if seed is not None:
+            w.reseed(seed)
         w.place_robot(
             0,
             pose.x,
@@ -99,18 +107,32 @@ class OdeBackend(Backend):
             heading_deg=pose.heading_deg,
             z=pose.z,
             joint_angles_deg=pose.joint_angles_deg,
+            quat=pose.quat,
         )
         w.place_ball(ball_pos, ball_vel)
         w.sense_contacts()  # the first perception shows the feet loaded, as the world's does
-        self._game = GameState(play_mode=play_mode, game_time=0.0)
-        return self._perceive()
+        w.set_game(play_mode=play_mode, game_time=0.0)
+        return w.perceive(0, vision=self.vision)
 
     def step(self, command: AgentCommand) -> Perception:
-        velocities = command.joint_velocities
-        self.world.step({0: velocities} if len(velocities) else None)
-        if self._game.play_mode not in PAUSED_MODES:
-            self._game.game_time = round(self._game.game_time + 0.02, 10)
-        p = self._perceive()
+        return self.advance(1, command)
+
+    def advance(self, cycles: int, command: AgentCommand | None = None) -> Perception:
+        """``cycles`` cycles (``command`` in the first; targets are sticky), perceiving only
+        after the last one, as the MuJoCo backend does."""
+        if cycles < 1:
+            raise ValueError(f"cycles must be >= 1, got {cycles}")
+        w = self.world
+        velocities = command.joint_velocities if command is not None else ()
+        try:
+            w.step({0: velocities} if len(velocities) else None)
+            for _ in range(cycles - 1):
+                w.step()
+        except SimulationDivergedError as e:
+            raise BackendDivergedError(str(e)) from e
+        if command is not None and command.say is not None:
+            w.say(0, command.say)
+        p = w.perceive(0, vision=None if self.vision else False)
         if not (
             np.isfinite(p.ground_truth.torso_pos).all() and np.isfinite(p.joint_angles_deg).all()
         ):
@@ -119,29 +141,20 @@ class OdeBackend(Backend):
             )
         return p
 
-    def _perceive(self) -> Perception:
-        w = self.world
-        game = GameState(play_mode=self._game.play_mode, game_time=self._game.game_time)
-        return Perception(
-            time=round(w.time, 10),
-            game=game,
-            gyro=w.gyro(0),
-            accel=w.accelerometer(0),
-            joint_names=self._model.perceptor_names,
-            joint_angles_deg=w.joint_angles_deg(0),
-            force_sensors=w.force_sensors(0),
-            ground_truth=GroundTruth(
-                ball_pos=w.ball_position(),
-                ball_vel=w.ball_velocity(),
-                torso_pos=w.torso_position(0),
-                torso_quat=w.torso_quat(0),
-                torso_vel=w.torso_velocity(0),
-                torso_ang_vel=w.torso_angular_velocity(0),
-            ),
-        )
-
     # ------------------------------------------------------------------ misc
+    def scene_world(self):
+        """A MuJoCo world posed like this one, for drawing (videos, :meth:`render`)."""
+        if self._poser is None:
+            self._poser = ScenePoser([self.robot_type])
+        return self._poser.pose(self.world)
+
+    def render(self, width: int = 480, height: int = 360) -> np.ndarray:
+        """RGB image of the scene from a camera that follows the robot, drawn by MuJoCo from
+        this world's state (needs an OpenGL context, e.g. ``MUJOCO_GL=egl`` when headless)."""
+        return self._camera.render(self.scene_world(), width, height)
+
     def close(self) -> None:
+        self._camera.close()
         self.world.close()
 
     def describe(self) -> dict[str, Any]:

@@ -68,8 +68,8 @@ INSTALL_HINT = (
     "(spark, then rcssserver3d: cmake, make, sudo make install, sudo ldconfig) or use your "
     "distribution's package — and put it on PATH or set RCSSSERVER3D=/path/to/rcssserver3d; or "
     "connect to a running server with backend_options={'host': ..., 'agent_port': ..., "
-    "'monitor_port': ...}; or use the default embedded backend, backend='mujoco', which needs "
-    "no server."
+    "'monitor_port': ...}; or use the in-process world, which needs no server: engine='ode' "
+    "(the default, SimSpark's own physics) or engine='mujoco'."
 )
 
 

@@ -866,6 +866,12 @@ class Rcssserver3dBackend(Backend):
         if self._closed:
             raise BackendError("the backend is closed")
         t0 = time.perf_counter()
+        if pose.quat is not None:
+            raise BackendError(
+                "a real rcssserver3d places robots upright only (the trainer's move sets a "
+                "position and a heading); a start pose with a full orientation (quat) needs an "
+                "in-process engine"
+            )
         target = self._start_angles(pose.joint_angles_deg)
         z = float(pose.z) if pose.z is not None else self._standing_z(target)
         hover_z = z + self.hover_height
@@ -1004,7 +1010,7 @@ class Rcssserver3dBackend(Backend):
         z = self._stand_cache.get(key)
         if z is None:
             if self._kinematics is None:
-                from robocup_gym.sim.world import World  # only for the kinematics
+                from robocup_gym.sim.engines.mujoco.world import World  # only for the kinematics
 
                 self._kinematics = World([self.robot_type])
             w = self._kinematics

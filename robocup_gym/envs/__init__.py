@@ -23,7 +23,16 @@ from robocup_gym.envs.config import (
     Normalisation,
 )
 from robocup_gym.envs.observations import COMPONENTS, component_names
-from robocup_gym.envs.tasks import SimpleKick, SimpleKickConfig, VelocityKick, VelocityKickConfig
+from robocup_gym.envs.tasks import (
+    GetUp,
+    GetUpConfig,
+    SimpleKick,
+    SimpleKickConfig,
+    VelocityKick,
+    VelocityKickConfig,
+    Walk,
+    WalkConfig,
+)
 
 __all__ = [
     "COMPONENTS",
@@ -35,11 +44,15 @@ __all__ = [
     "EnvConfig",
     "EnvConfigError",
     "EpisodeStart",
+    "GetUp",
+    "GetUpConfig",
     "Normalisation",
     "SimpleKick",
     "SimpleKickConfig",
     "VelocityKick",
     "VelocityKickConfig",
+    "Walk",
+    "WalkConfig",
     "component_names",
     "register_envs",
 ]
@@ -47,6 +60,8 @@ __all__ = [
 _ENTRY_POINTS = {
     "RobocupGym/SimpleKick-v0": "robocup_gym.envs.tasks.simple_kick:SimpleKick",
     "RobocupGym/VelocityKick-v0": "robocup_gym.envs.tasks.velocity_kick:VelocityKick",
+    "RobocupGym/Walk-v0": "robocup_gym.envs.tasks.walk:Walk",
+    "RobocupGym/GetUp-v0": "robocup_gym.envs.tasks.getup:GetUp",
 }
 REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 """Every Gymnasium id this package registers."""

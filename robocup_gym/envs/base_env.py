@@ -24,7 +24,13 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from robocup_gym.backends import Backend, BackendDivergedError, RobotPose, make_backend
+from robocup_gym.backends import (
+    Backend,
+    BackendDivergedError,
+    RobotPose,
+    make_backend,
+    resolve_backend,
+)
 from robocup_gym.envs.actions import ActionMapper
 from robocup_gym.envs.config import (
     ON_FIELD_X_M,
@@ -81,10 +87,13 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     Args:
         config: The configuration; ``None`` = :meth:`default_config` of the class.
-        backend: Simulator name (``"mujoco"``, the default; ``"rcssserver3d"``; ``"ode"``) or
-            a ready :class:`~robocup_gym.backends.Backend` instance (its robot type must match).
-        render_mode: ``None`` or ``"rgb_array"`` (MuJoCo backend; needs OpenGL, e.g.
-            ``MUJOCO_GL=egl``).
+        engine: Physics engine of the in-process world: ``"ode"`` (SimSpark's own step, exact;
+            the default) or ``"mujoco"`` (the fast approximation).
+        backend: Instead of ``engine``: a simulator name (``"ode"``, ``"mujoco"``,
+            ``"rcssserver3d"`` for a real server) or a ready
+            :class:`~robocup_gym.backends.Backend` instance (its robot type must match).
+        render_mode: ``None`` or ``"rgb_array"`` (drawn by MuJoCo on either engine; needs
+            OpenGL, e.g. ``MUJOCO_GL=egl``).
         render_size: ``(width, height)`` of rendered images, pixels.
         **overrides: Any :class:`EnvConfig` field (or task field), applied on top of ``config``.
 
@@ -105,6 +114,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}
     config_class: ClassVar[type[EnvConfig]] = EnvConfig
+    task_reset_options: ClassVar[frozenset[str]] = frozenset()
+    """Reset options a task adds to the common ones (it reads them in :meth:`_initial_state`)."""
     _closed = False
     """Config type of this environment (tasks use a subclass with their reward options)."""
 
@@ -118,7 +129,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self,
         config: EnvConfig | None = None,
         *,
-        backend: str | Backend = "mujoco",
+        backend: str | Backend | None = None,
+        engine: str | None = None,
         render_mode: str | None = None,
         render_size: tuple[int, int] = (480, 360),
         **overrides: Any,
@@ -178,15 +190,17 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         # ---- backend
         needs_vision = any(c.needs_vision for c in comps)
         if isinstance(backend, Backend):
+            if engine is not None and engine != backend.name:
+                raise EnvConfigError(f"engine={engine!r} but the given backend is {backend.name!r}")
             self.backend = backend
             if backend.robot_type != config.robot_type:
                 raise EnvConfigError(
                     f"backend robot_type {backend.robot_type} != config robot_type "
                     f"{config.robot_type}"
                 )
-        elif isinstance(backend, str):
+        elif backend is None or isinstance(backend, str):
             self.backend = make_backend(
-                backend,
+                resolve_backend(backend, engine),
                 robot_type=config.robot_type,
                 vision=needs_vision,
                 **dict(config.backend_options),
@@ -228,6 +242,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             "torso_height": self._w_torso_height,
             "time": self._w_time,
             "kick_target": self._w_kick_target,
+            "velocity_command": self._w_velocity_command,
+            "torso_velocity": self._w_torso_velocity,
             "last_action": self._w_last_action,
         }
         los, his, labels, sizes = [], [], [], []
@@ -287,6 +303,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.fallen = False
         self.ball_spawn_pos = config.ball_start.copy()
         self.kick_target = np.array(config.kick_target, dtype=float)
+        self.velocity_command = np.zeros(3)
+        """The planar velocity a task commands (forward m/s, left m/s, turn deg/s; the
+        ``velocity_command`` observation); zeros unless the task sets it."""
         self.episode_start: EpisodeStart | None = None
         self.diverged_episodes = 0
         """Episodes ended early because the simulation diverged."""
@@ -324,11 +343,10 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self._refuse_if_closed("reset")
         super().reset(seed=seed)
         options = dict(options or {})
-        bad = sorted(set(options) - _RESET_OPTIONS)
+        valid = _RESET_OPTIONS | self.task_reset_options
+        bad = sorted(set(options) - valid)
         if bad:
-            raise ValueError(
-                f"unknown reset option(s) {bad}; valid: {', '.join(sorted(_RESET_OPTIONS))}"
-            )
+            raise ValueError(f"unknown reset option(s) {bad}; valid: {', '.join(sorted(valid))}")
         start = self._initial_state(options)
         backend_seed = int(self.np_random.integers(2**31 - 1)) if seed is not None else None
         p = self.backend.reset_episode(
@@ -718,6 +736,21 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _w_kick_target(self, out: np.ndarray) -> None:
         out[:] = self.kick_target
+
+    def _w_velocity_command(self, out: np.ndarray) -> None:
+        out[:] = self.velocity_command
+
+    def _w_torso_velocity(self, out: np.ndarray) -> None:
+        gt = self.ground_truth
+        if gt.torso_vel is None or gt.torso_ang_vel is None:  # a backend without velocities
+            out[:] = 0.0
+            return
+        c, s = heading_frame(gt.torso_quat)
+        v = gt.torso_vel
+        out[0] = c * v[0] + s * v[1]
+        out[1] = c * v[1] - s * v[0]
+        out[2] = v[2]
+        out[3] = math.degrees(gt.torso_ang_vel[2])
 
     def _w_last_action(self, out: np.ndarray) -> None:
         out[:] = self._last_action

@@ -209,6 +209,25 @@ COMPONENTS: dict[str, Component] = {
             _labels("kick_target", ["distance", "angle"]),
         ),
         Component(
+            "velocity_command",
+            "The planar velocity the task commands (Walk): forward and leftward speed in the "
+            "heading frame and turn rate (CCW positive); zeros in tasks without a command.",
+            "m/s, m/s, deg/s",
+            "[-1, 1], [-1, 1], [-90, 90]",
+            _const([-1.0, -1.0, -90.0], [1.0, 1.0, 90.0]),
+            _labels("velocity_command", ["forward", "left", "turn"]),
+        ),
+        Component(
+            "torso_velocity",
+            "Velocity of the torso centre in the heading frame (forward, left, up) and its turn "
+            "rate about the world's up axis (CCW positive). Ground truth.",
+            "m/s, m/s, m/s, deg/s",
+            "[-2, 2] each, [-360, 360]",
+            _const([-2.0, -2.0, -2.0, -360.0], [2.0, 2.0, 2.0, 360.0]),
+            _labels("torso_velocity", ["forward", "left", "up", "turn"]),
+            needs_ground_truth=True,
+        ),
+        Component(
             "last_action",
             "The previous action as given to step() (after clipping to [-1, 1]); zeros on the "
             "first frame.",

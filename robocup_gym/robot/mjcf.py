@@ -2,14 +2,15 @@
 
 Nothing here is hand-copied XML: every body, inertia, joint and geom comes from
 :func:`robocup_gym.robot.nao.nao_model`. The world (field, ball, several robots) is assembled by
-:mod:`robocup_gym.sim.scene`, which calls :func:`robot_xml` once per robot.
+:mod:`robocup_gym.sim.engines.mujoco.scene`, which calls :func:`robot_xml` once per robot.
 
 How SimSpark's joint motor is modelled
 --------------------------------------
 A SimSpark hinge is driven by an ODE *velocity motor*: a constraint row that makes the joint rate
 equal to the commanded velocity using at most 10 N·m. Each hinge here has ``frictionloss = 10``:
 MuJoCo's friction-loss row is exactly such a force-bounded velocity row, with target velocity 0.
-The world (:mod:`robocup_gym.sim.world`) shifts the row's reference acceleration every step so
+The world (:mod:`robocup_gym.sim.engines.mujoco.world`) shifts the row's reference acceleration
+every step so
 that its target is the commanded velocity, which gives the ODE motor semantics: the joint moves at
 the commanded velocity whenever ≤ 10 N·m suffices and otherwise accelerates with exactly 10 N·m.
 """

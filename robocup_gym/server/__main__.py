@@ -104,6 +104,13 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
         default=None,
         help="close agents that send no (syn) for this many seconds (default: wait forever)",
     )
+    p.add_argument(
+        "--engine",
+        choices=("mujoco", "ode"),
+        default="mujoco",
+        help="physics engine; serve runs on mujoco for now (the ODE engine has no walls, "
+        "goals or referee yet)",
+    )
     p.add_argument("--seed", type=int, default=None, help="random seed")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     return p
@@ -114,6 +121,11 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
     port that cannot be used, each said in one line on stderr)."""
     parser = build_parser(prog)
     args = parser.parse_args(argv)
+    if args.engine != "mujoco":
+        parser.error(
+            "serve does not run on the ODE engine yet (it has no walls, goals, referee or "
+            "monitor scene); use --engine mujoco (the default here)"
+        )
     if args.agent_port == args.monitor_port and args.agent_port != 0:
         parser.error(
             f"--agent-port and --monitor-port are both {args.agent_port}; agents and monitors "

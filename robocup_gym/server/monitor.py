@@ -22,7 +22,7 @@ import numpy as np
 
 from robocup_gym.protocol.constants import DEFAULT_ENVIRONMENT, PLAY_MODES, play_mode_id
 from robocup_gym.protocol.values import fmt_g
-from robocup_gym.sim.world import World
+from robocup_gym.sim.engines.mujoco.world import World
 
 SLT_THRESHOLD = 0.005
 

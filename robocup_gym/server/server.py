@@ -57,9 +57,9 @@ from robocup_gym.server.wire import (
     trainer_commands,
 )
 from robocup_gym.server.worldhost import WorldHost
+from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import SimulationDivergedError
 
 log = logging.getLogger("robocup_gym.server")
 
@@ -174,7 +174,8 @@ class SimServer:
     # ------------------------------------------------------------------ lifecycle
     @property
     def world(self):
-        """The current :class:`~robocup_gym.sim.world.World` (replaced when robots change)."""
+        """The current :class:`~robocup_gym.sim.engines.mujoco.world.World` (replaced when robots
+        change)."""
         return self.world_host.world
 
     def bind(self) -> tuple[int, int]:
@@ -914,6 +915,7 @@ def serve(
         [
             "sync mode" if server.sync else "real-time agents (no sync)",
             "real time" if server.real_time else "as fast as possible",
+            "MuJoCo engine",
         ]
     )
     print(

@@ -1,4 +1,5 @@
-"""The embedded :class:`~robocup_gym.sim.world.World` behind the server, with a changing robot set.
+"""The embedded :class:`~robocup_gym.sim.engines.mujoco.world.World` behind the server, with a
+changing robot set.
 
 A ``World`` compiles its MuJoCo model once, for a fixed list of robots. Agents of the server
 connect, load robots of any type (``scene``) and disconnect at any time, so :class:`WorldHost`
@@ -27,9 +28,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from robocup_gym.sim.engines.mujoco.world import World
 from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import World
 
 log = logging.getLogger("robocup_gym.server")
 

@@ -1,6 +1,7 @@
 """The world's per-cycle work compiled to C: same results, a fraction of the Python cost.
 
-One :meth:`World.step <robocup_gym.sim.world.World.step>` is one MuJoCo step plus ~40 small
+One :meth:`World.step <robocup_gym.sim.engines.mujoco.world.World.step>` is one MuJoCo step plus
+~40 small
 NumPy operations (motor targets, creep compensation, ODE's stop rules, the surface layer, drag,
 accelerometer): about as much time again as MuJoCo itself. ``cstep.c`` does the same arithmetic
 in the same order (the states are bit-equal, ``tests/sim/test_compiled.py``) in three calls per
@@ -33,7 +34,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-SOURCE = Path(__file__).with_name("cstep.c")
+SOURCE = Path(__file__).parent / "engines" / "mujoco" / "cstep.c"
+"""The MuJoCo world's per-cycle work in C."""
 CFLAGS = ("-O2", "-shared", "-fPIC", "-ffp-contract=off", "-fno-fast-math", "-std=c99")
 """No fused multiply-add and no fast-math: the C must round exactly as the NumPy path does."""
 FLAGS = ("relaxed", "bouncy", "any_limited", "any_away", "nrows")

@@ -13,7 +13,7 @@ from importlib import resources
 import numpy as np
 
 from robocup_gym.robot.nao import nao_model
-from robocup_gym.sim.world import World
+from robocup_gym.sim.engines.mujoco.world import World
 
 BALL_MOVE_THRESHOLD_M = 0.005
 """Ball displacement that counts as "moved" (the monitor only re-sends a transform when it changes
@@ -37,7 +37,8 @@ class StandResult:
 
 
 def stand(seconds: float = 60.0, robot_type: int = 0, world: World | None = None) -> StandResult:
-    """Stand with zero joint velocities for ``seconds`` and report the torso height."""
+    """Stand with zero joint velocities for ``seconds`` and report the torso height (on the
+    MuJoCo world by default, or on ``world``: either engine's)."""
     w = world or World([robot_type])
     w.place_robot(0, x=-1.0, y=0.0, heading_deg=0.0)
     w.place_ball((5.0, 5.0))
@@ -46,14 +47,13 @@ def stand(seconds: float = 60.0, robot_type: int = 0, world: World | None = None
     zs, hs = [], []
     zero = np.zeros(len(w.robots[0].model.joints))
     fell = False
-    head = w.robots[0].head_body
     for c in range(cycles):
         w.step({0: zero})
         if w.torso_up(0)[2] < 0.5 or w.torso_position(0)[2] < 0.25:
             fell = True
         if c >= cycles - last:
             zs.append(w.torso_position(0)[2])
-            hs.append(w.data.xpos[head][2])
+            hs.append(w._head_pose(0)[0][2])
     return StandResult(
         fell=fell,
         torso_z_m=float(np.mean(zs)),

@@ -18,6 +18,31 @@ PENALTY_HALF_WIDTH = 3.0
 """Half of the drawn/used penalty-area width (PenaltyWidth + GoalWidth)/2, m."""
 CENTRE_CIRCLE_RADIUS = 2.0
 
+
+def _goal_boxes(
+    side: int,
+) -> list[tuple[str, tuple[float, float, float], tuple[float, float, float]]]:
+    s = "L" if side < 0 else "R"
+    x0 = side * 15.3
+    return [
+        (f"goal{s}_post1", (x0, 1.07, 0.4), (0.6, 0.04, 0.8)),
+        (f"goal{s}_post2", (x0, -1.07, 0.4), (0.6, 0.04, 0.8)),
+        (f"goal{s}_back", (side * 15.58, 0.0, 0.4), (0.04, 2.1, 0.8)),
+        (f"goal{s}_bar", (x0, 0.0, 0.82), (0.6, 2.18, 0.04)),
+    ]
+
+
+WALLS: tuple[tuple[str, tuple[float, float, float], tuple[float, float, float]], ...] = (
+    ("wall_left", (-24.99, 0.0, 0.0), (1.0, 51.0, 1.0)),
+    ("wall_right", (24.99, 0.0, 0.0), (1.0, 51.0, 1.0)),
+    ("wall_back", (0.0, 25.0, 0.0), (50.98, 1.0, 1.0)),
+    ("wall_front", (0.0, -25.0, 0.0), (50.98, 1.0, 1.0)),
+)
+"""The four static walls around the field (spec §6.2): name, centre (m), full size (m)."""
+GOAL_BOXES = tuple(_goal_boxes(-1) + _goal_boxes(1))
+"""The goals' solid parts (spec §6.3), left goal first: side walls, back wall, top bar; name,
+centre (m), full size (m). The goal sensor box makes no contacts and is not listed."""
+
 #: Landmarks seen by vision, in the server's model order (world frame, not mirrored), m.
 LANDMARKS: dict[str, tuple[float, float, float]] = {
     "G1L": (-15.0, 1.05, 0.8),

@@ -58,7 +58,7 @@ class _Geometry:
     """Heights of an upright robot, from the embedded model (computed once per pose)."""
 
     def __init__(self, robot_type: int) -> None:
-        from robocup_gym.sim.world import World
+        from robocup_gym.sim.engines.mujoco.world import World
 
         self.world = World(robot_types=[robot_type])
         self._cache: dict[tuple[float, ...], tuple[float, float]] = {}

@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from robocup_gym.backends import available_backends
+from robocup_gym.backends import DEFAULT_ENGINE, available_backends
 
 ALGOS = ("ppo", "sac")
 
@@ -89,7 +89,9 @@ class TrainConfig:
     n_envs: int = DEFAULT_N_ENVS
     timesteps: int = 1_000_000
     seed: int = 0
-    backend: str = "mujoco"
+    backend: str = DEFAULT_ENGINE
+    """Simulator: ``ode`` (SimSpark's physics, exact, the default), ``mujoco`` (the fast
+    approximation; its kicks do not work on rcssserver3d) or ``rcssserver3d`` (a real server)."""
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     """Keyword arguments for ``gymnasium.make`` (the task's config fields)."""
     algo_kwargs: dict[str, Any] = field(default_factory=dict)

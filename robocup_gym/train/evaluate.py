@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from robocup_gym.backends import DEFAULT_ENGINE
 from robocup_gym.train.metrics import episode_record, summarize
 from robocup_gym.train.run import RunInfo, load_model, load_run
 
@@ -54,6 +55,31 @@ def run_episodes(
             done = terminated or truncated
         records.append(episode_record(info, ret, length))
     return records
+
+
+def policy_and_env(policy: str, env_id: str, engine: str | None = None):
+    """``(env, act)`` for a benchmark: ``policy`` is a run folder (its task's environment with
+    its options, on ``engine`` or the run's own simulator; ``act(obs)`` its deterministic
+    action, observation statistics applied) or ``"zero"`` (``env_id`` on ``engine``, default
+    the default engine, and an action of zeros: a baseline)."""
+    from robocup_gym.train.run import load_model, load_run
+    from robocup_gym.train.tasks import make_env
+
+    if policy == "zero":
+        env = make_env(env_id, backend=engine or DEFAULT_ENGINE)
+        zeros = np.zeros(env.action_space.shape)
+        return env, lambda obs: zeros
+    info = load_run(policy)
+    model = load_model(info)
+    normalize = info.obs_normalizer()
+    cfg = info.config
+    env = make_env(cfg.env_id, backend=engine or cfg.backend, env_kwargs=cfg.env_kwargs)
+
+    def act(obs):
+        o = normalize(obs) if normalize is not None else obs
+        return model.predict(o, deterministic=True)[0]
+
+    return env, act
 
 
 # ---------------------------------------------------------------------------------- video
@@ -186,7 +212,9 @@ class FrameRecorder:
 
 
 def _find_world(env):
-    """The embedded :class:`robocup_gym.sim.world.World` behind ``env``, if any."""
+    """A MuJoCo :class:`robocup_gym.sim.engines.mujoco.world.World` showing the state behind
+    ``env`` (the
+    MuJoCo engine's own world, or one posed like the ODE engine's), if any."""
     e = env
     for _ in range(16):
         for attr in ("world", "_world", "sim"):
@@ -194,6 +222,8 @@ def _find_world(env):
             if w is not None and hasattr(w, "model") and hasattr(w, "data"):
                 return w
         backend = getattr(e, "backend", None)
+        if backend is not None and hasattr(backend, "scene_world"):
+            return backend.scene_world()  # a MuJoCo world showing the backend's state
         if backend is not None and not isinstance(backend, str):
             w = getattr(backend, "world", None)
             if w is not None and hasattr(w, "model"):

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from robocup_gym.backends import DEFAULT_ENGINE, ENGINES
 from robocup_gym.train.config import TrainConfig
 from robocup_gym.train.run import load_run
 
@@ -128,8 +129,11 @@ def _base(scale: Scale, **kw: Any) -> TrainConfig:
     )
 
 
-def plan(scale: Scale, seeds: int, only: list[str] | None = None) -> dict[str, list[RunSpec]]:
-    """The runs of each figure (a run shared by two figures appears in both)."""
+def plan(
+    scale: Scale, seeds: int, only: list[str] | None = None, backend: str = DEFAULT_ENGINE
+) -> dict[str, list[RunSpec]]:
+    """The runs of each figure (a run shared by two figures appears in both), all on
+    ``backend``."""
     figs = [f for f in FIGURES if not only or f in only]
     out: dict[str, list[RunSpec]] = {}
     if "algos" in figs:
@@ -143,6 +147,7 @@ def plan(scale: Scale, seeds: int, only: list[str] | None = None) -> dict[str, l
                     n_envs=n,
                     seed=s,
                     timesteps=scale.timesteps,
+                    backend=backend,
                 ),
             )
             for algo in ("ppo", "sac")
@@ -160,6 +165,7 @@ def plan(scale: Scale, seeds: int, only: list[str] | None = None) -> dict[str, l
                     n_envs=scale.task_envs,
                     seed=s,
                     timesteps=scale.task_timesteps,
+                    backend=backend,
                 ),
             )
             for task in ("simple-kick", "velocity-kick")
@@ -178,6 +184,7 @@ def plan(scale: Scale, seeds: int, only: list[str] | None = None) -> dict[str, l
                     timesteps=scale.worker_timesteps,
                     checkpoint_freq=0,
                     eval_freq=0,
+                    backend=backend,
                 ),
             )
             for n in scale.worker_counts
@@ -312,9 +319,11 @@ def run_paper(
     only: list[str] | None = None,
     seeds: int | None = None,
     timesteps: int | None = None,
+    engine: str = DEFAULT_ENGINE,
     console=None,
 ) -> dict[str, Any]:
-    """Run (or reuse) every run of the chosen figures and write their CSVs and PNGs.
+    """Run (or reuse) every run of the chosen figures, on the physics ``engine``, and write
+    their CSVs and PNGs.
 
     Returns a summary: the files written and, per curve, the final mean ball x-displacement.
     """
@@ -346,7 +355,9 @@ def run_paper(
     root = out / "runs"
     root.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    figures = plan(scale, n_seeds, only)
+    if engine not in ENGINES:
+        raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")
+    figures = plan(scale, n_seeds, only, backend=engine)
     total = sum(len(v) for v in figures.values())
     console.print(f"[bold]paper experiments[/bold] ({name}): {total} runs → {out}")
     summary: dict[str, Any] = {"scale": name, "out": str(out), "figures": {}}

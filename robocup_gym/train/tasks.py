@@ -13,6 +13,8 @@ from typing import Any
 
 import gymnasium as gym
 
+from robocup_gym.backends import DEFAULT_ENGINE
+
 NAMESPACE = "RobocupGym"
 _VERSION = re.compile(r"-v(\d+)$")
 
@@ -63,6 +65,9 @@ def resolve_task(task: str) -> str:
         return task
     if key in tasks:
         return tasks[key]
+    loose = {name.replace("-", ""): env_id for name, env_id in tasks.items()}
+    if key.replace("-", "") in loose:  # getup, velocitykick
+        return loose[key.replace("-", "")]
     known = ", ".join(tasks) or "(none registered: robocup_gym.envs did not register any task)"
     raise ValueError(
         f"unknown task {task!r}; known tasks: {known} (or any registered Gymnasium id)"
@@ -82,7 +87,7 @@ def task_name(env_id: str) -> str:
 def make_env(
     env_id: str,
     *,
-    backend: str = "mujoco",
+    backend: str = DEFAULT_ENGINE,
     env_kwargs: dict[str, Any] | None = None,
     render_mode: str | None = None,
 ) -> gym.Env:
@@ -91,8 +96,8 @@ def make_env(
     if is_robocup_task(env_id):
         _register_tasks()  # subprocess workers start with an empty registry
         kwargs.setdefault("backend", backend)
-    elif backend != "mujoco":
-        raise ValueError(f"--backend only applies to RobocupGym tasks, not {env_id!r}")
+    elif backend != DEFAULT_ENGINE:
+        raise ValueError(f"--backend/--engine only apply to RobocupGym tasks, not {env_id!r}")
     if render_mode is not None:
         kwargs["render_mode"] = render_mode
     return gym.make(env_id, **kwargs)

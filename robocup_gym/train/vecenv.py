@@ -21,6 +21,7 @@ import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
+from robocup_gym.backends import DEFAULT_ENGINE
 from robocup_gym.train.tasks import make_env
 
 
@@ -47,7 +48,7 @@ def env_factories(
     env_id: str,
     n_envs: int,
     *,
-    backend: str = "mujoco",
+    backend: str = DEFAULT_ENGINE,
     env_kwargs: dict[str, Any] | None = None,
     seed: int | None = 0,
 ) -> list[Callable[[], gym.Env]]:
@@ -68,7 +69,7 @@ def make_vec_env(
     env_id: str,
     n_envs: int,
     *,
-    backend: str = "mujoco",
+    backend: str = DEFAULT_ENGINE,
     env_kwargs: dict[str, Any] | None = None,
     seed: int | None = 0,
     kind: str = "auto",

@@ -38,7 +38,7 @@ def test_missing_binary_env_var_points_nowhere(monkeypatch, tmp_path):
         find_binary()
     msg = str(e.value)
     assert "RCSSSERVER3D" in msg and str(missing) in msg and "does not exist" in msg
-    assert "Install rcssserver3d" in msg and "backend='mujoco'" in msg
+    assert "Install rcssserver3d" in msg and "engine='ode'" in msg and "engine='mujoco'" in msg
     # through the registry: a BackendNotAvailableError like any unavailable backend
     with pytest.raises(BackendNotAvailableError, match="RCSSSERVER3D"):
         make_backend("rcssserver3d")

@@ -23,6 +23,16 @@ KEYS = (
 )
 
 
+ODE_KEYS = (
+    "ode_world_cycles_per_s",
+    "ode_raw_cycles_per_s",
+    "ode_world_vs_raw",
+    "ode_env_steps_per_s",
+    "ode_env_vs_world",
+    "ode_22_robots_cycles_per_s",
+)
+
+
 def test_throughput_quick_prints_json_last():
     proc = subprocess.run(
         [sys.executable, str(ROOT / "benchmarks" / "throughput.py"), "--quick"],
@@ -40,6 +50,15 @@ def test_throughput_quick_prints_json_last():
     assert result["world_vs_raw"] == result["world_cycles_per_s"] / result["raw_cycles_per_s"]
     assert result["env_vs_world"] == result["env_steps_per_s"] / result["world_cycles_per_s"]
     from robocup_gym.sim import compiled
+    from robocup_gym.sim.engines.ode import available
 
+    if available():  # the default engine's keys, and their ratios
+        for key in ODE_KEYS:
+            assert isinstance(result[key], float) and math.isfinite(result[key]), key
+            assert result[key] > 0, key
+        assert result["ode_world_vs_raw"] == (
+            result["ode_world_cycles_per_s"] / result["ode_raw_cycles_per_s"]
+        )
+        assert result["ode_world_cycles_per_s"] < result["ode_raw_cycles_per_s"]
     # the world measured is the compiled one wherever it can be built, and says so
     assert result["stepper"] == ("compiled" if compiled.available() else "numpy")

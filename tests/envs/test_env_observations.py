@@ -100,7 +100,7 @@ def test_ball_vision_is_polar_from_the_head(make_env):
     # a ball 1 m straight ahead is in view (a ball at the feet is below the view cone)
     obs, _ = env.reset(seed=0, options={"ball_pos": (0.0, 0.0)})
     d, horizontal, vertical, visible = raw(env, obs, "ball_vision")
-    head = env.backend.world.data.xpos[env.backend.world.robots[0].head_body]
+    head, _ = env.backend.world._head_pose(0)  # the engine's own head pose
     rel = env.ball_pos - head
     assert visible == 1.0
     assert d == pytest.approx(np.linalg.norm(rel), rel=1e-4)

@@ -20,6 +20,8 @@ def test_registry_lists_the_tasks():
     assert set(rg_envs.REGISTERED_IDS) == {
         "RobocupGym/SimpleKick-v0",
         "RobocupGym/VelocityKick-v0",
+        "RobocupGym/Walk-v0",
+        "RobocupGym/GetUp-v0",
     }
     for env_id in rg_envs.REGISTERED_IDS:
         assert env_id in gym.registry

@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 
 from robocup_gym.robot.nao import nao_model
+from robocup_gym.sim.engines.mujoco.world import World
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import World
 
 STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 # the kick_D command sequence of the real-server capture (shortened rest phase)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from robocup_gym.sim.ode import available
+from robocup_gym.sim.engines.ode import available
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -33,6 +33,11 @@ def test_fidelity_quick_reports_targets():
     assert met["mass_within_1pct"] and met["stand_no_fall"] and met["stand_z_within_5mm"]
     assert met["kick_within_25pct"], res["kick_D_ball_m"]
     assert met["kick_first_move_within_2_cycles"], res["kick_D_first_move_cycle"]
+    if available():  # the default engine against the targets
+        ode = res["ode_targets_met"]
+        assert ode["kick_within_1pct"], res["ode_kick_D_ball_m"]
+        assert ode["kick_first_move_64_pm_1"], res["ode_kick_D_first_move_cycle"]
+        assert ode["stand_z_within_2mm"] and ode["stand_no_fall"], res["ode_stand_torso_z_m"]
 
 
 def test_ode_compare_quick_reports_the_motions():

@@ -1,4 +1,5 @@
-"""The compiled per-cycle work (robocup_gym/sim/cstep.c) against the NumPy path it replaces.
+"""The compiled per-cycle work (robocup_gym/sim/engines/mujoco/cstep.c) against the NumPy path it
+replaces.
 
 Both must give bit-equal physics on every rule of the world's step: commands (full and partial,
 several due at once, dead time 0 and 1), creep compensation, joints at and pulled away from their
@@ -11,9 +12,9 @@ import numpy as np
 import pytest
 
 from robocup_gym.sim import compiled
+from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError, World
 from robocup_gym.sim.fidelity import load_data, scripted_kick
 from robocup_gym.sim.physics import PhysicsConfig
-from robocup_gym.sim.world import SimulationDivergedError, World
 
 needs_compiler = pytest.mark.skipif(
     not compiled.available(), reason="no C compiler here (apt-get install gcc, or set CC)"

@@ -1,6 +1,7 @@
 """What the world relies on in MuJoCo's internals, asserted on whichever MuJoCo is installed.
 
-The joint motors (robocup_gym/sim/world.py, robocup_gym/robot/mjcf.py) are MuJoCo dof friction-loss
+The joint motors (robocup_gym/sim/engines/mujoco/world.py, robocup_gym/robot/mjcf.py) are MuJoCo
+dof friction-loss
 rows whose reference acceleration the world shifts between ``mj_step1`` and ``mj_step2``. That needs
 the rows first in the constraint list and in dof order (also checked at every World construction),
 a row per dof with non-zero ``dof_frictionloss`` only (the world drops a motor's row at a stop by
@@ -12,10 +13,10 @@ import mujoco
 import numpy as np
 import pytest
 
-import robocup_gym.sim.world as world_module
+import robocup_gym.sim.engines.mujoco.world as world_module
 from robocup_gym.sim import physics as phys
+from robocup_gym.sim.engines.mujoco.world import World
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import World
 
 FRICTION_DOF = mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF
 

@@ -11,14 +11,14 @@ import sys
 import numpy as np
 import pytest
 
-from robocup_gym.sim.fidelity import load_data, scripted_kick
-from robocup_gym.sim.ode import available, mix_surfaces
-from robocup_gym.sim.ode.world import (
+from robocup_gym.sim.engines.ode import available, mix_surfaces
+from robocup_gym.sim.engines.ode.world import (
     BALL_SURFACE,
     GROUND_SURFACE,
     ROBOT_SURFACE,
     WALL_SURFACE,
 )
+from robocup_gym.sim.fidelity import load_data, scripted_kick
 
 needs_ode = pytest.mark.skipif(
     not available(), reason="no double-precision libode here (apt-get install libode8)"
@@ -44,7 +44,7 @@ def test_surface_mixing_gives_the_spec_table():
 
 def test_missing_library_is_a_clear_error():
     code = (
-        "from robocup_gym.sim.ode import OdeWorld, OdeUnavailableError\n"
+        "from robocup_gym.sim.engines.ode import OdeWorld, OdeUnavailableError\n"
         "try:\n    OdeWorld([0])\nexcept OdeUnavailableError as e:\n    print(e)\n"
     )
     env = dict(os.environ, ROBOCUP_GYM_LIBODE="/nonexistent/libode.so")
@@ -57,7 +57,7 @@ def test_missing_library_is_a_clear_error():
 @needs_ode
 def test_reference_reproduces_the_real_servers_kick():
     """The scripted kick on ODE with the spec's parameters lands where the real server's did."""
-    from robocup_gym.sim.ode import OdeWorld
+    from robocup_gym.sim.engines.ode import OdeWorld
 
     real = load_data("kick_D.json")
     kick = scripted_kick(world=OdeWorld([0]))
@@ -71,7 +71,7 @@ def test_reference_reproduces_the_real_servers_kick():
 def test_reference_stands_and_sleeps():
     """Standing with zero velocities: upright at the real server's height (±2 mm), joints
     unmoved, and ODE's auto-disable has put the resting robot to sleep."""
-    from robocup_gym.sim.ode import OdeWorld
+    from robocup_gym.sim.engines.ode import OdeWorld
 
     w = OdeWorld([0])
     w.place_robot(0, -1.0, 0.0)
@@ -87,7 +87,7 @@ def test_reference_stands_and_sleeps():
 def test_reference_hinge_effector_rules():
     """Clipped to the joint's max speed; a robot moved asleep hangs until a non-zero command;
     a command is ignored while its joint is at or beyond a stop."""
-    from robocup_gym.sim.ode import OdeWorld
+    from robocup_gym.sim.engines.ode import OdeWorld
 
     w = OdeWorld([0], dead_time_cycles=0)
     w.place_robot(0, -1.0, 0.0, z=0.385, asleep=True)
@@ -122,7 +122,7 @@ def test_reference_hinge_effector_rules():
 def test_world_follows_the_reference(name, torso_m, joints_deg):
     """The MuJoCo world and ODE end a motion within a few millimetres/degrees of each other
     (torso centre at the end, RMS joint-angle difference over the motion)."""
-    from robocup_gym.sim.ode.compare import compare, motions
+    from robocup_gym.sim.engines.ode.compare import compare, motions
 
     motion = next(m for m in motions() if m.name == name)
     c = compare(motion)
@@ -139,7 +139,7 @@ def test_world_kick_is_close_to_the_reference():
     """Kick D: the MuJoCo world's ball goes within 15 % of the reference's (ODE's maximal
     coordinates let the leg's joints stretch by millimetres at kick speed, which MuJoCo's
     joints cannot: docs/physics.md)."""
-    from robocup_gym.sim.ode.compare import compare, motions
+    from robocup_gym.sim.engines.ode.compare import compare, motions
 
     c = compare(next(m for m in motions() if m.name == "kick_D"))
     mj, ref = c.ball_travel_m
@@ -149,7 +149,7 @@ def test_world_kick_is_close_to_the_reference():
 
 @needs_ode
 def test_reference_bad_commands_are_clear_errors():
-    from robocup_gym.sim.ode import OdeWorld
+    from robocup_gym.sim.engines.ode import OdeWorld
 
     w = OdeWorld([0])
     with pytest.raises(ValueError, match="he1"):
@@ -171,7 +171,7 @@ def test_every_robot_type_follows_the_reference(robot_type):
     joints into their stops end within millimetres and a fraction of a degree of ODE."""
     import dataclasses
 
-    from robocup_gym.sim.ode.compare import compare, motions
+    from robocup_gym.sim.engines.ode.compare import compare, motions
 
     for name in ("squat", "stops"):
         motion = dataclasses.replace(
@@ -189,8 +189,8 @@ def test_reference_placement_matches_the_world():
     hinges read the angles back."""
     import mujoco
 
-    from robocup_gym.sim.ode import OdeWorld
-    from robocup_gym.sim.world import World
+    from robocup_gym.sim.engines.mujoco.world import World
+    from robocup_gym.sim.engines.ode import OdeWorld
 
     angles = {"rle4": -30.0, "rle3": 15.0, "lae1": -90.0, "he1": 40.0, "lle2": 10.0}
     ref = OdeWorld([0])
@@ -212,10 +212,12 @@ def test_a_recorded_episode_replays_exactly_on_a_fresh_world():
     import gymnasium as gym
 
     import robocup_gym.envs  # noqa: F401 (registers the tasks)
-    from robocup_gym.sim.ode.compare import record_world, replay_recording
-    from robocup_gym.sim.world import World
+    from robocup_gym.sim.engines.mujoco.world import World
+    from robocup_gym.sim.engines.ode.compare import record_world, replay_recording
 
-    env = gym.make("RobocupGym/VelocityKick-v0", max_episode_steps=15, wait_steps=5)
+    env = gym.make(
+        "RobocupGym/VelocityKick-v0", engine="mujoco", max_episode_steps=15, wait_steps=5
+    )
     world = env.unwrapped.backend.world
     rng = np.random.default_rng(0)
     with record_world(world) as rec:
@@ -233,7 +235,7 @@ def test_a_recorded_episode_replays_exactly_on_a_fresh_world():
     np.testing.assert_array_equal(replay.joint_angles_deg(0), world.joint_angles_deg(0))
     env.close()
     if available():
-        from robocup_gym.sim.ode import OdeWorld
+        from robocup_gym.sim.engines.ode import OdeWorld
 
         ref = OdeWorld([0])
         replay_recording(rec, ref)
@@ -244,7 +246,7 @@ def _flail_reference(compiled, types, cycles=400):
     """Random over-speed flailing (partial commands, re-placements, a bouncing ball) on an
     ODE world whose robots start asleep (the first command wakes them); per cycle its joints,
     torso, ball, accelerometer and foot sensors."""
-    from robocup_gym.sim.ode import OdeWorld
+    from robocup_gym.sim.engines.ode import OdeWorld
 
     w = OdeWorld(list(types), compiled=compiled)
     for i in range(len(types)):
@@ -275,7 +277,7 @@ def _flail_reference(compiled, types, cycles=400):
 @needs_ode
 @pytest.mark.parametrize("types", [(0,), (4, 1)])
 def test_compiled_reference_loops_are_bit_equal(types):
-    """The ODE world's loops in C (drag, commands, contacts: robocup_gym/sim/ode/ode_step.c)
+    """The ODE world's loops in C (drag, commands, contacts: robocup_gym/sim/engines/ode/ode_step.c)
     give exactly what the Python loops give."""
     from robocup_gym.sim import compiled
 
@@ -292,7 +294,7 @@ def test_compiled_reference_loops_are_bit_equal(types):
 @needs_ode
 def test_reference_without_a_compiler_runs_its_python_loops(monkeypatch, tmp_path):
     from robocup_gym.sim import compiled
-    from robocup_gym.sim.ode import OdeWorld
+    from robocup_gym.sim.engines.ode import OdeWorld
 
     monkeypatch.setenv("ROBOCUP_GYM_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
@@ -305,3 +307,65 @@ def test_reference_without_a_compiler_runs_its_python_loops(monkeypatch, tmp_pat
             OdeWorld([0], compiled=True)
     finally:
         compiled.forget()
+
+
+def _flail_together(skip_apart_pairs: bool, cycles=150):
+    """Two robots flailing into each other, with the ball, next to the left goal."""
+    from robocup_gym.sim.engines.ode import OdeWorld
+
+    w = OdeWorld([0, 3])
+    if not skip_apart_pairs:  # every pair goes to dCollide, as without the AABB pre-test
+        w._pair_slots[:] = -1
+    w.place_robot(0, -14.6, 0.9, heading_deg=180.0)
+    w.place_robot(1, -14.6, 0.6, heading_deg=90.0)
+    w.place_ball((-14.5, 1.3, 0.2), vel=(-2.0, 0.0, 0.0))
+    rng = np.random.default_rng(5)
+    out = []
+    for _ in range(cycles):
+        cmds = {
+            i: rng.uniform(-1.0, 1.0, len(r.model.max_speeds)) * r.model.max_speeds
+            for i, r in enumerate(w.robots)
+        }
+        w.step(cmds)
+        out.append(
+            np.concatenate(
+                [
+                    w.joint_angles_deg(0),
+                    w.joint_angles_deg(1),
+                    w.torso_position(0),
+                    w.torso_position(1),
+                    w.ball_position(),
+                ]
+            )
+        )
+    return out
+
+
+@needs_ode
+def test_skipping_pairs_whose_boxes_are_apart_changes_nothing():
+    """The AABB pre-test only skips dCollide calls that would make no contact: the state is
+    bit-equal to colliding every pair (two robots tangled at a goal post, the ball bouncing)."""
+    for a, b in zip(_flail_together(True), _flail_together(False), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@needs_ode
+def test_walls_and_goals_are_solid():
+    from robocup_gym.sim.engines.ode import OdeWorld
+
+    w = OdeWorld([0])
+    w.place_robot(0, 0.0, 5.0)
+    w.place_ball((20.0, 0.0), vel=(10.0, 0.0, 0.0))  # towards the right wall at x = 24.49
+    xs = []
+    for _ in range(150):
+        w.step()
+        xs.append(w.ball_position()[0])
+    assert max(xs) < 24.49 and xs[-1] < max(xs) - 0.5  # the centre never passed the wall's face
+    # into the left goal, slow enough not to pass the 4 cm back wall within one 20 ms step
+    # (as on rcssserver3d, a faster ball can tunnel through it: ODE collides discretely)
+    w.place_ball((-15.0, 0.0, 0.2), vel=(-3.0, 0.0, 0.0))
+    xs = []
+    for _ in range(100):
+        w.step()
+        xs.append(w.ball_position()[0])
+    assert min(xs) > -15.58 and xs[-1] > min(xs)  # stopped by the back wall, bounced

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from robocup_gym.sim import physics as phys
+from robocup_gym.sim.engines.mujoco.world import World
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig, ode_impedance, ode_solref
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import World
 
 
 def standing_world(n_cycles: int = 10) -> World:

@@ -8,7 +8,7 @@ import pytest
 
 from robocup_gym.robot.nao import nao_model, wire_perceptor_order
 from robocup_gym.robot.types import robot_type
-from robocup_gym.sim.scene import RobotSlot, scene_xml
+from robocup_gym.sim.engines.mujoco.scene import RobotSlot, scene_xml
 
 SOLE = {0: 0.385, 1: 0.42164, 2: 0.385, 3: 0.440737, 4: 0.385}
 COM = {

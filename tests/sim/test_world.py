@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
+from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError, World
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.sim.world import SimulationDivergedError, World
 from robocup_gym.types import AgentCommand
 
 
@@ -407,7 +407,7 @@ def test_drag_on_every_robot_body_from_the_velocities_at_the_start_of_the_cycle(
     # the forces in effect while MuJoCo integrates this cycle (spy on mj_step2)
     import mujoco
 
-    import robocup_gym.sim.world as world_module
+    import robocup_gym.sim.engines.mujoco.world as world_module
 
     seen = []
 

@@ -61,24 +61,27 @@ def test_eval_prints_json_last(ppo_run):
 
 
 def test_eval_on_another_backend(ppo_run):
-    """``--backend ode`` runs the policy closed-loop on SimSpark's physics on ODE and writes
-    eval-ode.json beside the run's own eval.json; an unknown backend is a clear error."""
+    """``--engine mujoco`` runs the policy (trained on the default engine, SimSpark's physics on
+    ODE) closed-loop on the MuJoCo engine and writes eval-mujoco.json beside the run's own
+    eval.json; an unknown backend or engine is a clear error."""
     from typer.testing import CliRunner
 
     from robocup_gym.cli import app
-    from robocup_gym.sim.ode import available
+    from robocup_gym.sim.engines.ode import available
 
     bad = CliRunner().invoke(app, ["eval", str(ppo_run), "--episodes", "1", "--backend", "bullet"])
     assert bad.exit_code == 1
     assert "unknown backend 'bullet'" in bad.output and "'ode'" in bad.output
+    bad = CliRunner().invoke(app, ["eval", str(ppo_run), "--episodes", "1", "--engine", "bullet"])
+    assert bad.exit_code == 1 and "unknown engine 'bullet'" in bad.output
     if not available():
         pytest.skip("no double-precision libode here (apt-get install libode8)")
     before = (ppo_run / "eval.json").read_text() if (ppo_run / "eval.json").exists() else None
-    result = invoke(["eval", ppo_run, "--episodes", 1, "--backend", "ode"])
+    result = invoke(["eval", ppo_run, "--episodes", 1, "--engine", "mujoco"])
     summary = last_json(result.stdout)
-    assert summary["backend"] == "ode" and summary["episodes"] == 1
+    assert summary["backend"] == "mujoco" and summary["episodes"] == 1
     assert isinstance(summary["ball_dx_mean"], float)
-    assert json.loads((ppo_run / "eval-ode.json").read_text())["backend"] == "ode"
+    assert json.loads((ppo_run / "eval-mujoco.json").read_text())["backend"] == "mujoco"
     after = (ppo_run / "eval.json").read_text() if (ppo_run / "eval.json").exists() else None
     assert after == before  # the run's own evaluation is left alone
 
@@ -342,7 +345,7 @@ def test_ode_transfer_replays_a_trained_policy_on_the_reference(ppo_run):
     import importlib.util
     from pathlib import Path
 
-    from robocup_gym.sim.ode import available
+    from robocup_gym.sim.engines.ode import available
 
     if not available():
         pytest.skip("no double-precision libode here (apt-get install libode8)")
@@ -395,7 +398,7 @@ def test_init_from_starts_a_new_run_from_a_trained_policy(ppo_run, tmp_path):
     import torch
     from stable_baselines3 import PPO
 
-    from robocup_gym.sim.ode import available
+    from robocup_gym.sim.engines.ode import available
 
     backend = "ode" if available() else "mujoco"
     out = tmp_path / "runs"

@@ -85,5 +85,5 @@ def test_task_names():
     assert resolve_task("Pendulum-v1") == "Pendulum-v1"
     assert kebab("VelocityKick") == "velocity-kick"
     assert task_name("RobocupGym/VelocityKick-v0") == "velocity-kick"
-    with pytest.raises(ValueError, match="known tasks: simple-kick, velocity-kick"):
+    with pytest.raises(ValueError, match="known tasks: get-up, simple-kick, velocity-kick, walk"):
         resolve_task("penalty-kick")

@@ -1,6 +1,7 @@
 """A small ctypes binding of the Open Dynamics Engine (ODE), the engine rcssserver3d runs on.
 
-Only what :mod:`robocup_gym.sim.ode.world` needs: a world, bodies with masses, hinge joints with
+Only what :mod:`robocup_gym.sim.engines.ode.world` needs: a world, bodies with masses, hinge joints
+with
 their motor/stop parameters, box/sphere/capsule/plane geoms, ``dCollide`` and contact joints. ODE
 is not a Python package: it is the system library ``libode`` (Debian/Ubuntu: ``apt-get install
 libode8``; rcssserver3d 0.7.3 was measured on ODE 0.16.2 in double precision, which is what
@@ -151,10 +152,41 @@ _SIGNATURES: dict[str, tuple] = {
     "dCreateCapsule": (dID, [dID, dReal, dReal]),
     "dCreatePlane": (dID, [dID, dReal, dReal, dReal, dReal]),
     "dGeomSetBody": (None, [dID, dID]),
+    "dGeomSetPosition": (None, [dID, dReal, dReal, dReal]),
+    "dGeomGetAABB": (None, [dID, ctypes.POINTER(dReal)]),
     "dGeomGetBody": (dID, [dID]),
     "dGeomDestroy": (None, [dID]),
     "dCollide": (ctypes.c_int, [dID, dID, ctypes.c_int, ctypes.POINTER(ContactGeom), ctypes.c_int]),
 }
+
+
+MIN_ABI = 8
+"""The shared-library major version of ODE 0.16 (``libode.so.8``), the version rcssserver3d 0.7
+is built against; older ODE has other structure layouts (contact, surface parameters)."""
+
+
+def loaded_path(stem: str) -> str | None:
+    """The file of the mapped shared library whose name starts with ``stem`` (Linux: from
+    ``/proc/self/maps``), or ``None`` where that cannot be read."""
+    try:
+        with open("/proc/self/maps") as f:
+            for line in f:
+                name = line.rsplit(None, 1)[-1]
+                if os.path.basename(name).startswith(stem + "."):
+                    return name
+    except OSError:
+        return None
+    return None
+
+
+def abi_version(path: str) -> int | None:
+    """The major version in a shared library's file name (``libode.so.8.1.0`` → 8,
+    ``libode.8.dylib`` → 8), following symbolic links; ``None`` if it has none."""
+    import re
+
+    name = os.path.basename(os.path.realpath(path))
+    m = re.search(r"\.so\.(\d+)", name) or re.search(r"\.(\d+)(?:\.\d+)*\.dylib$", name)
+    return int(m.group(1)) if m else None
 
 
 @cache
@@ -162,8 +194,9 @@ def load() -> ctypes.CDLL:
     """The initialised ODE library.
 
     Raises:
-        OdeUnavailableError: when ``libode`` cannot be found or loaded, or is a single-precision
-            build (SimSpark's results are for double precision).
+        OdeUnavailableError: when ``libode`` cannot be found or loaded, is a single-precision
+            build (SimSpark's results are for double precision) or is older than ODE 0.16;
+            the message says what was found and how to install the right one.
     """
     path = os.environ.get("ROBOCUP_GYM_LIBODE") or ctypes.util.find_library("ode") or "libode.so.8"
     try:
@@ -171,7 +204,8 @@ def load() -> ctypes.CDLL:
     except OSError as e:
         raise OdeUnavailableError(
             f"the Open Dynamics Engine library could not be loaded ({path}: {e}); install it "
-            "(Debian/Ubuntu: apt-get install libode8) or point ROBOCUP_GYM_LIBODE at libode.so"
+            "(Debian/Ubuntu: apt-get install libode8; macOS: brew install ode) or point "
+            "ROBOCUP_GYM_LIBODE at libode.so, or use the MuJoCo engine (engine='mujoco')"
         ) from e
     for name, (restype, argtypes) in _SIGNATURES.items():
         fn = getattr(lib, name)
@@ -181,7 +215,17 @@ def load() -> ctypes.CDLL:
     if "ODE_double_precision" not in config.split():
         raise OdeUnavailableError(
             f"{path} is not a double-precision ODE build (configuration: {config}); "
-            "rcssserver3d's figures are for ODE in double precision"
+            "rcssserver3d's figures are for ODE in double precision. Install Debian/Ubuntu's "
+            "libode8 (double precision) or build ODE 0.16 with --enable-double-precision, "
+            "or use the MuJoCo engine (engine='mujoco')"
+        )
+    abi = abi_version(loaded_path("libode") or path)
+    if abi is not None and abi < MIN_ABI:
+        raise OdeUnavailableError(
+            f"{loaded_path('libode') or path} is ODE with library ABI {abi}, older than ODE "
+            f"0.16's ({MIN_ABI}, libode.so.{MIN_ABI}): its structures differ from the ones "
+            "this binding and SimSpark use. Install ODE 0.16 (Debian/Ubuntu: apt-get install "
+            "libode8; macOS: brew install ode) or point ROBOCUP_GYM_LIBODE at it"
         )
     lib.dInitODE2(0)
     return lib

@@ -2,11 +2,11 @@
 
 In Python they make ~200 ctypes calls a cycle, which take as long as ODE's own ``dWorldStep``.
 ``ode_step.c`` makes the same ODE calls, with the same arguments in the same order, through
-the function pointers of the ctypes binding (:mod:`robocup_gym.sim.ode.lib`), so it needs
+the function pointers of the ctypes binding (:mod:`robocup_gym.sim.engines.ode.lib`), so it needs
 neither ODE's headers nor linking, and the results are bit-equal. It is built like the MuJoCo
 world's compiled step (:mod:`robocup_gym.sim.compiled`: system C compiler, cached, the same
 ``ROBOCUP_GYM_COMPILED`` switch); where it cannot be built, :class:`OdeWorld
-<robocup_gym.sim.ode.world.OdeWorld>` runs the Python loops.
+<robocup_gym.sim.engines.ode.world.OdeWorld>` runs the Python loops.
 """
 
 from __future__ import annotations
@@ -17,9 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from robocup_gym.sim import compiled
-from robocup_gym.sim.ode import lib as ode
+from robocup_gym.sim.engines.ode import lib as ode
 
 SOURCE = Path(__file__).with_name("ode_step.c")
+SANE_SPEED = 1e6
+"""Largest linear (m/s) or angular (rad/s) velocity component of a sane body: beyond it (or at
+NaN) the solver has blown up, and ODE's next step would abort the whole process."""
 FUNCTIONS = (
     "dCollide",
     "dJointCreateContact",
@@ -32,6 +35,10 @@ FUNCTIONS = (
     "dJointGetHingeAngle",
     "dJointSetHingeParam",
     "dBodyEnable",
+    "dGeomGetAABB",
+    "dBodyGetPosition",
+    "dBodyGetRotation",
+    "dJointGetHingeAngleRate",
 )
 """The ODE functions ``ode_step.c`` calls, in the order of its ``ode_fns`` struct."""
 
@@ -61,17 +68,19 @@ def _configure(lib: ctypes.CDLL) -> None:
         raise compiled.CompiledStepUnavailableError(
             "ode_step.c's dContact and lib.py's Contact differ in size"
         )
-    lib.ode_drag.argtypes = [_p, ctypes.c_int, _p, _p]
-    lib.ode_drag.restype = None
+    lib.ode_drag.argtypes = [_p, ctypes.c_int, _p, _p, ctypes.c_double]
+    lib.ode_drag.restype = ctypes.c_int
     lib.ode_realise.argtypes = [_p, ctypes.c_int, _p, _p, _p, _p, _p, ctypes.c_int]
     lib.ode_realise.restype = None
     lib.ode_collide.argtypes = [_p, _p, _p, ctypes.c_int, _p, _p, _p, ctypes.c_int, _p, _p]
-    lib.ode_collide.argtypes += [_p, _p]
+    lib.ode_collide.argtypes += [_p, _p, ctypes.c_int, _p, _p, _p]
     lib.ode_collide.restype = ctypes.c_int
+    lib.ode_read.argtypes = [_p, ctypes.c_int, _p, _p, ctypes.c_int, _p, _p, _p]
+    lib.ode_read.restype = None
 
 
 class FastLoops:
-    """The C loops bound to one :class:`~robocup_gym.sim.ode.world.OdeWorld`'s handles.
+    """The C loops bound to one :class:`~robocup_gym.sim.engines.ode.world.OdeWorld`'s handles.
 
     Args:
         ode_lib: The world's ctypes ODE binding (its function pointers are passed to C).
@@ -82,9 +91,26 @@ class FastLoops:
         pairs: The world's collision pairs ``(g1, g2, b1, b2, surface, frp1, frp2)``.
         feedback: The world's ``dJointFeedback`` slots (one per sensed contact).
         max_contacts: Contacts per pair.
+        slot_geoms: The geoms with an AABB slot (all but the ground plane).
+        pair_slots: ``(n_pairs, 2)`` slot of each pair's geoms (-1: the ground plane).
+        state: ``(bodies, state array (n, 18), joints, angles, rates)`` that :meth:`read`
+            fills (``OdeWorld``'s state snapshot).
     """
 
-    def __init__(self, ode_lib, bodies, robots, world, group, pairs, feedback, max_contacts):
+    def __init__(
+        self,
+        ode_lib,
+        bodies,
+        robots,
+        world,
+        group,
+        pairs,
+        feedback,
+        max_contacts,
+        slot_geoms,
+        pair_slots,
+        state,
+    ):
         self._lib = load()
         self._fns = OdeFunctions(
             *[ctypes.cast(getattr(ode_lib, name), _p).value for name in FUNCTIONS]
@@ -98,6 +124,7 @@ class FastLoops:
             n_bodies,
             ctypes.addressof(self._bodies),
             compiled.address(self._coef),
+            SANE_SPEED,
         )
         self._keep = []  # the arrays the per-robot arguments point into
         self._realise_args = []
@@ -127,6 +154,22 @@ class FastLoops:
         slots = len(feedback)
         self._out_pair = np.zeros(slots, dtype=np.int32)
         self._out_pos = np.zeros((slots, 3))
+        self._slot_geoms = (_p * len(slot_geoms))(*slot_geoms)
+        self._pair_slots = np.ascontiguousarray(pair_slots, dtype=np.int32)
+        self._aabb = np.zeros((len(slot_geoms), 6))
+        bodies_all, out, joints_all, angles, rates = state
+        self._read_bodies = (_p * len(bodies_all))(*bodies_all)
+        self._read_joints = (_p * max(len(joints_all), 1))(*joints_all)
+        self._read_args = (
+            fns,
+            len(bodies_all),
+            ctypes.addressof(self._read_bodies),
+            compiled.address(out),
+            len(joints_all),
+            ctypes.addressof(self._read_joints),
+            compiled.address(angles),
+            compiled.address(rates),
+        )
         self._collide_args = (
             fns,
             world,
@@ -140,11 +183,20 @@ class FastLoops:
             ctypes.addressof(feedback),
             compiled.address(self._out_pair),
             compiled.address(self._out_pos),
+            len(slot_geoms),
+            ctypes.addressof(self._slot_geoms),
+            compiled.address(self._pair_slots),
+            compiled.address(self._aabb),
         )
 
-    def drag(self) -> None:
-        """Drag on every body (``OdeWorld._apply_drag``)."""
-        self._lib.ode_drag(*self._drag_args)
+    def read(self) -> None:
+        """Fill the world's state snapshot (``OdeWorld._read_state``)."""
+        self._lib.ode_read(*self._read_args)
+
+    def drag(self) -> int:
+        """Drag on every body (``OdeWorld._apply_drag``); returns the index of a body whose
+        velocity is not sane (then no force was added), else -1."""
+        return self._lib.ode_drag(*self._drag_args)
 
     def realise(self, robot: int, targets: np.ndarray) -> None:
         """Robot ``robot``'s due targets, rad/s, NaN = none (``OdeWorld._realise``)."""

@@ -1,4 +1,4 @@
-/* The per-cycle work of robocup_gym.sim.world.World.step in C (compiled on first use by
+/* The per-cycle work of robocup_gym.sim.engines.mujoco.world.World.step in C (compiled on first use by
  * robocup_gym/sim/compiled.py against the installed MuJoCo's headers; no MuJoCo function is
  * called, only mjModel/mjData fields are read and written).
  *

@@ -12,7 +12,7 @@ import mujoco
 
 from robocup_gym.robot.mjcf import robot_xml, self_collision_excludes
 from robocup_gym.robot.nao import nao_model
-from robocup_gym.sim.field import FIELD_LINES
+from robocup_gym.sim.field import FIELD_LINES, GOAL_BOXES, WALLS
 from robocup_gym.sim.physics import (
     BALL_GROUND_ERP_CFM,
     BALL_MASS,
@@ -52,18 +52,6 @@ def _box(name: str, pos, size, rgba: str = "0.9 0.9 0.9 1", cls: str = "static")
     )
 
 
-def _goal(side: int) -> list[str]:
-    """Goal walls and bar (spec §6.3); ``side`` −1 = left goal at x = −15.3, +1 = right."""
-    s = "L" if side < 0 else "R"
-    x0 = side * 15.3
-    return [
-        _box(f"goal{s}_post1", (x0, 1.07, 0.4), (0.6, 0.04, 0.8)),
-        _box(f"goal{s}_post2", (x0, -1.07, 0.4), (0.6, 0.04, 0.8)),
-        _box(f"goal{s}_back", (side * 15.58, 0, 0.4), (0.04, 2.1, 0.8)),
-        _box(f"goal{s}_bar", (x0, 0, 0.82), (0.6, 2.18, 0.04)),
-    ]
-
-
 def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> str:
     """The complete MJCF of a world with ``robots`` (may be empty), ball and field."""
     ph = physics or PhysicsConfig()
@@ -84,12 +72,8 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
         sensors.extend(_drag_sensors(slot))
         frp.extend(_frp_sensors(slot))
     sensors.extend(frp)  # after every robot's drag sensors (World reads those as one block)
-    walls = [
-        _box("wall_left", (-24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
-        _box("wall_right", (24.99, 0, 0), (1, 51, 1), "0.5 0.5 0.5 1"),
-        _box("wall_back", (0, 25, 0), (50.98, 1, 1), "0.5 0.5 0.5 1"),
-        _box("wall_front", (0, -25, 0), (50.98, 1, 1), "0.5 0.5 0.5 1"),
-    ]
+    walls = [_box(name, pos, size, "0.5 0.5 0.5 1") for name, pos, size in WALLS]
+    goals = [_box(name, pos, size) for name, pos, size in GOAL_BOXES]
     pairs.append(
         f'    <pair geom1="ball" geom2="ground" condim="3" '
         f'friction="{ph.ball_friction} {ph.ball_friction} 0.005 0.0001 0.0001" '
@@ -139,7 +123,7 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
     <geom name="ground" type="plane" pos="0 0 {GROUND_PLANE_Z}" size="25 25 0.1"
           material="grass" class="static" contype="4" conaffinity="1"/>
 {chr(10).join(walls)}
-{chr(10).join(_goal(-1) + _goal(1))}
+{chr(10).join(goals)}
     <body name="ball" pos="0 0 {BALL_RADIUS}">
       <freejoint name="ball"/>
       <geom name="ball" type="sphere" size="{BALL_RADIUS}" mass="{BALL_MASS}" priority="1"

@@ -36,30 +36,26 @@ except ImportError:  # numpy < 2
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
-from robocup_gym.sim.memory import release_free_memory
-from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
-from robocup_gym.sim.scene import (
+from robocup_gym.sim.engines.mujoco.scene import (
     FRP_GEOMS,
     RobotSlot,
     apply_ode_softness,
     frp_sensor_name,
     scene_xml,
 )
-from robocup_gym.sim.vision import CALIBRATION_ERROR_M, PLAYER_PARTS, VisionConfig, see
+from robocup_gym.sim.memory import release_free_memory
+from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
+from robocup_gym.sim.senses import AgentState, Senses
+from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import (
     AgentCommand,
     ForceResistance,
     GameState,
     GroundTruth,
-    HeardMessage,
-    Perception,
 )
 
-PAUSED_MODES = ("BeforeKickOff", "GameOver")
-"""Play modes in which the game clock stands still."""
 CREEP_WINDOW_RAD = math.radians(0.5)
 """Largest position error the motor creep compensation corrects (anti-windup), rad."""
-SAY_MAX_CHARS = 20
 DIVERGED_QVEL_SQ = 1e10
 """Squared norm of the velocity vector above which the world counts as diverged (no Nao or
 ball gets near 1e5 rad/s or m/s)."""
@@ -72,7 +68,6 @@ _DIVERGENCE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQVEL),
     int(mujoco.mjtWarning.mjWARN_BADQPOS),
 )
-HEARING_RANGE_M = 50.0
 _XYZ = (0, 1, 2)
 _SATURATED = phys.MOTOR_MAX_TORQUE * (1.0 - 1e-9)
 """Force (N·m) from which a motor row counts as saturated: it could not reach its target."""
@@ -96,19 +91,14 @@ class SimulationDivergedError(RuntimeError):
     """The physics produced NaN/inf or MuJoCo reported an instability; call :meth:`World.reset`."""
 
 
-@dataclass
-class RobotState:
-    """Book-keeping of one robot in the world (ids into the MuJoCo model and agent state)."""
+@dataclass(kw_only=True)
+class RobotState(AgentState):
+    """Book-keeping of one robot in the world: ids into the MuJoCo model, motor state, and (from
+    :class:`~robocup_gym.sim.senses.AgentState`) its state as an agent."""
 
     index: int
     prefix: str
     model: NaoModel
-    team: str | None = None
-    """Team side ``"left"``/``"right"``."""
-    team_name: str | None = None
-    unum: int | None = None
-    announce_team: bool = False
-    """True until the next GS carries unum/team (sent once after init)."""
     qpos_root: int = 0
     qvel_root: int = 0
     qpos_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
@@ -145,26 +135,12 @@ class RobotState:
     command", whether every joint has a command)``."""
     accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
     prev_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    perception_counter: int = 0
-    calibration: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    heard: list[HeardMessage] = field(default_factory=list)
-    hear_capacity: dict[str, int] = field(default_factory=lambda: {"team": 2, "opp": 2})
     last_frp: dict[str, ForceResistance] = field(default_factory=dict)
     asleep: bool = False
     """Held where it was placed (ODE auto-disable) until a non-zero motor target or a contact
     with a moving body wakes it (see :meth:`World.place_robot`)."""
     sleep_qpos: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Root pose (7) and joint angles at which a sleeping robot is held."""
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """Perceptor names (canonical order)."""
-        return self.model.perceptor_names
-
-    @property
-    def effector_names(self) -> tuple[str, ...]:
-        """Effector names (canonical order)."""
-        return self.model.effector_names
 
 
 def yaw_quat(yaw_rad: float) -> np.ndarray:
@@ -217,7 +193,7 @@ def joint_angles_array(model: NaoModel, angles: Mapping[str, float] | np.ndarray
     return out
 
 
-class World:
+class World(Senses):
     """The SimSpark Nao world on MuJoCo.
 
     Args:
@@ -414,7 +390,8 @@ class World:
         self._compiled = compiled_step.CompiledStep(st, m, self._data, list(keep.values()))
 
     def _init_drag(self, drag_bodies: list[int]) -> None:
-        """Map the scene's drag sensors (:func:`robocup_gym.sim.scene._drag_sensors`: per robot
+        """Map the scene's drag sensors
+        (:func:`robocup_gym.sim.engines.mujoco.scene._drag_sensors`: per robot
         body its centre-of-mass linear and angular velocity) onto ``xfrc_applied``."""
         m, d = self.model, self._data
         n = 2 * len(drag_bodies)  # the drag sensors come first; the FRP contact sensors follow
@@ -554,7 +531,7 @@ class World:
         if problem is not None:
             raise RuntimeError(
                 f"MuJoCo {mujoco.__version__}: {problem}. The World's joint motors "
-                "(robocup_gym/sim/world.py, robocup_gym/robot/mjcf.py) rely on it; "
+                "(robocup_gym/sim/engines/mujoco/world.py, robocup_gym/robot/mjcf.py) rely on it; "
                 "use a tested MuJoCo version (docs/physics.md, 'MuJoCo versions')."
             )
 
@@ -695,24 +672,9 @@ class World:
         return self._data
 
     @property
-    def n_robots(self) -> int:
-        """Number of robots in the world."""
-        return len(self.robots)
-
-    @property
     def substeps(self) -> int:
         """MuJoCo steps per 20 ms cycle."""
         return self._substeps
-
-    def robot(self, index: int) -> RobotState:
-        """The robot with index ``index``.
-
-        Raises:
-            IndexError: naming the valid range.
-        """
-        if not 0 <= index < len(self.robots):
-            raise IndexError(f"robot index {index} out of range 0..{len(self.robots) - 1}")
-        return self.robots[index]
 
     # ------------------------------------------------------------------ reset / placement
     def reset(self, seed: int | None = None) -> None:
@@ -732,12 +694,9 @@ class World:
         for r in self.robots:
             r.targets[:] = 0.0
             r.pending.clear()
-            r.perception_counter = 0
-            r.heard.clear()
-            r.hear_capacity = {"team": 2, "opp": 2}
             r.last_frp = {}
             r.asleep = False
-            r.calibration = self.rng.uniform(-CALIBRATION_ERROR_M, CALIBRATION_ERROR_M, 3)
+        self._reset_senses()
         counts = {"left": 0, "right": 0, None: 0}
         for r in self.robots:
             n = counts[r.team]
@@ -933,33 +892,6 @@ class World:
         mujoco.mj_sensorAcc(m, d)
         self._poses_stale = self._com_stale = False
 
-    def set_game(
-        self,
-        *,
-        play_mode: str | None = None,
-        game_time: float | None = None,
-        score_left: int | None = None,
-        score_right: int | None = None,
-    ) -> None:
-        """Set play mode (wire name, e.g. ``"PlayOn"``), game clock (s) and scores instantly."""
-        if play_mode is not None:
-            self.game.play_mode = play_mode
-        if game_time is not None:
-            self.game.game_time = float(game_time)
-        if score_left is not None:
-            self.game.score_left = int(score_left)
-        if score_right is not None:
-            self.game.score_right = int(score_right)
-
-    def set_team(self, index: int, side: str, team_name: str, unum: int) -> None:
-        """Give robot ``index`` its team (as ``init`` does): it is then seen by others, can hear,
-        and the next GS carries ``unum``/``team`` once."""
-        if side not in ("left", "right"):
-            raise ValueError(f"side must be 'left' or 'right', got {side!r}")
-        r = self.robot(index)
-        r.team, r.team_name, r.unum = side, team_name, int(unum)
-        r.announce_team = True
-
     # ------------------------------------------------------------------ commands
     def command_array(self, index: int, velocities: Mapping[str, float] | np.ndarray) -> np.ndarray:
         """Validate a joint-velocity command (rad/s) and return it as a canonical-order array in
@@ -1064,34 +996,6 @@ class World:
         r.targets[:] = vel
         return True
 
-    def say(self, index: int, message: str) -> None:
-        """Broadcast ``message`` (≤ 20 printable characters, no spaces/parentheses) from robot
-        ``index`` to every robot with a team within 50 m (spec §4.8); heard in the next percept."""
-        r = self.robot(index)
-        if not message or len(message) > SAY_MAX_CHARS or r.team is None:
-            return
-        if any(not (0x21 <= ord(c) <= 0x7E) or c in "()" for c in message):
-            return
-        src = self._posed().xpos[r.torso_body]
-        for other in self.robots:
-            if other.team is None:
-                continue
-            if other is r:
-                other.heard.append(HeardMessage(r.team_name, self.game.game_time, None, message))
-                continue
-            dst = self._data.xpos[other.torso_body]
-            delta = src[:2] - dst[:2]
-            if float(np.hypot(*delta)) > HEARING_RANGE_M:
-                continue
-            key = "team" if other.team == r.team else "opp"
-            if other.hear_capacity[key] < 2:
-                continue
-            other.hear_capacity[key] -= 2
-            if other.team == "right":
-                delta = -delta
-            direction = math.degrees(math.atan2(delta[1], delta[0]))
-            other.heard.append(HeardMessage(r.team_name, self.game.game_time, direction, message))
-
     # ------------------------------------------------------------------ stepping
     def step(
         self,
@@ -1120,11 +1024,7 @@ class World:
         # and velocities are brought up to the new state when first used (see ``data``).
         self._poses_stale = self._com_stale = True
         self.cycle += 1
-        self.time = round(self.time + CYCLE_S, 10)
-        if self.game.play_mode not in PAUSED_MODES:
-            self.game.game_time = round(self.game.game_time + CYCLE_S, 10)
-        for r in self.robots:
-            r.perception_counter += 1
+        self._advance_clocks(CYCLE_S)
         if diverged:
             self._raise_diverged()
 
@@ -1455,67 +1355,19 @@ class World:
         r.last_frp = out
         return out
 
-    def perceive(
-        self, index: int = 0, *, vision: bool | None = None, ground_truth: bool = True
-    ) -> Perception:
-        """Robot ``index``'s perception of the current state, as rcssserver3d would send it.
+    def accelerometer(self, index: int = 0) -> np.ndarray:
+        """The accelerometer (``ACC``) of robot ``index``, m/s², torso frame."""
+        return self.robot(index).accel.copy()
 
-        Vision (``See``) is included every ``vision.interval``-th cycle (or when ``vision`` is
-        forced True/False). GS carries unum/team once after :meth:`set_team`. Messages heard since
-        the last call are returned and cleared. Ground truth is attached unless ``ground_truth``
-        is False (the server, which does not send it, saves the work).
-        """
-        r = self.robot(index)
+    def _head_pose(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Head centre (world, m) and rotation matrix of robot ``index``."""
+        r = self.robots[index]
         d = self._posed()
-        game = GameState(
-            play_mode=self.game.play_mode,
-            game_time=self.game.game_time,
-            score_left=self.game.score_left,
-            score_right=self.game.score_right,
-        )
-        if r.announce_team:
-            game.unum, game.team_side = r.unum, r.team
-            r.announce_team = False
-        due = r.perception_counter % self.vision_config.interval == 0 and r.perception_counter > 0
-        if vision is None:
-            vision = due
-        vis = self.vision(index) if vision else None
-        heard = r.heard
-        r.heard = []
-        for k in r.hear_capacity:
-            r.hear_capacity[k] = min(2, r.hear_capacity[k] + 1)
-        return Perception(
-            time=self.time,
-            game=game,
-            gyro=self.gyro(index),
-            accel=r.accel.copy(),
-            joint_names=r.joint_names,
-            joint_angles_deg=np.degrees(d.qpos[r.qpos_joints]),
-            force_sensors=self.force_sensors(index),
-            vision=vis,
-            heard=heard,
-            ground_truth=self.ground_truth(index) if ground_truth else None,
-        )
+        return d.xpos[r.head_body].copy(), d.xmat[r.head_body].reshape(3, 3).copy()
 
-    def vision(self, index: int = 0):
-        """The ``See`` percept of robot ``index`` for the current state (ignores the interval)."""
-        r = self.robot(index)
-        d = self._posed()
-        players = [
-            (o.team_name, o.unum, d.xpos[o.part_bodies])
-            for o in self.robots
-            if o.team_name is not None and o.unum is not None
-        ]
-        return see(
-            head_pos=d.xpos[r.head_body].copy(),
-            head_rot=d.xmat[r.head_body].reshape(3, 3).copy(),
-            ball_pos=self.ball_position(),
-            players=players,
-            calibration=r.calibration,
-            rng=self.rng,
-            config=self.vision_config,
-            mirror=r.team == "right",
-        )
+    def _part_positions(self, index: int) -> np.ndarray:
+        """World positions of robot ``index``'s parts seen by vision (``PLAYER_PARTS``), m."""
+        return self._posed().xpos[self.robots[index].part_bodies]
 
     # ------------------------------------------------------------------ misc
     def state(self) -> np.ndarray:

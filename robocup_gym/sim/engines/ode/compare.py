@@ -2,7 +2,8 @@
 
 A :class:`Motion` is what ``kick_D.json`` is: a placement and a sequence of blocks of joint
 velocity commands (rad/s, all joints sent every cycle, unlisted ones 0). :func:`compare` replays
-it on :class:`robocup_gym.sim.world.World` and on :class:`robocup_gym.sim.ode.OdeWorld` and
+it on :class:`robocup_gym.sim.engines.mujoco.world.World` and on
+:class:`robocup_gym.sim.engines.ode.OdeWorld` and
 measures how far the two drift apart (torso, joints, ball, cycle by cycle). ``MOTIONS`` covers
 what the real server's fixtures do not: standing, squatting, arm swings, joints driven into their
 stops, the kick, falls, a rolling ball and random flailing. ``benchmarks/ode_compare.py`` prints
@@ -244,8 +245,8 @@ def compare(
 
     ``make_world(robot_types)`` / ``make_reference(robot_types)`` build the two worlds (default:
     ``World`` and ``OdeWorld`` with their defaults)."""
-    from robocup_gym.sim.ode.world import OdeWorld
-    from robocup_gym.sim.world import World
+    from robocup_gym.sim.engines.mujoco.world import World
+    from robocup_gym.sim.engines.ode.world import OdeWorld
 
     types = [motion.robot_type]
     mj = replay(motion, (make_world or World)(types))

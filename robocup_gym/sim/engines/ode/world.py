@@ -10,17 +10,19 @@ contact surfaces mixed from each side's handler as SimSpark does (§7.3); drag b
 (§7.5); the hinge effector's rules (clip to the joint's max speed, ignore commands while the
 joint is not strictly inside its limits, wake the body on a non-zero command, §8.3).
 
-It is a yardstick, not a second simulator: no referee, no vision, no walls or goals (the
-motions it compares happen near the centre of the field). It has the body sensors a kick
-policy reads (joint angles, gyro, accelerometer, foot force perceptors from ODE's contact
-feedback, as SimSpark computes them), so that :class:`robocup_gym.backends.ode_backend.OdeBackend`
-can run a trained policy closed-loop on SimSpark's physics. What it settles is how ODE's own
+Since session 10 it is the default engine of the environments. It has every body perceptor
+(joint angles, gyro, accelerometer, the foot force perceptors from ODE's contact feedback, as
+SimSpark computes them), and the game state, hearing, vision and perception of
+:mod:`robocup_gym.sim.senses`, the same code as the MuJoCo world's. It has no referee and no
+walls or goals yet (what environments need happens on the open field; ``robocup-gym serve``
+still runs on the MuJoCo world). What it settles is how ODE's own
 solver, contact generation, joint stops and motor-at-stop rules behave for a given motion,
-which the MuJoCo translation (:mod:`robocup_gym.sim.world`) can then be compared with
+which the MuJoCo translation (:mod:`robocup_gym.sim.engines.mujoco.world`) can then be compared with
 (``benchmarks/ode_compare.py``). It needs the system library ``libode``
-(:mod:`robocup_gym.sim.ode.lib`).
+(:mod:`robocup_gym.sim.engines.ode.lib`).
 
-It offers the part of :class:`robocup_gym.sim.world.World`'s interface that scripted motions
+It offers the part of :class:`robocup_gym.sim.engines.mujoco.world.World`'s interface that scripted
+motions
 use (``place_robot``, ``place_ball``, ``step``, ``ball_position``, ``torso_position``, …), so
 :func:`robocup_gym.sim.fidelity.scripted_kick` runs on either.
 """
@@ -30,6 +32,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import math
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -39,12 +42,20 @@ import numpy as np
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
-from robocup_gym.sim.ode import lib as ode
-from robocup_gym.sim.ode.fast import FastLoops
-from robocup_gym.sim.ode.fast import load as load_fast
-from robocup_gym.sim.scene import FRP_GEOMS
-from robocup_gym.sim.world import heading_to_quat, joint_angles_array, joint_index
-from robocup_gym.types import ForceResistance
+from robocup_gym.sim.engines.mujoco.scene import FRP_GEOMS
+from robocup_gym.sim.engines.mujoco.world import (
+    SimulationDivergedError,
+    heading_to_quat,
+    joint_angles_array,
+    joint_index,
+)
+from robocup_gym.sim.engines.ode import lib as ode
+from robocup_gym.sim.engines.ode.fast import SANE_SPEED, FastLoops
+from robocup_gym.sim.engines.ode.fast import load as load_fast
+from robocup_gym.sim.field import GOAL_BOXES, WALLS
+from robocup_gym.sim.senses import AgentState, Senses
+from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
+from robocup_gym.types import ForceResistance, GameState, GroundTruth
 
 WORLD_CFM = 1e-5
 """SimSpark's world CFM (spec §7.1); the world ERP stays ODE's default 0.2."""
@@ -118,6 +129,23 @@ def _surface_parameters(s: Surface) -> ode.SurfaceParameters:
     return p
 
 
+def _lowest(body, rot: np.ndarray, centre: np.ndarray) -> float:
+    """Height of the lowest point of a collision shape (box, sphere, or capsule along its local
+    z) with rotation ``rot`` and centre ``centre``, m."""
+    size = np.asarray(body.size, dtype=float)
+    if body.shape == "box":
+        return float(centre[2] - np.abs(rot[2]) @ (size / 2))
+    if body.shape == "sphere":
+        return float(centre[2] - size[0])
+    return float(centre[2] - abs(rot[2][2]) * size[1] / 2 - size[0])
+
+
+def _apart(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two axis-aligned boxes ``(minx, maxx, miny, maxy, minz, maxz)`` are apart (then
+    their geoms cannot touch); ``ode_step.c``'s ``apart`` is the same test."""
+    return a[1] < b[0] or b[1] < a[0] or a[3] < b[2] or b[3] < a[2] or a[5] < b[4] or b[5] < a[4]
+
+
 def _rotation(quat: np.ndarray) -> np.ndarray:
     """The 3×3 matrix of a unit quaternion ``(w, x, y, z)`` (MuJoCo's ``mju_quat2Mat``)."""
     m = np.zeros(9)
@@ -140,9 +168,10 @@ def _mat3(r: np.ndarray) -> ode.Mat3:
     return m
 
 
-@dataclass
-class OdeRobot:
-    """One Nao in the ODE world: body and joint handles in the model's order."""
+@dataclass(kw_only=True)
+class OdeRobot(AgentState):
+    """One Nao in the ODE world: body and joint handles in the model's order, and (from
+    :class:`~robocup_gym.sim.senses.AgentState`) its state as an agent."""
 
     model: NaoModel
     bodies: list[int]
@@ -156,6 +185,10 @@ class OdeRobot:
     """(n, 2) stops in rad."""
     pending: list = field(default_factory=list)
     """Commands given but not yet realised (dead time)."""
+    body_index: dict[str, int] = field(default_factory=dict)
+    """Body name → index into :attr:`bodies`."""
+    joint_slice: slice = field(default_factory=lambda: slice(0, 0))
+    """This robot's joints in the world's joint state arrays."""
     frp_bodies: dict[str, int] = field(default_factory=dict)
     """Force resistance perceptor name (``lf``, ``rf``, ``lf1``, ``rf1``) → its body handle."""
     prev_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -168,19 +201,25 @@ class OdeRobot:
     last_frp: dict[str, ForceResistance] = field(default_factory=dict)
 
 
-class OdeWorld:
+class OdeWorld(Senses):
     """The SimSpark Nao world stepped by ODE 0.16 exactly as rcssserver3d steps it.
 
     Args:
         robot_types: One entry per robot (types 0–4).
         dead_time_cycles: Cycles between a command given to :meth:`step` and the step it first
-            acts in, as :class:`robocup_gym.sim.world.World` (1 = SimSpark's sync-mode latency).
-        compiled: Run the per-cycle loops in C (:mod:`robocup_gym.sim.ode.fast`, bit-equal,
-            twice as fast), as :class:`~robocup_gym.sim.world.World`'s argument of that name:
+            acts in, as :class:`robocup_gym.sim.engines.mujoco.world.World` (1 = SimSpark's
+            sync-mode latency).
+        compiled: Run the per-cycle loops in C (:mod:`robocup_gym.sim.engines.ode.fast`, bit-equal,
+            twice as fast), as :class:`~robocup_gym.sim.engines.mujoco.world.World`'s argument of
+            that name:
             ``None`` = ``ROBOCUP_GYM_COMPILED``, else whenever it can be built.
+        vision: ``See`` settings (noise, field of view, interval, ground-truth extensions), as
+            the MuJoCo world's; vision, hearing and the game state are the same code on both
+            engines (:mod:`robocup_gym.sim.senses`).
+        seed: Seed of the vision noise and calibration offsets.
 
     Raises:
-        robocup_gym.sim.ode.lib.OdeUnavailableError: when ``libode`` is missing.
+        robocup_gym.sim.engines.ode.lib.OdeUnavailableError: when ``libode`` is missing.
     """
 
     def __init__(
@@ -189,10 +228,21 @@ class OdeWorld:
         *,
         dead_time_cycles: int = 1,
         compiled: bool | None = None,
+        vision: VisionConfig | None = None,
+        seed: int | None = None,
     ) -> None:
         self._lib = lib = ode.load()
         self.dead_time_cycles = int(dead_time_cycles)
         self.time = 0.0
+        self.cycle = 0
+        self.game = GameState()
+        self.vision_config = vision or VisionConfig()
+        self.seed = seed
+        self.rng = np.random.default_rng(seed)
+        self.engine_seconds: float | None = None
+        """Set to 0.0 to accumulate the wall time of ODE's own work (contact generation and
+        ``dWorldStep``) in each step; ``benchmarks/throughput.py`` compares it with the whole
+        step. ``None``: not measured."""
         self._world = lib.dWorldCreate()
         lib.dWorldSetGravity(self._world, 0.0, 0.0, -phys.GRAVITY)
         lib.dWorldSetERP(self._world, WORLD_ERP)
@@ -207,17 +257,55 @@ class OdeWorld:
         lib.dBodySetMass(self._ball, ctypes.byref(mass))
         self._ball_geom = lib.dCreateSphere(None, phys.BALL_RADIUS)
         lib.dGeomSetBody(self._ball_geom, self._ball)
+        self._statics = []
+        """The walls and the goals' solid parts (spec §6.2, §6.3): static boxes, no body."""
+        for _name, centre, size in (*WALLS, *GOAL_BOXES):
+            g = lib.dCreateBox(None, *size)
+            lib.dGeomSetPosition(g, *centre)
+            self._statics.append(g)
         self.robots = [self._build_robot(int(t)) for t in robot_types]
         self._contact_buf = (ode.ContactGeom * MAX_CONTACTS)()
         self._contact = ode.Contact()
         self._pairs = self._collision_pairs()
+        # the AABB pre-test: every geom but the ground plane has a slot; a pair whose boxes are
+        # apart cannot touch, so dCollide (which would return no contact) is skipped for it
+        self._slot_geoms = [
+            self._ball_geom,
+            *self._statics,
+            *(g for r in self.robots for g in r.geoms),
+        ]
+        slot = {g: k for k, g in enumerate(self._slot_geoms)}
+        self._pair_slots = np.array(
+            [(slot.get(p[0], -1), slot.get(p[1], -1)) for p in self._pairs], dtype=np.int32
+        ).reshape(-1, 2)
+        self._aabb = np.zeros((len(self._slot_geoms), 6))
         n_sensed = sum(1 for p in self._pairs if p[5] or p[6])
         self._feedback = (ode.JointFeedback * (MAX_CONTACTS * max(n_sensed, 1)))()
         """Contact feedback slots for the contacts of foot/toe geoms (SimSpark's ``FRP``)."""
+        # the state snapshot every reading comes from (one C call per step, see _read_state)
+        self._state_bodies = self._drag_bodies()
+        self._row = {b: k for k, b in enumerate(self._state_bodies)}
+        self._state = np.zeros((len(self._state_bodies), 18))
+        self._all_joints = [h for r in self.robots for h in r.joints]
+        self._angles = np.zeros(len(self._all_joints))
+        self._rates = np.zeros(len(self._all_joints))
+        start = 0
+        for r in self.robots:
+            r.joint_slice = slice(start, start + len(r.joints))
+            start += len(r.joints)
+        self._fresh = False
         self._fast = self._init_fast(compiled_step.wanted() if compiled is None else compiled)
+        self._reset_senses()
         self.place_ball((0.0, 0.0))
         for i in range(len(self.robots)):
             self.place_robot(i, -1.0 - 1.0 * i, 0.0)
+
+    def reseed(self, seed: int | None) -> None:
+        """Restart the vision noise from ``seed`` and draw new calibration offsets (as the MuJoCo
+        world's ``reset(seed=...)`` does); the physical state is left as it is."""
+        self.seed = seed
+        self.rng = np.random.default_rng(seed)
+        self._reset_senses()
 
     # ------------------------------------------------------------------ construction
     def _build_robot(self, type_index: int) -> OdeRobot:
@@ -272,7 +360,16 @@ class OdeWorld:
             child.append(c)
         limits = np.array([j.range_rad for j in model.joints])
         frp = {f: bodies[names.index(FRP_GEOMS[f])] for f in FRP_GEOMS if FRP_GEOMS[f] in names}
-        return OdeRobot(model, bodies, joints, geoms, child, limits, frp_bodies=frp)
+        return OdeRobot(
+            model=model,
+            bodies=bodies,
+            joints=joints,
+            geoms=geoms,
+            child_body=child,
+            limits=limits,
+            body_index={name: i for i, name in enumerate(names)},
+            frp_bodies=frp,
+        )
 
     def _collision_pairs(self) -> list[tuple]:
         """Every geom pair that can touch, as ``(geom1, geom2, body1, body2, surface)`` (body
@@ -283,6 +380,8 @@ class OdeWorld:
         robot_ball = _surface_parameters(mix_surfaces(ROBOT_SURFACE, BALL_SURFACE))
         robot_robot = _surface_parameters(mix_surfaces(ROBOT_SURFACE, ROBOT_SURFACE))
         ball_ground = _surface_parameters(mix_surfaces(BALL_SURFACE, GROUND_SURFACE))
+        robot_wall = _surface_parameters(mix_surfaces(ROBOT_SURFACE, WALL_SURFACE))
+        ball_wall = _surface_parameters(mix_surfaces(BALL_SURFACE, WALL_SURFACE))
         pairs = [(self._ball_geom, self._ground, ball_ground)]
         for i, r in enumerate(self.robots):
             for g in r.geoms:
@@ -290,6 +389,11 @@ class OdeWorld:
                 pairs.append((g, self._ball_geom, robot_ball))
                 for other in self.robots[i + 1 :]:
                     pairs.extend((g, g2, robot_robot) for g2 in other.geoms)
+        # walls and goals last: they touch nothing near the centre of the field, so the order of
+        # the contacts (and so every result) there is that of a world without them
+        for w in self._statics:
+            pairs.append((self._ball_geom, w, ball_wall))
+            pairs.extend((g, w, robot_wall) for r in self.robots for g in r.geoms)
         body = self._lib.dGeomGetBody
         sensor = {}  # body handle -> (robot, FRP name)
         for i, r in enumerate(self.robots):
@@ -314,8 +418,8 @@ class OdeWorld:
             self.compiled_unavailable = str(exc)
             return None
         lin, ang = phys.BODY_LINEAR_DRAG, phys.BODY_ANGULAR_DRAG
-        bodies = [(b, (lin, ang)) for r in self.robots for b in r.bodies]
-        bodies.append((self._ball, (phys.BALL_LINEAR_DRAG, phys.BALL_ANGULAR_DRAG)))
+        ball = (phys.BALL_LINEAR_DRAG, phys.BALL_ANGULAR_DRAG)
+        bodies = [(b, ball if b == self._ball else (lin, ang)) for b in self._drag_bodies()]
         robots = [(r.joints, r.child_body, r.limits, r.model.max_speeds) for r in self.robots]
         return FastLoops(
             self._lib,
@@ -326,6 +430,9 @@ class OdeWorld:
             self._pairs,
             self._feedback,
             MAX_CONTACTS,
+            self._slot_geoms,
+            self._pair_slots,
+            (self._state_bodies, self._state, self._all_joints, self._angles, self._rates),
         )
 
     @property
@@ -344,30 +451,38 @@ class OdeWorld:
         z: float | None = None,
         joint_angles_deg: Mapping[str, float] | np.ndarray | None = None,
         asleep: bool = False,
+        quat: Sequence[float] | None = None,
+        forward: bool = True,
     ) -> None:
         """Teleport robot ``index`` with zero velocities and motor targets, as the trainer's
         ``move`` does; ``z`` = torso centre height (``None``: lowest point 1 mm deep, ODE's
-        resting depth, as :meth:`robocup_gym.sim.world.World.place_robot` puts it),
-        ``joint_angles_deg`` in canonical order or by name (others 0). ``asleep`` leaves every
-        body disabled, as ODE's auto-disable leaves a robot that was resting when moved."""
+        resting depth, as :meth:`robocup_gym.sim.engines.mujoco.world.World.place_robot` puts it),
+        ``joint_angles_deg`` in canonical order or by name (others 0), ``quat`` a full torso
+        orientation ``(w, x, y, z)`` instead of upright facing ``heading_deg``. ``asleep``
+        leaves every body disabled, as ODE's auto-disable leaves a robot that was resting when
+        moved. ``forward`` is accepted for the MuJoCo world's interface (nothing to recompute
+        here)."""
         lib = self._lib
         r = self.robots[index]
         model = r.model
         for name, v in (("x", x), ("y", y), ("z", z), ("heading_deg", heading_deg)):
             if v is not None and not math.isfinite(v):
                 raise ValueError(f"robot placement {name} must be finite, got {v}")
+        q = np.asarray(quat, float) if quat is not None else heading_to_quat(heading_deg)
+        if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
+            raise ValueError(f"quat must be 4 finite numbers, got {quat!r}")
         angles = (
             np.zeros(len(model.joints))
             if joint_angles_deg is None
             else joint_angles_array(model, joint_angles_deg)
         )
-        rot, trans = self._forward_kinematics(model, np.radians(angles), heading_deg)
+        rot, trans = self._forward_kinematics(model, np.radians(angles), q / np.linalg.norm(q))
         centres = [rot[i] @ np.array(b.pos) + trans[i] for i, b in enumerate(model.bodies)]
         if z is None:
             shift = -phys.SURFACE_LAYER - min(
-                c[2] - np.abs(rot[i][2]) @ (np.array(b.size) / 2)
+                _lowest(b, rot[i], c)
                 for i, (b, c) in enumerate(zip(model.bodies, centres, strict=True))
-                if b.collides and b.shape == "box"
+                if b.collides
             )
         else:
             shift = z - centres[0][2]
@@ -385,14 +500,16 @@ class OdeWorld:
         r.accel[:] = (0.0, 0.0, phys.GRAVITY)
         r.frp = {}
         r.last_frp = {}
+        self._fresh = False
 
     @staticmethod
     def _forward_kinematics(
-        model: NaoModel, angles: np.ndarray, heading_deg: float
+        model: NaoModel, angles: np.ndarray, quat: np.ndarray
     ) -> tuple[list[np.ndarray], list[np.ndarray]]:
         """Per body, the rotation and translation that take zero-pose torso-frame points to
-        world points (relative to the torso's x, y; torso centre at height 0)."""
-        root = _rotation(heading_to_quat(heading_deg))
+        world points (relative to the torso's x, y; torso centre at height 0) for a torso with
+        orientation ``quat``."""
+        root = _rotation(quat)
         index = {b.name: i for i, b in enumerate(model.bodies)}
         joint_of = {j.child: (k, j) for k, j in enumerate(model.joints)}
         rot: list = [None] * len(model.bodies)
@@ -433,6 +550,7 @@ class OdeWorld:
         lib.dBodySetLinearVel(self._ball, *map(float, v))
         lib.dBodySetAngularVel(self._ball, *map(float, w))
         lib.dBodyEnable(self._ball)
+        self._fresh = False
 
     # ------------------------------------------------------------------ stepping
     def step(self, commands: Mapping[int, Mapping[str, float] | np.ndarray] | None = None) -> None:
@@ -453,12 +571,32 @@ class OdeWorld:
                 elif due is not None:
                     self._realise(r, due)
         self._sense_accelerometers()
-        if self._fast is not None:
-            self._fast.drag()
-        else:
-            self._apply_drag()
+        bad = self._fast.drag() if self._fast is not None else self._apply_drag()
+        if bad >= 0:
+            raise SimulationDivergedError(
+                f"the ODE world diverged before cycle {self.cycle + 1} (t = {self.time:.2f} s): "
+                f"{self._body_name(bad)} has a velocity that is not finite or beyond "
+                f"{SANE_SPEED:g}; place the ball and robots again"
+            )
         self._collide_and_step()
-        self.time += phys.CYCLE_S
+        self._fresh = False
+        self.cycle += 1
+        self._advance_clocks(phys.CYCLE_S)
+        self._check_sane()
+
+    def _check_sane(self) -> None:
+        """Raise :class:`~robocup_gym.sim.engines.mujoco.world.SimulationDivergedError` (as the
+        MuJoCo world
+        does) when a body left the finite, plausible range (NaN/inf, or 1 km away): ODE blew up.
+        Re-placing the ball and every robot recovers."""
+        positions = self._read_state()[:, 0:3]  # the snapshot the next perception reads anyway
+        if not np.abs(positions).max() < 1e3:  # NaN fails too
+            k = int(np.argmax(~(np.abs(positions) < 1e3).all(axis=1)))
+            raise SimulationDivergedError(
+                f"the ODE world diverged at cycle {self.cycle} (t = {self.time:.2f} s): "
+                f"{self._body_name(k)} is at {tuple(positions[k])}; place the ball and robots "
+                "again"
+            )
 
     def sense_contacts(self) -> None:
         """Fill the force perceptors for the current state without advancing it: with the
@@ -485,12 +623,19 @@ class OdeWorld:
             lib.dBodySetLinearVel(b, *vel)
             lib.dBodySetAngularVel(b, *ang)
             (lib.dBodyEnable if enabled else lib.dBodyDisable)(b)
+        self._fresh = False
 
     def _collide_and_step(self) -> None:
         """Contacts for the current poses, one ``dWorldStep(0.02)``, the force perceptors."""
         lib = self._lib
-        sensed = self._fast.collide() if self._fast is not None else self._collide()
-        lib.dWorldStep(self._world, phys.CYCLE_S)
+        if self.engine_seconds is None:
+            sensed = self._fast.collide() if self._fast is not None else self._collide()
+            lib.dWorldStep(self._world, phys.CYCLE_S)
+        else:  # measuring: the engine's own share (collision and dWorldStep)
+            t0 = time.perf_counter()
+            sensed = self._fast.collide() if self._fast is not None else self._collide()
+            lib.dWorldStep(self._world, phys.CYCLE_S)
+            self.engine_seconds += time.perf_counter() - t0
         self._read_feedback(sensed)
         lib.dJointGroupEmpty(self._contacts)
 
@@ -501,7 +646,16 @@ class OdeWorld:
         buf, contact = self._contact_buf, self._contact
         size = ctypes.sizeof(ode.ContactGeom)
         sensed = []
-        for g1, g2, b1, b2, surface, frp1, frp2 in self._pairs:
+        aabb = self._aabb
+        box = (ode.dReal * 6)()
+        for k, g in enumerate(self._slot_geoms):
+            lib.dGeomGetAABB(g, box)
+            aabb[k] = box[:]
+        for (g1, g2, b1, b2, surface, frp1, frp2), (s1, s2) in zip(
+            self._pairs, self._pair_slots, strict=True
+        ):
+            if s1 >= 0 and s2 >= 0 and _apart(aabb[s1], aabb[s2]):
+                continue
             n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
             if n:
                 contact.surface = surface
@@ -516,16 +670,18 @@ class OdeWorld:
         return sensed
 
     def _sense_accelerometers(self) -> None:
-        """Each torso's accelerometer, sampled as :class:`robocup_gym.sim.world.World` samples
+        """Each torso's accelerometer, sampled as
+        :class:`robocup_gym.sim.engines.mujoco.world.World` samples
         it (spec §4.5): the change of the torso's velocity since the last sample over one cycle
         plus gravity, in the torso frame, m/s²; taken just before the physics step."""
-        lib = self._lib
+        st = self._read_state()
         for r in self.robots:
-            v = self._vec(lib.dBodyGetLinearVel(r.bodies[0]))
+            row = st[self._row[r.bodies[0]]]
+            v = row[12:15].copy()
             a = (v - r.prev_vel) / phys.CYCLE_S
             a[2] += phys.GRAVITY
             r.prev_vel[:] = v
-            r.accel[:] = a @ self._rotation(r.bodies[0])
+            r.accel[:] = a @ row[3:12].reshape(3, 3)
 
     def _read_feedback(self, sensed: list) -> None:
         """SimSpark's force resistance perceptors from the step's contact feedback (spec §4.6):
@@ -591,8 +747,27 @@ class OdeWorld:
             if v != 0.0:
                 lib.dBodyEnable(r.child_body[k])
 
-    def _apply_drag(self) -> None:
+    def _drag_bodies(self) -> list[int]:
+        """Every body that feels drag, in the compiled loop's order: robots' parts, the ball."""
+        return [*(b for r in self.robots for b in r.bodies), self._ball]
+
+    def _body_name(self, k: int) -> str:
+        """A readable name of body ``k`` of :meth:`_drag_bodies`."""
+        for i, r in enumerate(self.robots):
+            if k < len(r.bodies):
+                return f"robot {i}'s {r.model.bodies[k].name}"
+            k -= len(r.bodies)
+        return "the ball"
+
+    def _apply_drag(self) -> int:
+        """Drag on every body, after checking every body's velocity as ``ode_drag`` does;
+        returns the index of an insane body (nothing applied then), else -1."""
         lib = self._lib
+        bodies = self._drag_bodies()
+        for k, b in enumerate(bodies):
+            v, w = lib.dBodyGetLinearVel(b), lib.dBodyGetAngularVel(b)
+            if not all(abs(v[j]) < SANE_SPEED and abs(w[j]) < SANE_SPEED for j in range(3)):
+                return k
         lin, ang = phys.BODY_LINEAR_DRAG, phys.BODY_ANGULAR_DRAG
         for r in self.robots:
             for b in r.bodies:
@@ -605,58 +780,84 @@ class OdeWorld:
         c, a = phys.BALL_LINEAR_DRAG, phys.BALL_ANGULAR_DRAG
         lib.dBodyAddForce(self._ball, -c * v[0], -c * v[1], -c * v[2])
         lib.dBodyAddTorque(self._ball, -a * w[0], -a * w[1], -a * w[2])
+        return -1
 
     # ------------------------------------------------------------------ state
     def _vec(self, ptr) -> np.ndarray:
         return np.array([ptr[0], ptr[1], ptr[2]])
 
+    def _read_state(self) -> np.ndarray:
+        """The state snapshot (per body: position, rotation, velocity, angular velocity; every
+        hinge's angle and rate), read from ODE once after each change: in one C call, or by the
+        Python loops without a compiler (the same numbers)."""
+        if not self._fresh:
+            if self._fast is not None:
+                self._fast.read()
+            else:
+                lib = self._lib
+                for k, b in enumerate(self._state_bodies):
+                    p, m = lib.dBodyGetPosition(b), lib.dBodyGetRotation(b)
+                    v, w = lib.dBodyGetLinearVel(b), lib.dBodyGetAngularVel(b)
+                    self._state[k] = [
+                        p[0], p[1], p[2],
+                        m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10],
+                        v[0], v[1], v[2], w[0], w[1], w[2],
+                    ]  # fmt: skip
+                for k, h in enumerate(self._all_joints):
+                    self._angles[k] = lib.dJointGetHingeAngle(h)
+                    self._rates[k] = lib.dJointGetHingeAngleRate(h)
+            self._fresh = True
+        return self._state
+
+    def _body(self, body: int) -> np.ndarray:
+        """Body ``body``'s row of the state snapshot (a view: copy what is kept)."""
+        return self._read_state()[self._row[body]]
+
+    def _rotation(self, body: int) -> np.ndarray:
+        """Orientation of body handle ``body`` as a 3×3 matrix (its axes in world coordinates)."""
+        return self._body(body)[3:12].reshape(3, 3).copy()
+
     def ball_position(self) -> np.ndarray:
         """Ball centre, world, m."""
-        return self._vec(self._lib.dBodyGetPosition(self._ball))
+        return self._body(self._ball)[0:3].copy()
 
     def ball_velocity(self) -> np.ndarray:
         """Ball linear velocity, world, m/s."""
-        return self._vec(self._lib.dBodyGetLinearVel(self._ball))
+        return self._body(self._ball)[12:15].copy()
+
+    def ball_angular_velocity(self) -> np.ndarray:
+        """Ball angular velocity, world, rad/s."""
+        return self._body(self._ball)[15:18].copy()
 
     def body_position(self, index: int, name: str) -> np.ndarray:
         """Centre of robot ``index``'s body ``name`` (e.g. ``rfoot``), world, m."""
         r = self.robots[index]
-        k = [b.name for b in r.model.bodies].index(name)
-        return self._vec(self._lib.dBodyGetPosition(r.bodies[k]))
+        return self._body(r.bodies[r.body_index[name]])[0:3].copy()
 
     def body_rotation(self, index: int, name: str) -> np.ndarray:
         """Orientation of robot ``index``'s body ``name`` as a 3×3 matrix (torso-frame axes in
         world coordinates)."""
         r = self.robots[index]
-        k = [b.name for b in r.model.bodies].index(name)
-        return self._rotation(r.bodies[k])
-
-    def _rotation(self, body: int) -> np.ndarray:
-        m = self._lib.dBodyGetRotation(body)
-        return np.array([[m[4 * i + j] for j in range(3)] for i in range(3)])
-
-    def ball_angular_velocity(self) -> np.ndarray:
-        """Ball angular velocity, world, rad/s."""
-        return self._vec(self._lib.dBodyGetAngularVel(self._ball))
+        return self._rotation(r.bodies[r.body_index[name]])
 
     def torso_quat(self, index: int = 0) -> np.ndarray:
         """Torso orientation of robot ``index`` as a unit quaternion ``(w, x, y, z)``."""
         quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, self._rotation(self.robots[index].bodies[0]).ravel())
+        mujoco.mju_mat2Quat(quat, self._body(self.robots[index].bodies[0])[3:12])
         return quat
 
     def torso_velocity(self, index: int = 0) -> np.ndarray:
         """Torso centre velocity of robot ``index``, world, m/s."""
-        return self._vec(self._lib.dBodyGetLinearVel(self.robots[index].bodies[0]))
+        return self._body(self.robots[index].bodies[0])[12:15].copy()
 
     def torso_angular_velocity(self, index: int = 0) -> np.ndarray:
         """Torso angular velocity of robot ``index``, world, rad/s."""
-        return self._vec(self._lib.dBodyGetAngularVel(self.robots[index].bodies[0]))
+        return self._body(self.robots[index].bodies[0])[15:18].copy()
 
     def gyro(self, index: int = 0) -> np.ndarray:
         """Torso angular velocity in the torso frame, deg/s (``GYR``, as the world's)."""
-        torso = self.robots[index].bodies[0]
-        return np.degrees(self.torso_angular_velocity(index) @ self._rotation(torso))
+        row = self._body(self.robots[index].bodies[0])
+        return np.degrees(row[15:18] @ row[3:12].reshape(3, 3))
 
     def accelerometer(self, index: int = 0) -> np.ndarray:
         """The accelerometer (``ACC``) of robot ``index``, m/s², torso frame."""
@@ -665,7 +866,8 @@ class OdeWorld:
     def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
         """``FRP`` readings of robot ``index`` from the last step's contact feedback: force (N)
         and centre of pressure (m) in the foot's own frame, as
-        :meth:`robocup_gym.sim.world.World.force_sensors` gives them (a foot without contact
+        :meth:`robocup_gym.sim.engines.mujoco.world.World.force_sensors` gives them (a foot without
+        contact
         is omitted; one whose contacts carry no force repeats its last reading)."""
         r = self.robots[index]
         out: dict[str, ForceResistance] = {}
@@ -674,31 +876,52 @@ class OdeWorld:
                 if name in r.last_frp:
                     out[name] = r.last_frp[name]
                 continue
-            body = r.frp_bodies[name]
-            rot = self._rotation(body)
-            origin = self._vec(self._lib.dBodyGetPosition(body))
-            out[name] = ForceResistance(point=(centre - origin) @ rot, force=force @ rot)
+            row = self._body(r.frp_bodies[name])
+            rot = row[3:12].reshape(3, 3)
+            out[name] = ForceResistance(point=(centre - row[0:3]) @ rot, force=force @ rot)
         r.last_frp = out
         return out
 
     def torso_position(self, index: int = 0) -> np.ndarray:
         """Torso centre of robot ``index``, world, m."""
-        return self._vec(self._lib.dBodyGetPosition(self.robots[index].bodies[0]))
+        return self._body(self.robots[index].bodies[0])[0:3].copy()
+
+    def ground_truth(self, index: int = 0) -> GroundTruth:
+        """Exact ball and torso state of robot ``index`` (world frame)."""
+        return GroundTruth(
+            ball_pos=self.ball_position(),
+            ball_vel=self.ball_velocity(),
+            torso_pos=self.torso_position(index),
+            torso_quat=self.torso_quat(index),
+            torso_vel=self.torso_velocity(index),
+            torso_ang_vel=self.torso_angular_velocity(index),
+        )
+
+    def _head_pose(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Head centre (world, m) and rotation matrix of robot ``index``."""
+        r = self.robots[index]
+        row = self._body(r.bodies[r.body_index["head"]])
+        return row[0:3].copy(), row[3:12].reshape(3, 3).copy()
+
+    def _part_positions(self, index: int) -> np.ndarray:
+        """World positions of robot ``index``'s parts seen by vision (``PLAYER_PARTS``), m."""
+        r = self.robots[index]
+        st = self._read_state()
+        return st[[self._row[r.bodies[r.body_index[p]]] for p in PLAYER_PARTS], 0:3]
 
     def torso_up(self, index: int = 0) -> np.ndarray:
         """The torso's up axis (+z of the torso frame) in world coordinates."""
-        m = self._lib.dBodyGetRotation(self.robots[index].bodies[0])
-        return np.array([m[2], m[6], m[10]])
+        return self._body(self.robots[index].bodies[0])[[5, 8, 11]].copy()
 
     def joint_angles_deg(self, index: int = 0) -> np.ndarray:
         """Joint angles of robot ``index`` in degrees, canonical order."""
-        lib = self._lib
-        return np.degrees([lib.dJointGetHingeAngle(h) for h in self.robots[index].joints])
+        self._read_state()
+        return np.degrees(self._angles[self.robots[index].joint_slice])
 
     def joint_velocities(self, index: int = 0) -> np.ndarray:
         """Joint angular velocities of robot ``index`` in rad/s, canonical order."""
-        lib = self._lib
-        return np.array([lib.dJointGetHingeAngleRate(h) for h in self.robots[index].joints])
+        self._read_state()
+        return self._rates[self.robots[index].joint_slice].copy()
 
     def asleep(self, index: int = 0) -> bool:
         """Whether every body of robot ``index`` is disabled by ODE's auto-disable."""
@@ -711,7 +934,8 @@ class OdeWorld:
             return
         lib = self._lib
         lib.dJointGroupEmpty(self._contacts)
-        for g in [self._ground, self._ball_geom, *(g for r in self.robots for g in r.geoms)]:
+        geoms = [self._ground, self._ball_geom, *self._statics]
+        for g in geoms + [g for r in self.robots for g in r.geoms]:
             lib.dGeomDestroy(g)
         lib.dWorldDestroy(self._world)
         self._world = None

@@ -1,9 +1,9 @@
-/* The Python-side loops of robocup_gym.sim.ode.world.OdeWorld.step in C: drag on every body,
+/* The Python-side loops of robocup_gym.sim.engines.ode.world.OdeWorld.step in C: drag on every body,
  * the hinge effector's rules for a command, and contact generation. They make ~200 ctypes
  * calls a cycle in Python, as long as ODE's own dWorldStep.
  *
  * ODE is called through the function pointers Python's ctypes binding already holds
- * (robocup_gym/sim/ode/lib.py), so this file needs neither ODE's headers nor linking. The
+ * (robocup_gym/sim/engines/ode/lib.py), so this file needs neither ODE's headers nor linking. The
  * structs mirror the ctypes ones in lib.py (ODE 0.16, double precision). Every call is made
  * with the same arguments in the same order as the Python it replaces, so the results are
  * bit-equal (tests/sim/test_ode_reference.py). Compiled by robocup_gym/sim/compiled.py.
@@ -49,12 +49,25 @@ typedef struct {
   dReal (*dJointGetHingeAngle)(dID);
   void (*dJointSetHingeParam)(dID, int, dReal);
   void (*dBodyEnable)(dID);
+  void (*dGeomGetAABB)(dID, dReal*);
+  const dReal* (*dBodyGetPosition)(dID);
+  const dReal* (*dBodyGetRotation)(dID);
+  dReal (*dJointGetHingeAngleRate)(dID);
 } ode_fns;
 
 int ode_sizeof_contact(void) { return (int)sizeof(dContact); }
 
-/* Drag F = -lin v, torque -ang w on each body; coef holds (lin, ang) per body. */
-void ode_drag(const ode_fns* f, int n, dID* bodies, const double* coef) {
+/* Drag F = -lin v, torque -ang w on each body; coef holds (lin, ang) per body. First every
+ * body's velocities are checked: if one is not finite or beyond `limit` (the solver blew up;
+ * ODE's next step would abort the process in its quaternion normalisation), nothing is done and
+ * the body's index is returned; else -1. */
+int ode_drag(const ode_fns* f, int n, dID* bodies, const double* coef, double limit) {
+  for (int i = 0; i < n; i++) {
+    const dReal* v = f->dBodyGetLinearVel(bodies[i]);
+    const dReal* w = f->dBodyGetAngularVel(bodies[i]);
+    for (int j = 0; j < 3; j++)
+      if (!(fabs(v[j]) < limit && fabs(w[j]) < limit)) return i;  /* NaN fails too */
+  }
   for (int i = 0; i < n; i++) {
     dID b = bodies[i];
     const dReal* v = f->dBodyGetLinearVel(b);
@@ -63,6 +76,7 @@ void ode_drag(const ode_fns* f, int n, dID* bodies, const double* coef) {
     f->dBodyAddForce(b, -lin * v[0], -lin * v[1], -lin * v[2]);
     f->dBodyAddTorque(b, -ang * w[0], -ang * w[1], -ang * w[2]);
   }
+  return -1;
 }
 
 /* SimSpark's hinge effector for one robot's targets (rad/s, NaN = no command): a joint not
@@ -82,16 +96,29 @@ void ode_realise(const ode_fns* f, int n, dID* joints, dID* child, const double*
   }
 }
 
+/* Whether two axis-aligned boxes (minx, maxx, miny, maxy, minz, maxz) are apart: then their
+ * geoms cannot touch and dCollide would return no contact (world.py's _apart is the same). */
+static int apart(const double* a, const double* b) {
+  return a[1] < b[0] || b[1] < a[0] || a[3] < b[2] || b[3] < a[2] || a[5] < b[4] || b[5] < a[4];
+}
+
 /* Contact joints for every pair (g1, g2, body1, body2 in pairs[4p..4p+3], the mixed surface in
  * surfaces[p]); contacts of pairs with sensed[p] get a feedback slot, and their pair index and
- * position are written out. Returns the number of sensed contacts. */
+ * position are written out. Returns the number of sensed contacts. A pair whose geoms both have
+ * an AABB slot (slots[2p], slots[2p+1] >= 0; not the ground plane) and whose boxes are apart is
+ * skipped, exactly as dCollide would skip it, but without its cost: with many robots most pairs
+ * are far apart. aabb holds 6 numbers per slot geom (slot_geoms), filled here. */
 int ode_collide(const ode_fns* f, dID world, dID group, int npairs, dID* pairs,
                 const dSurfaceParameters* surfaces, const int* sensed, int max_contacts,
-                dContactGeom* buf, dJointFeedback* feedback, int* out_pair, double* out_pos) {
+                dContactGeom* buf, dJointFeedback* feedback, int* out_pair, double* out_pos,
+                int nslots, dID* slot_geoms, const int* slots, double* aabb) {
   dContact contact;
   for (int j = 0; j < 4; j++) contact.fdir1[j] = 0.0;
+  for (int k = 0; k < nslots; k++) f->dGeomGetAABB(slot_geoms[k], aabb + 6 * k);
   int m = 0;
   for (int p = 0; p < npairs; p++) {
+    int s1 = slots[2 * p], s2 = slots[2 * p + 1];
+    if (s1 >= 0 && s2 >= 0 && apart(aabb + 6 * s1, aabb + 6 * s2)) continue;
     int n = f->dCollide(pairs[4 * p], pairs[4 * p + 1], max_contacts, buf,
                         (int)sizeof(dContactGeom));
     if (!n) continue;
@@ -109,4 +136,30 @@ int ode_collide(const ode_fns* f, dID world, dID group, int npairs, dID* pairs,
     }
   }
   return m;
+}
+
+/* The state every perception reads, in one call: per body its position, rotation (3x3, row
+ * major: ODE's 3x4 without the padding column), linear and angular velocity (18 numbers per
+ * body, world frame), and every hinge's angle and rate. */
+void ode_read(const ode_fns* f, int nb, dID* bodies, double* out, int nj, dID* joints,
+              double* angles, double* rates) {
+  for (int i = 0; i < nb; i++) {
+    double* o = out + 18 * i;
+    const dReal* p = f->dBodyGetPosition(bodies[i]);
+    const dReal* r = f->dBodyGetRotation(bodies[i]);
+    const dReal* v = f->dBodyGetLinearVel(bodies[i]);
+    const dReal* w = f->dBodyGetAngularVel(bodies[i]);
+    for (int j = 0; j < 3; j++) {
+      o[j] = p[j];
+      o[3 + j] = r[j];
+      o[6 + j] = r[4 + j];
+      o[9 + j] = r[8 + j];
+      o[12 + j] = v[j];
+      o[15 + j] = w[j];
+    }
+  }
+  for (int k = 0; k < nj; k++) {
+    angles[k] = f->dJointGetHingeAngle(joints[k]);
+    rates[k] = f->dJointGetHingeAngleRate(joints[k]);
+  }
 }

@@ -1,0 +1,85 @@
+"""How well does a policy get up? Success rate and cycles to up, from the front and the back.
+
+Runs a trained GetUp run's policy (``robocup-gym train getup`` folder) deterministically on the
+default engine, ``--episodes`` episodes from each side. Success: torso above 0.28 m, inclined
+less than 30°, for 1 s (the task's definition); ``cycles_to_up`` counts the agent cycles until
+the robot got up for good (the target: ≥ 90 % within 80 cycles; the reference team takes ~66
+from the front and ~55 from the back on rcssserver3d).
+
+``--policy zero`` runs a zero-action policy (a baseline that never gets up, and a smoke test).
+Prints one line per side and, as the last line, one JSON object (``success_rate``,
+``cycles_to_up_median``, per side the same).
+
+    python benchmarks/getup.py runs/get-up-ppo-<time> --episodes 20
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+
+def run(env, act, side: str, episodes: int, seed: int, within: int) -> dict:
+    ups = []
+    successes = 0
+    for k in range(episodes):
+        obs, _ = env.reset(seed=seed + k, options={"start_side": side})
+        done = False
+        info: dict = {}
+        while not done:
+            obs, _, terminated, truncated, info = env.step(act(obs))
+            done = terminated or truncated
+        if info.get("success"):
+            ups.append(int(info["steps_to_up"]))
+            successes += int(info["steps_to_up"] <= within)
+    return {
+        "success_rate": successes / episodes,
+        "got_up": len(ups),
+        "cycles_to_up_median": float(np.median(ups)) if ups else None,
+        "episodes": episodes,
+    }
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("policy", help="a GetUp run folder, or 'zero' (a zero-action baseline)")
+    parser.add_argument("--episodes", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=100_000)
+    parser.add_argument("--within", type=int, default=80, help="cycles that count as success")
+    parser.add_argument(
+        "--engine",
+        choices=("ode", "mujoco"),
+        default=None,
+        help="default: the run's own (ode for 'zero')",
+    )
+    args = parser.parse_args(argv)
+    from robocup_gym.train.evaluate import policy_and_env
+
+    env, act = policy_and_env(args.policy, "RobocupGym/GetUp-v0", args.engine)
+    out: dict = {"policy": args.policy, "within_cycles": args.within}
+    try:
+        for side in ("front", "back"):
+            res = run(env, act, side, args.episodes, args.seed, args.within)
+            out[side] = res
+            print(
+                f"{side:5s}: success {res['success_rate']:.0%} within {args.within} cycles, "
+                f"got up {res['got_up']}/{args.episodes}, median cycles to up "
+                f"{res['cycles_to_up_median']}"
+            )
+    finally:
+        env.close()
+    both = [out[s]["success_rate"] for s in ("front", "back")]
+    out["success_rate"] = float(np.mean(both))
+    medians = [out[s]["cycles_to_up_median"] for s in ("front", "back")]
+    out["cycles_to_up_median"] = (
+        None if None in medians else float(np.mean([m for m in medians if m is not None]))
+    )
+    out["meets_target"] = min(both) >= 0.9
+    print(json.dumps(out))
+    return out
+
+
+if __name__ == "__main__":
+    main()

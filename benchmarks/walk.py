@@ -1,0 +1,113 @@
+"""How well does a policy walk? Forward speed, falls, and sideways and turn tracking.
+
+Runs a trained Walk run's policy (``robocup-gym train walk`` folder) deterministically on the
+default engine for ``--episodes`` episodes per command, each as long as the run's episodes
+(10 s by default), with the command held fixed:
+
+* forward 0.5 m/s (the target; the reference team walks 0.81 m/s on rcssserver3d): mean forward
+  speed over the episode (displacement along the start heading / time) and the falls;
+* sideways 0.3 m/s to the left: mean error of the leftward speed;
+* turning 30 deg/s: mean error of the turn rate.
+
+``--policy zero`` runs a policy that sends zero actions (a baseline, and a smoke test without a
+trained run). Prints one line per command and, as the last line, one JSON object
+(``forward_speed_mps``, ``falls``, ``sideways_error_mps``, ``turn_error_deg_s``, …).
+
+    python benchmarks/walk.py runs/walk-ppo-<time> --episodes 20
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+import numpy as np
+
+COMMANDS = {
+    "forward": (0.5, 0.0, 0.0),
+    "sideways": (0.0, 0.3, 0.0),
+    "turn": (0.0, 0.0, 30.0),
+}
+
+
+def run(env, act, command, episodes: int, seed: int) -> dict:
+    """Episodes with ``command`` held (no mid-episode changes): speeds and falls."""
+    u = env.unwrapped
+    u.config = u.config.replace(command_change_steps=0)
+    speeds, lefts, turns, falls = [], [], [], 0
+    for k in range(episodes):
+        obs, info = env.reset(seed=seed + k, options={"velocity_command": command})
+        start = u.torso_pos.copy()
+        heading = math.radians(u.config.robot_start_heading_deg)
+        yaw0 = _yaw(u.ground_truth.torso_quat)
+        done, steps = False, 0
+        while not done:
+            obs, _, terminated, truncated, info = env.step(act(obs))
+            steps += 1
+            done = terminated or truncated
+        t = steps * 0.02
+        d = u.torso_pos - start
+        fwd = d[0] * math.cos(heading) + d[1] * math.sin(heading)
+        left = -d[0] * math.sin(heading) + d[1] * math.cos(heading)
+        dyaw = math.degrees(_wrap(_yaw(u.ground_truth.torso_quat) - yaw0))
+        speeds.append(fwd / t)
+        lefts.append(left / t)
+        turns.append(dyaw / t)
+        falls += int(bool(info.get("fallen")))
+    return {
+        "forward_speed_mps": float(np.mean(speeds)),
+        "left_speed_mps": float(np.mean(lefts)),
+        "turn_rate_deg_s": float(np.mean(turns)),
+        "falls": falls,
+        "episodes": episodes,
+    }
+
+
+def _yaw(quat) -> float:
+    w, x, y, z = quat
+    return math.atan2(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))  # forward = torso +y
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("policy", help="a Walk run folder, or 'zero' (a zero-action baseline)")
+    parser.add_argument("--episodes", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=100_000)
+    parser.add_argument(
+        "--engine",
+        choices=("ode", "mujoco"),
+        default=None,
+        help="default: the run's own (ode for 'zero')",
+    )
+    args = parser.parse_args(argv)
+    from robocup_gym.train.evaluate import policy_and_env
+
+    env, act = policy_and_env(args.policy, "RobocupGym/Walk-v0", args.engine)
+    out: dict = {"policy": args.policy, "episodes_per_command": args.episodes}
+    try:
+        for name, command in COMMANDS.items():
+            res = run(env, act, command, args.episodes, args.seed)
+            out[name] = res
+            print(
+                f"{name:9s} command {command}: forward {res['forward_speed_mps']:+.3f} m/s, "
+                f"left {res['left_speed_mps']:+.3f} m/s, turn {res['turn_rate_deg_s']:+.1f} "
+                f"deg/s, falls {res['falls']}/{args.episodes}"
+            )
+    finally:
+        env.close()
+    out["forward_speed_mps"] = out["forward"]["forward_speed_mps"]
+    out["falls"] = out["forward"]["falls"]
+    out["sideways_error_mps"] = abs(out["sideways"]["left_speed_mps"] - COMMANDS["sideways"][1])
+    out["turn_error_deg_s"] = abs(out["turn"]["turn_rate_deg_s"] - COMMANDS["turn"][2])
+    out["meets_target"] = out["forward_speed_mps"] >= 0.5 and out["falls"] == 0
+    print(json.dumps(out))
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,264 @@
+"""GetUp: stand up from lying on the front or the back, fast, and stay up.
+
+The lying poses are made the way a robot comes to lie: by dropping it in the world. At the
+first reset for each side the environment lets the robot fall from a tilted pose onto its front
+(or back) with its joints held still and records where it comes to rest (torso position and
+orientation, joint angles); every episode then starts from that pose, placed instantly. So no
+part starts inside the ground, on either engine.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.backends import make_backend
+from robocup_gym.backends.base import RobotPose
+from robocup_gym.envs.base_env import BaseEnv
+from robocup_gym.envs.config import EnvConfig, EnvConfigError
+from robocup_gym.types import AgentCommand
+
+__all__ = ["GETUP_OBSERVATIONS", "GetUp", "GetUpConfig"]
+
+GETUP_OBSERVATIONS = (
+    "joint_pos",
+    "joint_vel",
+    "gyro",
+    "accel",
+    "foot_force",
+    "torso_orientation",
+    "torso_height",
+    "last_action",
+)
+"""What a get-up policy sees by default: its body and the torso's pose."""
+
+SIDES = ("front", "back")
+DROP_CYCLES = 100
+"""Cycles a dropped robot is given to come to rest (2 s)."""
+
+
+@dataclass
+class GetUpConfig(EnvConfig):
+    """:class:`EnvConfig` plus GetUp's start and reward options."""
+
+    observations: tuple[str, ...] = GETUP_OBSERVATIONS
+    max_episode_steps: int = 150
+    """3 s to get up (the reference team's get-up takes 55–66 cycles)."""
+    terminate_on_fall: bool = False
+    """The robot starts on the ground: lying is not an end here."""
+    start_side: str = "random"
+    """``"front"``, ``"back"`` or ``"random"`` (each episode one of the two)."""
+    success_height: float = 0.28
+    """Torso centre height above which the robot counts as up, m."""
+    success_tilt_deg: float = 30.0
+    """…with the torso inclined less than this, deg…"""
+    success_hold_steps: int = 50
+    """…for this many consecutive steps (1 s): then the episode ends with success."""
+    w_height: float = 2.0
+    """Weight of the torso height (m), every step."""
+    w_upright: float = 1.0
+    """Weight of the world z of the torso's up axis, every step."""
+    w_time: float = -0.5
+    """Paid every step the robot is not up (hurry)."""
+    w_action_rate: float = -0.01
+    """Weight of |a_t − a_{t−1}|²."""
+    success_bonus: float = 50.0
+    """Paid once on success, scaled by the share of the episode left (faster = more)."""
+
+    def validate(self) -> None:
+        super().validate()
+        if self.start_side not in (*SIDES, "random"):
+            raise EnvConfigError(
+                f"start_side must be 'front', 'back' or 'random', got {self.start_side!r}"
+            )
+        if not (0.0 < self.success_height < 0.6):
+            raise EnvConfigError("success_height must be between 0 and 0.6 m")
+        if not (0.0 < self.success_tilt_deg < 90.0):
+            raise EnvConfigError("success_tilt_deg must be between 0 and 90 deg")
+        if not (
+            isinstance(self.success_hold_steps, int | np.integer) and self.success_hold_steps >= 1
+        ):
+            raise EnvConfigError("success_hold_steps must be an integer >= 1")
+        for name in ("w_height", "w_upright", "w_time", "w_action_rate", "success_bonus"):
+            if not math.isfinite(getattr(self, name)):
+                raise EnvConfigError(f"{name} must be finite, got {getattr(self, name)!r}")
+
+
+class GetUp(BaseEnv):
+    """Get up from lying on the front or the back.
+
+    Each episode starts from a lying pose made by dropping the robot (see the module docstring),
+    on its front or back (``start_side``). The robot is *up* when its torso centre is above
+    ``success_height`` (0.28 m) and inclined less than ``success_tilt_deg`` (30°); up for
+    ``success_hold_steps`` (50 = 1 s) in a row ends the episode with success (``info["success"]``,
+    ``info["steps_to_up"]``: the step at which it got up for good). Every step pays:
+
+    ===================  =========  ===========================================================
+    term                 default w  value
+    ===================  =========  ===========================================================
+    ``height``           2.0        torso centre height, m
+    ``upright``          1.0        world z of the torso's up axis
+    ``time``             −0.5       while not up
+    ``action_rate``      −0.01      |a_t − a_{t−1}|²
+    ``success``          50         once, × (1 + share of the episode left)
+    ===================  =========  ===========================================================
+
+    ``reset(options={"start_side": "back"})`` picks the side of one episode. Works on every Nao
+    type and on both in-process engines (a real server cannot place a lying robot).
+    """
+
+    config_class = GetUpConfig
+    config: GetUpConfig
+    task_reset_options = frozenset({"start_side"})
+
+    def __init__(self, config: GetUpConfig | None = None, **kwargs: Any) -> None:
+        super().__init__(config, **kwargs)
+        self._lying: dict[str, tuple[float, np.ndarray, np.ndarray]] = {}
+        self.side = "front"
+        self._up_steps = 0
+        self._prev_action = np.zeros(self.action_space.shape)
+        self.success = False
+        self._pay_bonus = False
+        self.steps_to_up: int | None = None
+        self.reward_terms: dict[str, float] = {}
+
+    # ------------------------------------------------------------------ lying poses
+    def lying_pose(self, side: str) -> tuple[float, np.ndarray, np.ndarray]:
+        """``(torso z m, torso quat, joint angles deg)`` of the robot at rest on ``side``,
+        made once by dropping it in this environment's world."""
+        if side not in self._lying:
+            # tilted 80° forward (front) or backward (back), joints at 0 and held: upright
+            # facing +x (the torso's forward axis is its +y: turned -90° about z), then pitched
+            # about the world's y axis (+: the top goes forward, +x)
+            tilt = math.radians(80.0) * (1.0 if side == "front" else -1.0)
+            yaw = _quat_about((0.0, 0.0, 1.0), -math.pi / 2)
+            pitch = _quat_about((0.0, 1.0, 0.0), tilt)
+            quat = _quat_mul(pitch, yaw)
+            n = len(self.robot_model.joints)
+            x, y = self.config.robot_start_pos
+            # in a world of its own where the environment made its backend, so that the
+            # episodes' world has no history of the drop (episodes are then reproducible)
+            if self._owns_backend:
+                world = make_backend(
+                    self.backend.name,
+                    robot_type=self.config.robot_type,
+                    **dict(self.config.backend_options),
+                )
+            else:
+                world = self.backend
+            try:
+                world.reset_episode(
+                    RobotPose(x, y, joint_angles_deg=np.zeros(n), quat=quat),
+                    ball_pos=(x + 5.0, y + 5.0),
+                    play_mode=self.config.play_mode,
+                )
+                p = world.advance(DROP_CYCLES, AgentCommand(np.zeros(n)))
+            finally:
+                if world is not self.backend:
+                    world.close()
+            gt = p.ground_truth
+            self._lying[side] = (
+                float(gt.torso_pos[2]),
+                np.array(gt.torso_quat, dtype=float),
+                np.array(p.joint_angles_deg, dtype=float),
+            )
+        return self._lying[side]
+
+    # ------------------------------------------------------------------ episode
+    def _initial_state(self, options):
+        side = options.get("start_side", self.config.start_side)
+        if side == "random":
+            side = SIDES[int(self.np_random.integers(2))]
+        if side not in SIDES:
+            raise ValueError(f"reset option start_side must be 'front' or 'back', got {side!r}")
+        start = super()._initial_state(options)
+        z, quat, angles = self.lying_pose(side)
+        self.side = side
+        self._up_steps = 0
+        self._prev_action = np.zeros(self.action_space.shape)
+        self.success = False
+        self._pay_bonus = False
+        self.steps_to_up = None
+        self.reward_terms = {}
+        start.pose = RobotPose(
+            start.pose.x, start.pose.y, joint_angles_deg=angles.copy(), z=z, quat=quat.copy()
+        )
+        return start
+
+    def _is_up(self) -> bool:
+        gt = self.ground_truth
+        _, x, y, _ = gt.torso_quat
+        up_z = 1.0 - 2.0 * (x * x + y * y)
+        c = self.config
+        return bool(
+            gt.torso_pos[2] > c.success_height and up_z > math.cos(math.radians(c.success_tilt_deg))
+        )
+
+    def _is_terminated(self) -> bool:
+        return self.success
+
+    def _get_reward(self, action: np.ndarray) -> float:
+        c = self.config
+        gt = self.ground_truth
+        _, x, y, _ = gt.torso_quat
+        up_z = 1.0 - 2.0 * (x * x + y * y)
+        up = self._is_up()
+        terms = {
+            "height": c.w_height * float(gt.torso_pos[2]),
+            "upright": c.w_upright * up_z,
+            "time": 0.0 if up else c.w_time,
+            "action_rate": c.w_action_rate * float(np.sum((action - self._prev_action) ** 2)),
+            "success": 0.0,
+        }
+        self._prev_action = np.array(action, dtype=float)
+        if self._pay_bonus:
+            self._pay_bonus = False
+            left = 1.0 - self.episode_step / c.max_episode_steps
+            terms["success"] = c.success_bonus * (1.0 + left)
+        self.reward_terms = terms
+        return float(sum(terms.values()))
+
+    def _set_perception(self, p, cycles: int = 1, episode_over: bool = False) -> None:
+        super()._set_perception(p, cycles, episode_over)
+        if episode_over or self.ground_truth is None or self.episode_step < 1:
+            return  # counted over the episode's steps (not its first observation)
+        if self._is_up():
+            self._up_steps += 1
+            if self._up_steps >= self.config.success_hold_steps and not self.success:
+                self.success = True
+                self._pay_bonus = True
+                self.steps_to_up = self.episode_step - self._up_steps + 1
+        else:
+            self._up_steps = 0
+
+    def _info(self) -> dict[str, Any]:
+        info = super()._info()
+        info["start_side"] = self.side
+        info["success"] = self.success
+        info["steps_to_up"] = self.steps_to_up
+        if self.reward_terms:
+            info["reward_terms"] = dict(self.reward_terms)
+        return info
+
+
+def _quat_about(axis, angle: float) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation by ``angle`` rad about unit ``axis``."""
+    s = math.sin(angle / 2)
+    return np.array([math.cos(angle / 2), axis[0] * s, axis[1] * s, axis[2] * s])
+
+
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation ``b`` followed by ``a`` (Hamilton product ``a · b``)."""
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array(
+        [
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        ]
+    )

@@ -1,0 +1,261 @@
+"""Walk: follow a commanded planar velocity (forward, sideways, turn) without falling.
+
+The reward is a sum of small named terms in the style of the best locomotion environments
+(MuJoCo Playground's, legged_gym's): Gaussian kernels for tracking the commanded velocity, an
+upright torso, foot-contact timing, and penalties on the action rate and the joint speeds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.envs.base_env import BaseEnv
+from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, EnvConfig, EnvConfigError
+from robocup_gym.envs.observations import heading_frame
+
+__all__ = ["WALK_OBSERVATIONS", "Walk", "WalkConfig", "walk_reward_terms"]
+
+WALK_OBSERVATIONS = (
+    "joint_pos",
+    "joint_vel",
+    "gyro",
+    "accel",
+    "foot_force",
+    "torso_orientation",
+    "torso_height",
+    "torso_velocity",
+    "velocity_command",
+    "last_action",
+)
+"""What a walking policy sees by default: its body, the torso's pose and velocity, the command
+and its last action."""
+
+
+@dataclass
+class WalkConfig(EnvConfig):
+    """:class:`EnvConfig` plus Walk's command and reward options."""
+
+    observations: tuple[str, ...] = WALK_OBSERVATIONS
+    max_episode_steps: int = 500
+    """10 s episodes."""
+    joint_start_deg: Any = field(default_factory=lambda: dict(PAPER_STANDING_POSE_DEG))
+    """The crouched pose walking starts from (the paper's standing pose), deg by name."""
+    forward_speed_range: tuple[float, float] = (-0.3, 0.8)
+    """Commanded forward speed, m/s, drawn uniformly."""
+    sideways_speed_range: tuple[float, float] = (-0.3, 0.3)
+    """Commanded leftward speed, m/s."""
+    turn_rate_range: tuple[float, float] = (-45.0, 45.0)
+    """Commanded turn rate, deg/s (CCW positive)."""
+    command_change_steps: int = 250
+    """A new command is drawn every this many steps (0 = one command per episode)."""
+    standing_command_prob: float = 0.1
+    """Probability that a drawn command is zero (stand still)."""
+    tracking_sigma: float = 0.25
+    """Width of the tracking kernels exp(−error² / σ), (m/s)² and (rad/s)²."""
+    w_tracking_linear: float = 1.5
+    """Weight of exp(−|v_xy − command_xy|² / σ) per step."""
+    w_tracking_turn: float = 0.8
+    """Weight of exp(−(ω − command_ω)² / σ) per step (ω in rad/s)."""
+    w_upright: float = 0.3
+    """Weight of the torso's up axis z component (1 upright)."""
+    w_feet_air_time: float = 1.0
+    """Weight of Σ (air time − 0.2 s) over the feet that touch down this step (only while the
+    command asks to move): rewards steps of a useful length."""
+    w_action_rate: float = -0.02
+    """Weight of |a_t − a_{t−1}|² (actions in [-1, 1])."""
+    w_joint_speed: float = -2e-4
+    """Weight of Σ joint speed² (rad/s)², a proxy for effort."""
+    w_vertical_speed: float = -0.5
+    """Weight of the torso's vertical speed² (m/s)² (bouncing)."""
+    w_alive: float = 0.2
+    """Paid every step the robot is up."""
+    fall_penalty: float = 10.0
+    """Subtracted once when the robot falls (the episode ends)."""
+
+    def validate(self) -> None:
+        super().validate()
+        for name in ("forward_speed_range", "sideways_speed_range", "turn_rate_range"):
+            lo, hi = getattr(self, name)
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+                raise EnvConfigError(f"{name} must be finite (low, high) with low <= high")
+        if not (
+            isinstance(self.command_change_steps, int | np.integer)
+            and self.command_change_steps >= 0
+        ):
+            raise EnvConfigError("command_change_steps must be an integer >= 0")
+        if not 0.0 <= self.standing_command_prob <= 1.0:
+            raise EnvConfigError("standing_command_prob must be in [0, 1]")
+        if not (math.isfinite(self.tracking_sigma) and self.tracking_sigma > 0):
+            raise EnvConfigError("tracking_sigma must be > 0")
+        for name in (
+            "w_tracking_linear", "w_tracking_turn", "w_upright", "w_feet_air_time",
+            "w_action_rate", "w_joint_speed", "w_vertical_speed", "w_alive", "fall_penalty",
+        ):  # fmt: skip
+            if not math.isfinite(getattr(self, name)):
+                raise EnvConfigError(f"{name} must be finite, got {getattr(self, name)!r}")
+
+
+def walk_reward_terms(
+    config: WalkConfig,
+    *,
+    velocity: np.ndarray,
+    turn_rate: float,
+    command: np.ndarray,
+    up_z: float,
+    touchdown_air_times: list[float],
+    action: np.ndarray,
+    last_action: np.ndarray,
+    joint_speeds: np.ndarray,
+    fallen: bool,
+) -> dict[str, float]:
+    """Walk's reward as named terms (already weighted), for one step.
+
+    Args:
+        velocity: Torso velocity in the heading frame (forward, left, up), m/s.
+        turn_rate: Torso turn rate about the world's up axis, rad/s.
+        command: (forward m/s, left m/s, turn deg/s).
+        up_z: World z of the torso's up axis.
+        touchdown_air_times: Air time (s) of each foot that touched down this step.
+        action, last_action: This and the previous action, [-1, 1].
+        joint_speeds: Joint speeds, rad/s.
+        fallen: Whether the robot fell this step.
+    """
+    c = config
+    lin_err = float((velocity[0] - command[0]) ** 2 + (velocity[1] - command[1]) ** 2)
+    turn_err = float((turn_rate - math.radians(command[2])) ** 2)
+    moving = bool(np.any(np.abs(command[:2]) > 0.05) or abs(command[2]) > 3.0)
+    air = sum(t - 0.2 for t in touchdown_air_times) if moving else 0.0
+    return {
+        "tracking_linear": c.w_tracking_linear * math.exp(-lin_err / c.tracking_sigma),
+        "tracking_turn": c.w_tracking_turn * math.exp(-turn_err / c.tracking_sigma),
+        "upright": c.w_upright * float(up_z),
+        "feet_air_time": c.w_feet_air_time * air,
+        "action_rate": c.w_action_rate * float(np.sum((action - last_action) ** 2)),
+        "joint_speed": c.w_joint_speed * float(np.sum(joint_speeds**2)),
+        "vertical_speed": c.w_vertical_speed * float(velocity[2] ** 2),
+        "alive": 0.0 if fallen else c.w_alive,
+        "fall": -c.fall_penalty if fallen else 0.0,
+    }
+
+
+class Walk(BaseEnv):
+    """Walk at a commanded planar velocity: forward, sideways and turning.
+
+    The episode samples a command (uniform in the configured ranges, zero with probability
+    ``standing_command_prob``) and draws a new one every ``command_change_steps`` steps; the
+    command is part of the observation (``velocity_command``). The robot starts standing in the
+    crouched walking pose, placed instantly. A fall ends the episode (``terminate_on_fall``).
+    Every step pays the sum of these terms (each documented in :class:`WalkConfig`; ``info``
+    holds them under ``reward_terms``):
+
+    ====================  ===========  ==========================================================
+    term                  default w    value
+    ====================  ===========  ==========================================================
+    ``tracking_linear``   1.5          exp(−|v_xy − cmd_xy|² / σ), heading frame, σ = 0.25
+    ``tracking_turn``     0.8          exp(−(ω_z − cmd_ω)² / σ), rad/s
+    ``upright``           0.3          world z of the torso's up axis
+    ``feet_air_time``     1.0          Σ (air time − 0.2 s) of feet touching down (when moving)
+    ``action_rate``       −0.02        |a_t − a_{t−1}|²
+    ``joint_speed``       −2e-4        Σ joint speed², (rad/s)²
+    ``vertical_speed``    −0.5         torso vertical speed², (m/s)²
+    ``alive``             0.2          every step up
+    ``fall``              −10          once, when the robot falls
+    ====================  ===========  ==========================================================
+
+    Foot contact is read from the foot force perceptors (``FRP``) a policy has too.
+    ``reset(options={"velocity_command": (vx, vy, turn_deg_s)})`` fixes the episode's first
+    command (evaluation, the benchmark).
+    """
+
+    config_class = WalkConfig
+    config: WalkConfig
+    task_reset_options = frozenset({"velocity_command"})
+
+    def __init__(self, config: WalkConfig | None = None, **kwargs: Any) -> None:
+        super().__init__(config, **kwargs)
+        self._air = {"lf": 0.0, "rf": 0.0}
+        self._prev_action = np.zeros(self.action_space.shape)
+        self.reward_terms: dict[str, float] = {}
+
+    def _draw_command(self) -> None:
+        c, rng = self.config, self.np_random
+        if rng.uniform() < c.standing_command_prob:
+            self.velocity_command[:] = 0.0
+        else:
+            self.velocity_command[:] = (
+                rng.uniform(*c.forward_speed_range),
+                rng.uniform(*c.sideways_speed_range),
+                rng.uniform(*c.turn_rate_range),
+            )
+
+    def _initial_state(self, options):
+        start = super()._initial_state(options)
+        self._air = {"lf": 0.0, "rf": 0.0}
+        self._prev_action = np.zeros(self.action_space.shape)
+        self.reward_terms = {}
+        command = options.get("velocity_command")
+        if command is None:
+            self._draw_command()
+        else:
+            cmd = np.asarray(command, dtype=float)
+            if cmd.shape != (3,) or not np.isfinite(cmd).all():
+                raise ValueError(
+                    "reset option velocity_command must be 3 finite numbers (forward m/s, left "
+                    f"m/s, turn deg/s), got {command!r}"
+                )
+            self.velocity_command[:] = cmd
+        return start
+
+    def step(self, action: Any):
+        c = self.config
+        if (
+            c.command_change_steps
+            and self.episode_step
+            and (self.episode_step % c.command_change_steps == 0)
+        ):
+            self._draw_command()
+        return super().step(action)
+
+    def _get_reward(self, action: np.ndarray) -> float:
+        gt = self.ground_truth
+        cos, sin = heading_frame(gt.torso_quat)
+        v = gt.torso_vel if gt.torso_vel is not None else np.zeros(3)
+        w = gt.torso_ang_vel if gt.torso_ang_vel is not None else np.zeros(3)
+        velocity = np.array([cos * v[0] + sin * v[1], cos * v[1] - sin * v[0], v[2]])
+        _, x, y, _ = gt.torso_quat
+        up_z = 1.0 - 2.0 * (x * x + y * y)
+        touchdowns = []
+        forces = self.perception.force_sensors
+        for foot in ("lf", "rf"):
+            if foot in forces and forces[foot].force[2] > 1.0:
+                if self._air[foot] > 0.0:
+                    touchdowns.append(self._air[foot])
+                self._air[foot] = 0.0
+            else:
+                self._air[foot] += 0.02
+        terms = walk_reward_terms(
+            self.config,
+            velocity=velocity,
+            turn_rate=float(w[2]),
+            command=self.velocity_command,
+            up_z=up_z,
+            touchdown_air_times=touchdowns,
+            action=action,
+            last_action=self._prev_action,
+            joint_speeds=self.joint_velocities,
+            fallen=self.fallen,
+        )
+        self._prev_action = np.array(action, dtype=float)
+        self.reward_terms = terms
+        return float(sum(terms.values()))
+
+    def _info(self) -> dict[str, Any]:
+        info = super()._info()
+        info["velocity_command"] = self.velocity_command.copy()
+        if self.reward_terms:
+            info["reward_terms"] = dict(self.reward_terms)
+        return info

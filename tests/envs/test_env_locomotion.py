@@ -1,0 +1,175 @@
+"""The locomotion and recovery tasks: Walk (follow a commanded planar velocity) and GetUp
+(stand up from lying on the front or the back)."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import robocup_gym.envs  # noqa: F401 (registers the tasks)
+from robocup_gym.envs import EnvConfigError, GetUp, Walk, WalkConfig
+from robocup_gym.envs.tasks.walk import walk_reward_terms
+from robocup_gym.sim.engines.ode import available
+
+ENGINES = [
+    "mujoco",
+    pytest.param("ode", marks=pytest.mark.skipif(not available(), reason="no libode")),
+]
+
+
+@pytest.mark.parametrize("robot_type", range(5))
+@pytest.mark.parametrize("task", ["RobocupGym/Walk-v0", "RobocupGym/GetUp-v0"])
+def test_check_env_for_every_type(task, robot_type):
+    env = gym.make(task, robot_type=robot_type)
+    check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def test_the_tasks_are_listed_by_the_cli():
+    from robocup_gym.train.tasks import registered_tasks, resolve_task
+
+    tasks = registered_tasks()
+    assert tasks["walk"] == "RobocupGym/Walk-v0" and tasks["get-up"] == "RobocupGym/GetUp-v0"
+    assert resolve_task("getup") == resolve_task("GetUp") == "RobocupGym/GetUp-v0"
+
+
+# ------------------------------------------------------------------ Walk
+def _terms(**kw):
+    base = dict(
+        velocity=np.zeros(3),
+        turn_rate=0.0,
+        command=np.array([0.5, 0.0, 0.0]),
+        up_z=1.0,
+        touchdown_air_times=[],
+        action=np.zeros(4),
+        last_action=np.zeros(4),
+        joint_speeds=np.zeros(4),
+        fallen=False,
+    )
+    return walk_reward_terms(WalkConfig(), **{**base, **kw})
+
+
+def test_walking_at_the_command_earns_the_tracking_reward():
+    on = _terms(velocity=np.array([0.5, 0.0, 0.0]))
+    off = _terms(velocity=np.array([-0.5, 0.0, 0.0]))
+    assert on["tracking_linear"] == pytest.approx(1.5)  # the full weight at zero error
+    assert off["tracking_linear"] < 0.1
+    turning = _terms(command=np.array([0.0, 0.0, 30.0]), turn_rate=math.radians(30.0))
+    assert turning["tracking_turn"] == pytest.approx(0.8)
+    # a good step (0.35 s in the air) is rewarded while moving, shuffling (0.05 s) is not
+    assert _terms(touchdown_air_times=[0.35])["feet_air_time"] == pytest.approx(0.15)
+    assert _terms(touchdown_air_times=[0.05])["feet_air_time"] < 0
+    assert _terms(command=np.zeros(3), touchdown_air_times=[0.35])["feet_air_time"] == 0.0
+    jerky = _terms(action=np.ones(4), last_action=-np.ones(4))
+    assert jerky["action_rate"] == pytest.approx(-0.02 * 16)
+    down = _terms(fallen=True)
+    assert down["fall"] == -10.0 and down["alive"] == 0.0
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_fall_ends_a_walk_episode_with_the_penalty(engine):
+    env = Walk(engine=engine, joint_start_deg={"rle3": 60.0, "lle3": 60.0})  # hips bent: topples
+    env.reset(seed=0, options={"velocity_command": (0.5, 0.0, 0.0)})
+    for _ in range(150):
+        _, reward, terminated, truncated, info = env.step(np.zeros(env.action_space.shape))
+        if terminated or truncated:
+            break
+    assert terminated and info["fallen"]
+    assert info["reward_terms"]["fall"] == -10.0 and reward < -5.0
+    env.close()
+
+
+def test_the_command_is_observed_and_changes_mid_episode():
+    env = Walk(command_change_steps=5, standing_command_prob=0.0)
+    obs, info = env.reset(seed=1)
+    sl = env.component_slices["velocity_command"]
+    first = info["velocity_command"]
+    assert np.any(first != 0.0)
+    raw = (obs[sl] - env._offset[sl]) / env._scale[sl]  # undo min-max normalisation
+    np.testing.assert_allclose(raw, first, atol=1e-5)
+    commands = [env.step(np.zeros(env.action_space.shape))[4]["velocity_command"] for _ in range(6)]
+    assert not np.array_equal(commands[3], commands[5])  # a new command after 5 steps
+    with pytest.raises(ValueError, match="velocity_command must be 3 finite numbers"):
+        env.reset(options={"velocity_command": (math.nan, 0.0, 0.0)})
+    env.close()
+
+
+def test_walk_options_are_validated():
+    with pytest.raises(EnvConfigError, match="forward_speed_range"):
+        Walk(forward_speed_range=(1.0, -1.0))
+    with pytest.raises(EnvConfigError, match="standing_command_prob"):
+        Walk(standing_command_prob=2.0)
+
+
+# ------------------------------------------------------------------ GetUp
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("side", ["front", "back"])
+def test_getup_starts_lying_at_rest_made_by_a_drop(engine, side):
+    env = GetUp(engine=engine)
+    env.reset(seed=0, options={"start_side": side})
+    z0 = env.torso_pos[2]
+    _, x, y, _ = env.ground_truth.torso_quat
+    up_z = 1.0 - 2.0 * (x * x + y * y)
+    assert z0 < 0.2 and up_z < 0.5  # lying, not standing
+    for _ in range(5):
+        env.step(np.zeros(env.action_space.shape))
+    assert abs(env.torso_pos[2] - z0) < 0.005  # at rest: nothing started inside the ground
+    assert not env.success
+    env.close()
+
+
+def test_getup_success_needs_a_held_pose_and_pays_once():
+    """With a threshold a robot lying on its front meets (arms under it), success comes after
+    the hold, ends the episode and pays the bonus once."""
+    env = GetUp(success_height=0.05, success_tilt_deg=89.0, success_hold_steps=3)
+    env.reset(seed=0, options={"start_side": "front"})
+    rewards, infos = [], []
+    for _ in range(3):
+        _, r, terminated, _, info = env.step(np.zeros(env.action_space.shape))
+        rewards.append(r)
+        infos.append(info)
+    assert terminated and info["success"] and info["steps_to_up"] == 1
+    assert infos[0]["reward_terms"]["success"] == 0.0
+    assert info["reward_terms"]["success"] > 50.0
+    env.close()
+
+
+def test_getup_options_are_validated():
+    with pytest.raises(EnvConfigError, match="start_side"):
+        GetUp(start_side="sideways")
+    env = GetUp()
+    with pytest.raises(ValueError, match="start_side must be 'front' or 'back'"):
+        env.reset(options={"start_side": "left"})
+    env.close()
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
+@pytest.mark.parametrize("script", ["walk.py", "getup.py"])
+def test_the_locomotion_benchmarks_print_json_last(script):
+    """``benchmarks/walk.py`` and ``benchmarks/getup.py`` with the zero-action baseline: the
+    JSON is there, and the baseline neither walks nor gets up."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / script), "zero", "--episodes", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=root,
+        check=True,
+    ).stdout
+    res = json.loads(out.strip().splitlines()[-1])
+    assert res["meets_target"] is False
+    if script == "walk.py":
+        assert abs(res["forward_speed_mps"]) < 0.01 and res["falls"] == 0
+        assert res["turn_error_deg_s"] == pytest.approx(30.0, abs=1.0)
+    else:
+        assert res["success_rate"] == 0.0 and res["front"]["got_up"] == 0
