@@ -81,6 +81,12 @@ class _Link:
         self.decoder = FrameDecoder()
         self.closed = False
         sock.setblocking(True)
+        # rcssserver3d sets neither option on its sockets. Without NODELAY our small frames wait
+        # for Nagle; without QUICKACK the kernel delays the ACKs of a connection that mostly
+        # receives (the monitor's) by up to ~40 ms, and the server's own Nagle then holds its
+        # next frames back until they come: monitor frames arrived in bursts 40 ms apart.
+        _set_tcp(sock, "TCP_NODELAY")
+        _set_tcp(sock, "TCP_QUICKACK")
 
     def send(self, text: str, timeout: float) -> None:
         self.sock.settimeout(timeout)
@@ -125,6 +131,7 @@ class _Link:
 
     def _fill(self, timeout: float) -> bool:
         """Read what is there (waiting up to ``timeout`` s for something); False if nothing."""
+        _set_tcp(self.sock, "TCP_QUICKACK")  # Linux clears it again after some reads: re-arm
         try:
             ready, _, _ = select.select([self.sock], [], [], max(0.0, timeout))
         except (OSError, ValueError) as exc:
@@ -149,7 +156,17 @@ class _Link:
         if not self.closed:
             self.closed = True
             with contextlib.suppress(OSError):
+                self.sock.shutdown(socket.SHUT_RDWR)  # the server sees the end at once
+            with contextlib.suppress(OSError):
                 self.sock.close()
+
+
+def _set_tcp(sock: socket.socket, option: str) -> None:
+    """Switch a TCP option on where the OS has it (``TCP_QUICKACK`` is Linux's)."""
+    value = getattr(socket, option, None)
+    if value is not None:
+        with contextlib.suppress(OSError):
+            sock.setsockopt(socket.IPPROTO_TCP, value, 1)
 
 
 # ------------------------------------------------------------------------------------------
@@ -471,6 +488,8 @@ class Rcssserver3dBackend(Backend):
         hover_height: How high above its standing height the robot is held while the joints
             move, m (keeps the legs off the ground and the ball).
         monitor_wait: Seconds a step waits for the monitor frame that belongs to its percept.
+        reset_timeout: Seconds a reset waits, after its trainer commands, to see them take
+            effect in the monitor stream (wall-clock time: never a count of polled cycles).
         syn_interval: Seconds between the ``(syn)`` sent while waiting for the first percept.
     """
 
@@ -499,6 +518,7 @@ class Rcssserver3dBackend(Backend):
         hover_height: float = 0.3,
         monitor_wait: float = 0.05,
         syn_interval: float = 0.01,
+        reset_timeout: float = 2.0,
     ) -> None:
         super().__init__(robot_type=robot_type, seed=seed, vision=vision)
         self._model = nao_model(self.robot_type)  # validates the type
@@ -517,6 +537,7 @@ class Rcssserver3dBackend(Backend):
         self.hover_height = float(hover_height)
         self.monitor_wait = float(monitor_wait)
         self.syn_interval = float(syn_interval)
+        self.reset_timeout = float(reset_timeout)
         if not 0 < self.reset_gain <= 1.0:
             raise ValueError(f"reset_gain must be in (0, 1], got {reset_gain}")
         self.connect_mode = host is not None or agent_port is not None or monitor_port is not None
@@ -549,6 +570,7 @@ class Rcssserver3dBackend(Backend):
         self._stand_cache: dict[tuple[float, ...], float] = {}
         self._kinematics: Any = None
         self._finalizer = weakref.finalize(self, _release, self._links, None)
+        self._launch = (binary, script_template, tuple(server_args))
         try:
             self._open(binary, script_template, server_args)
         except BaseException:
@@ -577,6 +599,12 @@ class Rcssserver3dBackend(Backend):
                 self._finalizer.detach()
                 self._finalizer = weakref.finalize(self, _release, self._links, server)
                 self.agent_port, self.monitor_port = server.start()
+                # registered again, after the server's own exit-time finalizer: finalizers run
+                # newest first at exit, so an environment nobody closed closes its connections
+                # before the server gets SIGINT (else the server, still serving a connected
+                # agent, ignored SIGINT and was killed 5 s later)
+                self._finalizer.detach()
+                self._finalizer = weakref.finalize(self, _release, self._links, server)
                 try:
                     self._connect(server, timeout=self.startup_timeout)
                     break
@@ -588,6 +616,26 @@ class Rcssserver3dBackend(Backend):
                         raise
                     log.warning("rcssserver3d did not start (%s); retrying on new ports", exc)
         self._handshake()
+
+    def _relaunch_if_dead(self) -> None:
+        """Launch mode: a server that exited or was killed (its step raised a clear
+        :class:`BackendError`) is replaced by a new one here, so that the environment resets and
+        goes on; connect mode cannot restart someone else's server."""
+        if self.connect_mode or self.server is None or self.server.running:
+            return
+        log.warning(
+            "rcssserver3d (pid %s) is gone (exit code %s); starting a new one",
+            self.server.pid,
+            self.server.proc.returncode if self.server.proc is not None else None,
+        )
+        self._close_links()
+        self.server.stop()
+        self.server = None
+        self.unum = self.side = None
+        self._tracker = _MonitorTracker()
+        self._targets[:] = 0.0
+        self._last = None
+        self._open(*self._launch)
 
     def _connect(self, server: ServerProcess | None, timeout: float) -> None:
         # The monitor port doubles as the readiness probe (a throw-away agent connection would
@@ -865,6 +913,7 @@ class Rcssserver3dBackend(Backend):
             raise ValueError(f"unknown play mode {play_mode!r}; valid: {', '.join(PLAY_MODES)}")
         if self._closed:
             raise BackendError("the backend is closed")
+        self._relaunch_if_dead()
         t0 = time.perf_counter()
         if pose.quat is not None:
             raise BackendError(
@@ -933,12 +982,17 @@ class Rcssserver3dBackend(Backend):
         zero = self._velocity_text(np.zeros(self._n))
         p = self._exchange(zero, final, wait=False)
         settle = 1
-        limit = 4 * self.monitor_interval + 8
+        deadline = time.monotonic() + self.reset_timeout
         while not self._reset_visible(p, pose, z):
-            if settle >= limit:
+            # wait (a little) for the monitor frame of this very cycle before running another:
+            # the wait is bounded by the wall clock, never by how many cycles were polled
+            self._sync_monitor(p)
+            if self._reset_visible(p, pose, z):
+                break
+            if time.monotonic() > deadline:
                 self._fail(
-                    f"the reset did not show within {settle} cycles after the trainer commands "
-                    "(is the monitor port that of the same server?)"
+                    f"the reset did not show within {self.reset_timeout:.1f} s ({settle} cycles) "
+                    "after the trainer commands (is the monitor port that of the same server?)"
                 )
             p = self._exchange(zero, wait=False)
             settle += 1

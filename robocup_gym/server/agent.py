@@ -30,7 +30,9 @@ class AgentState:
     lets the first 5 cycles after connecting pass unsynced, which sends a client that replies
     slower than the server cycles two percepts for its first message and leaves it one percept
     behind for good; here every handshake message gets exactly one percept, and FC Portugal's
-    ``init`` without ``(syn)`` still gets its answer."""
+    ``init`` without ``(syn)`` still gets its answer. An ``init`` counts as ``(syn)`` even after
+    a ``(syn)``: clients for the real server keep sending ``(syn)`` while they wait for their
+    robot (it otherwise stalls ~2 s before the first percept), then send ``init`` alone."""
     percepts_sent: int = 0
     percept: bytes | None = None
     """Frame computed at the end of the last cycle, sent at the start of the next."""

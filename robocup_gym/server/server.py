@@ -375,7 +375,7 @@ class SimServer:
     # ------------------------------------------------------------------ the cycle
     def _cycle(self) -> None:
         monitor_cycle = self.cycle % self.monitor_interval == 0
-        self._read_phase(monitor_cycle)
+        self._read_phase()
         if self._stop.is_set():
             return
         self._send_percepts()
@@ -385,7 +385,7 @@ class SimServer:
         if self.on_cycle is not None:
             self.on_cycle(self)
 
-    def _read_phase(self, monitor_cycle: bool) -> None:
+    def _read_phase(self) -> None:
         self._poll(0)
         self._process_agents()
         if self.sync:
@@ -404,8 +404,9 @@ class SimServer:
                     break
                 self._poll(_POLL_S)
                 self._process_agents()
-        if monitor_cycle:
-            self._process_monitors()
+        # trainer commands take effect in the next cycle, as on rcssserver3d (only the monitor's
+        # frames go out every monitor_interval cycles)
+        self._process_monitors()
 
     def _all_synced(self) -> bool:
         return all(a.synced for a in self.agents if a.waited_for)
@@ -513,8 +514,11 @@ class SimServer:
                 conn.warn("second scene ignored")
             else:
                 conn.warn("unknown command %r ignored", _name(act))
-        if a.has_robot and not a.ever_synced:
-            a.synced = True  # handshake: every message counts as (syn), see AgentState
+        if a.has_robot and (not a.ever_synced or any(type(x) is fx.Init for x in actions)):
+            # the handshake: every message counts as (syn) until the first (syn), and an
+            # ``init`` always does (see AgentState): a client that kept sending (syn) while it
+            # waited for its robot must still get the answer to the ``init`` that follows
+            a.synced = True
 
     _limits_cache: ClassVar[dict[int, dict[str, float]]] = {}
 

@@ -33,6 +33,20 @@ def report(event: str, **data: object) -> None:
         f.write(json.dumps({"event": event, "pid": os.getpid(), **data}) + "\n")
 
 
+def _peer_open(conn) -> bool:
+    """Whether the agent at the other end still has its connection open (its FIN is not in)."""
+    import socket
+
+    if not conn.alive or conn.sock is None:
+        return False
+    try:
+        return conn.sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) != b""
+    except BlockingIOError:
+        return True  # open, nothing to read
+    except OSError:
+        return False
+
+
 def arg(name: str) -> str | None:
     argv = sys.argv[1:]
     return argv[argv.index(name) + 1] if name in argv else None
@@ -46,13 +60,17 @@ def main() -> int:
         with open(script_path, encoding="latin-1") as f:
             script = f.read()
     stop = threading.Event()
+    serving: list = []  # the protocol server, in "serve" mode
     signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the real server ignores SIGTERM
     if mode == "stubborn":
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     else:
 
         def on_sigint(*_: object) -> None:
-            report("sigint")
+            # how many agents were still connected when SIGINT came (a client should close
+            # its connections first: rcssserver3d serving a connected agent ignores SIGINT)
+            connected = sum(1 for a in serving[0].agents if _peer_open(a.conn)) if serving else None
+            report("sigint", connected_agents=connected)
             stop.set()
 
         signal.signal(signal.SIGINT, on_sigint)
@@ -88,6 +106,7 @@ def main() -> int:
             monitor_interval=max(1, round(float(step.group(1)) / 0.02)),
         )
         server.start_in_thread()
+        serving.append(server)
         report("listening")
         while not stop.wait(0.05):
             pass

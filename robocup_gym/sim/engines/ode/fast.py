@@ -95,6 +95,8 @@ class FastLoops:
         pair_slots: ``(n_pairs, 2)`` slot of each pair's geoms (-1: the ground plane).
         state: ``(bodies, state array (n, 18), joints, angles, rates)`` that :meth:`read`
             fills (``OdeWorld``'s state snapshot).
+        sensed_out: ``(pair index array, position array (n, 3))`` that :meth:`collide` fills
+            for the sensed contacts (the world's own arrays).
     """
 
     def __init__(
@@ -110,6 +112,7 @@ class FastLoops:
         slot_geoms,
         pair_slots,
         state,
+        sensed_out,
     ):
         self._lib = load()
         self._fns = OdeFunctions(
@@ -148,12 +151,9 @@ class FastLoops:
         self._pairs = (_p * (4 * n))(*[h for pair in pairs for h in pair[:4]])
         self._surfaces = (ode.SurfaceParameters * n)(*[pair[4] for pair in pairs])
         self._sensed = np.array([int(bool(p[5] or p[6])) for p in pairs], dtype=np.int32)
-        self._frp = [(p[5], p[6]) for p in pairs]
         self._buf = (ode.ContactGeom * max_contacts)()
         self._feedback = feedback
-        slots = len(feedback)
-        self._out_pair = np.zeros(slots, dtype=np.int32)
-        self._out_pos = np.zeros((slots, 3))
+        self._out_pair, self._out_pos = sensed_out
         self._slot_geoms = (_p * len(slot_geoms))(*slot_geoms)
         self._pair_slots = np.ascontiguousarray(pair_slots, dtype=np.int32)
         self._aabb = np.zeros((len(slot_geoms), 6))
@@ -206,11 +206,7 @@ class FastLoops:
             fns, n, joints, child, compiled.address(targets), limits, vmax, ode.PARAM_VEL
         )
 
-    def collide(self) -> list:
-        """Contact joints for this step; returns the sensed contacts as ``OdeWorld`` lists
-        them: ``(feedback slot, position, FRP of body 1, FRP of body 2)``."""
-        m = self._lib.ode_collide(*self._collide_args)
-        return [
-            (self._feedback[i], self._out_pos[i].copy(), *self._frp[self._out_pair[i]])
-            for i in range(m)
-        ]
+    def collide(self) -> int:
+        """Contact joints for this step; returns how many sensed contacts it wrote to the
+        world's pair and position arrays (``OdeWorld._collide`` does the same in Python)."""
+        return self._lib.ode_collide(*self._collide_args)

@@ -282,6 +282,12 @@ class OdeWorld(Senses):
         n_sensed = sum(1 for p in self._pairs if p[5] or p[6])
         self._feedback = (ode.JointFeedback * (MAX_CONTACTS * max(n_sensed, 1)))()
         """Contact feedback slots for the contacts of foot/toe geoms (SimSpark's ``FRP``)."""
+        self._feedback_view = np.frombuffer(self._feedback, dtype=np.float64).reshape(-1, 16)
+        """The slots as numbers: force on body 1 in columns 0–2, on body 2 in 8–10."""
+        self._out_pair = np.zeros(len(self._feedback), dtype=np.int32)
+        self._out_pos = np.zeros((len(self._feedback), 3))
+        self._pair_frp = [(p[5], p[6]) for p in self._pairs]
+        """Per pair, the force perceptors ``(robot, name)`` of its two bodies (or ``None``)."""
         # the state snapshot every reading comes from (one C call per step, see _read_state)
         self._state_bodies = self._drag_bodies()
         self._row = {b: k for k, b in enumerate(self._state_bodies)}
@@ -433,6 +439,7 @@ class OdeWorld(Senses):
             self._slot_geoms,
             self._pair_slots,
             (self._state_bodies, self._state, self._all_joints, self._angles, self._rates),
+            (self._out_pair, self._out_pos),
         )
 
     @property
@@ -636,23 +643,24 @@ class OdeWorld(Senses):
             sensed = self._fast.collide() if self._fast is not None else self._collide()
             lib.dWorldStep(self._world, phys.CYCLE_S)
             self.engine_seconds += time.perf_counter() - t0
-        self._read_feedback(sensed)
+        self._read_feedback(sensed)  # the number of sensed contacts
         lib.dJointGroupEmpty(self._contacts)
 
-    def _collide(self) -> list:
-        """Contact joints for the current poses; returns the contacts of foot/toe geoms as
-        ``(feedback slot, contact position, FRP of body 1, FRP of body 2)``."""
+    def _collide(self) -> int:
+        """Contact joints for the current poses (the Python loop; ``ode_step.c``'s
+        ``ode_collide`` does the same): the contacts of foot/toe geoms get feedback slots in
+        order, their pairs and positions go to ``_out_pair``/``_out_pos``; returns how many."""
         lib = self._lib
         buf, contact = self._contact_buf, self._contact
         size = ctypes.sizeof(ode.ContactGeom)
-        sensed = []
+        m = 0
         aabb = self._aabb
         box = (ode.dReal * 6)()
         for k, g in enumerate(self._slot_geoms):
             lib.dGeomGetAABB(g, box)
             aabb[k] = box[:]
-        for (g1, g2, b1, b2, surface, frp1, frp2), (s1, s2) in zip(
-            self._pairs, self._pair_slots, strict=True
+        for p, ((g1, g2, b1, b2, surface, frp1, frp2), (s1, s2)) in enumerate(
+            zip(self._pairs, self._pair_slots, strict=True)
         ):
             if s1 >= 0 and s2 >= 0 and _apart(aabb[s1], aabb[s2]):
                 continue
@@ -664,10 +672,11 @@ class OdeWorld(Senses):
                     joint = lib.dJointCreateContact(self._world, self._contacts, contact)
                     lib.dJointAttach(joint, b1, b2)
                     if frp1 or frp2:
-                        slot = self._feedback[len(sensed)]
-                        lib.dJointSetFeedback(joint, slot)
-                        sensed.append((slot, np.array(buf[k].pos[:3]), frp1, frp2))
-        return sensed
+                        lib.dJointSetFeedback(joint, self._feedback[m])
+                        self._out_pair[m] = p
+                        self._out_pos[m] = buf[k].pos[:3]
+                        m += 1
+        return m
 
     def _sense_accelerometers(self) -> None:
         """Each torso's accelerometer, sampled as
@@ -683,26 +692,38 @@ class OdeWorld(Senses):
             r.prev_vel[:] = v
             r.accel[:] = a @ row[3:12].reshape(3, 3)
 
-    def _read_feedback(self, sensed: list) -> None:
+    def _read_feedback(self, m: int) -> None:
         """SimSpark's force resistance perceptors from the step's contact feedback (spec §4.6):
         per foot/toe the total contact force on it and the contacts' centre weighted by the
-        magnitude of each contact's force, world frame."""
+        magnitude of each contact's force, world frame. ``m`` sensed contacts: contact ``k``
+        has feedback slot ``k``, pair ``self._out_pair[k]`` and position ``self._out_pos[k]``
+        (written alike by the compiled and the Python contact loops)."""
         sums: dict[tuple[int, str], list] = {}
-        for slot, pos, frp1, frp2 in sensed:
-            for frp, f in ((frp1, slot.f1), (frp2, slot.f2)):
+        fb = self._feedback_view
+        for k in range(m):
+            p = int(self._out_pair[k])
+            pos = self._out_pos[k]
+            for frp, f in ((self._pair_frp[p][0], fb[k, 0:3]), (self._pair_frp[p][1], fb[k, 8:11])):
                 if frp is None:
                     continue
-                force = np.array(f[:3])
-                acc = sums.setdefault(frp, [np.zeros(3), np.zeros(3), 0.0])
-                magnitude = float(np.linalg.norm(force))
-                acc[0] += force
-                acc[1] += magnitude * pos
-                acc[2] += magnitude
+                fx, fy, fz = float(f[0]), float(f[1]), float(f[2])
+                acc = sums.get(frp)
+                if acc is None:
+                    acc = sums[frp] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+                magnitude = math.sqrt(fx * fx + fy * fy + fz * fz)
+                acc[0] += fx
+                acc[1] += fy
+                acc[2] += fz
+                acc[3] += magnitude * float(pos[0])
+                acc[4] += magnitude * float(pos[1])
+                acc[5] += magnitude * float(pos[2])
+                acc[6] += magnitude
         for r in self.robots:
             r.frp = {}
-        for (i, name), (force, moment, total) in sums.items():
-            centre = moment / total if total > 0.0 else None
-            self.robots[i].frp[name] = (force, centre)
+        for (i, name), a in sums.items():
+            total = a[6]
+            centre = np.array(a[3:6]) / total if total > 0.0 else None
+            self.robots[i].frp[name] = (np.array(a[0:3]), centre)
 
     def _command_array(self, r: OdeRobot, cmd: Mapping[str, float] | np.ndarray) -> np.ndarray:
         """Targets in canonical order, rad/s; NaN marks a joint the command leaves alone.

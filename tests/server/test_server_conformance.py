@@ -1,0 +1,93 @@
+"""What clients written for the real server do, byte for byte: the handshake orders rcssserver3d
+accepts, and trainer commands that act in the next cycle."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from robocup_gym.protocol.perceptors import parse_perception
+from robocup_gym.server.client import AgentClient, MonitorClient
+
+from .conftest import HOST
+
+SCENE = "(scene rsg/agent/nao/nao_hetero.rsg 0)"
+
+
+@pytest.fixture
+def server(make_server):
+    return make_server()
+
+
+def _answer(c: AgentClient, timeout: float = 3.0) -> str:
+    return c.recv(timeout=timeout)
+
+
+def test_syn_while_waiting_for_the_robot_then_init_alone(server):
+    """A client for the real server keeps sending (syn) until its first percept (the real server
+    otherwise stalls ~2 s), then sends (init) without (syn): it must get the answer (it hung)."""
+    with AgentClient(HOST, server.agent_port, timeout=3.0) as c:
+        c.send(SCENE)
+        first = None
+        for _ in range(200):
+            try:
+                first = c.recv(timeout=0.01)
+                break
+            except TimeoutError:
+                c.send("(syn)")
+        assert first is not None
+        c.send("(init (unum 1)(teamname Syn))")
+        parse_perception(_answer(c))  # the answer to init (it hung here)
+        numbers = []
+        for _ in range(4):  # from here on one percept per (syn); GS announces the number
+            c.send("(syn)")
+            numbers.append(parse_perception(_answer(c)).game.unum)
+        assert 1 in numbers
+
+
+@pytest.mark.parametrize(
+    "messages",
+    [
+        [SCENE + "(syn)", "(init (unum 2)(teamname A))(syn)"],  # everything with (syn)
+        [SCENE, "(init (unum 2)(teamname A))"],  # FC Portugal: no (syn) in the handshake
+        ["(syn)", SCENE, "(init (unum 2)(teamname A))(syn)"],  # (syn) before scene: ignored
+        [SCENE + "(init (unum 2)(teamname A))(syn)"],  # scene and init in one message
+    ],
+    ids=["with-syn", "without-syn", "syn-before-scene", "one-message"],
+)
+def test_every_handshake_order_gets_its_percepts(server, messages):
+    with AgentClient(HOST, server.agent_port, timeout=3.0) as c:
+        for m in messages:
+            c.send(m)
+            if m == "(syn)":
+                continue  # no robot yet: nothing to answer
+            _answer(c)
+        got_number = False
+        for _ in range(4):
+            c.send("(syn)")
+            p = parse_perception(_answer(c))
+            got_number |= p.game.unum == 2
+        assert got_number or server.world.n_robots == 1
+
+
+def test_trainer_commands_act_in_the_next_cycle(make_server):
+    """On every cycle, not only on monitor cycles (serve sends monitor frames every second
+    cycle, but reads the trainer's commands every cycle, as rcssserver3d)."""
+    server = make_server(monitor_interval=2)
+    with (
+        AgentClient(HOST, server.agent_port, timeout=3.0) as c,
+        MonitorClient(HOST, server.monitor_port, timeout=3.0) as m,
+    ):
+        c.handshake("T", 1)
+        m.send("(playMode PlayOn)")  # before kick-off the referee keeps the ball on the spot
+        for _ in range(2):
+            c.send("(syn)")
+            _answer(c)
+        for x in (1.0, 2.0, 3.0, 4.0):  # both parities of the cycle counter
+            m.send(f"(ball (pos {x} 1 0.042)(vel 0 0 0))")
+            time.sleep(0.05)  # the command is in before the agent's (syn) lets the cycle run
+            c.send("(syn)")
+            _answer(c)
+            np.testing.assert_allclose(server.world.ball_position()[:2], (x, 1.0), atol=0.01)
