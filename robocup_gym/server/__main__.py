@@ -42,6 +42,58 @@ positive_seconds = _positive(float, "a finite number of seconds")
 positive_int = _positive(int, "a whole number")
 
 
+def robot_type_list(text: str) -> tuple[int, ...]:
+    """An argparse type: comma-separated robot types 0–4, e.g. ``0,4``."""
+    try:
+        types = tuple(sorted({int(t) for t in str(text).split(",") if t.strip()}))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a list of robot types") from None
+    if not types or any(not 0 <= t <= 4 for t in types):
+        raise argparse.ArgumentTypeError(f"{text!r}: robot types are 0 to 4, at least one")
+    return types
+
+
+def _load_config(parser: argparse.ArgumentParser, path: str) -> dict:
+    """The options of TOML file ``path`` as argparse defaults (checked like the flags)."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        try:
+            import tomli as tomllib  # type: ignore[no-redef]
+        except ModuleNotFoundError:
+            parser.error("--config needs Python 3.11 or the tomli package (pip install tomli)")
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except OSError as exc:
+        parser.error(f"--config {path}: {exc.strerror or exc}")
+    except tomllib.TOMLDecodeError as exc:
+        parser.error(f"--config {path}: not valid TOML ({exc})")
+    actions = {a.dest: a for a in parser._actions if a.dest not in ("help", "config")}
+    out = {}
+    for key, value in data.items():
+        dest = key.replace("-", "_")
+        action = actions.get(dest)
+        if action is None:
+            valid = ", ".join(sorted(d.replace("_", "-") for d in actions))
+            parser.error(f"--config {path}: unknown option {key!r}; valid: {valid}")
+        if isinstance(action, argparse.BooleanOptionalAction) or action.const is True:
+            if not isinstance(value, bool):
+                parser.error(f"--config {path}: {key} must be true or false, got {value!r}")
+        elif action.type is not None:
+            text = ",".join(map(str, value)) if isinstance(value, list) else str(value)
+            try:
+                value = action.type(text)
+            except argparse.ArgumentTypeError as exc:
+                parser.error(f"--config {path}: {key}: {exc}")
+            except ValueError:
+                parser.error(f"--config {path}: {key}: {value!r} is not valid")
+            if action.choices is not None and value not in action.choices:
+                parser.error(f"--config {path}: {key} must be one of {list(action.choices)}")
+        out[dest] = value
+    return out
+
+
 class _OneLineErrors(argparse.ArgumentParser):
     """Usage errors as one line (``prog: error: …; see --help``), exit status 2."""
 
@@ -111,6 +163,32 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
         help="physics engine; serve runs on mujoco for now (the ODE engine has no walls, "
         "goals or referee yet)",
     )
+    p.add_argument(
+        "--decimals",
+        type=int,
+        choices=(2, 3),
+        default=2,
+        help="digits after the point in percepts: 2 as rcssserver3d 0.7.3, 3 as the SPL fork",
+    )
+    p.add_argument(
+        "--robot-types",
+        type=robot_type_list,
+        default=(0, 1, 2, 3, 4),
+        help="robot types agents may load, e.g. 0,4 (default 0,1,2,3,4)",
+    )
+    p.add_argument(
+        "--type-limits",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="the league's per-team robot-type rules (--no-type-limits: e.g. 11 robots of type 0)",
+    )
+    p.add_argument(
+        "--config",
+        type=str,
+        default=None,
+        help="a TOML file of these options (their names without the leading dashes, e.g. "
+        "sync = true, agent-port = 0, robot-types = [0, 4]); flags given here win",
+    )
     p.add_argument("--seed", type=int, default=None, help="random seed")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     return p
@@ -120,6 +198,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
     """Run the server with command-line ``argv``; returns the exit status (2: a bad option or a
     port that cannot be used, each said in one line on stderr)."""
     parser = build_parser(prog)
+    first, _ = parser.parse_known_args(argv)
+    if first.config is not None:
+        parser.set_defaults(**_load_config(parser, first.config))
     args = parser.parse_args(argv)
     if args.engine != "mujoco":
         parser.error(
@@ -147,6 +228,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
             monitor_interval=args.monitor_interval,
             sync_timeout=args.sync_timeout,
             seed=args.seed,
+            decimals=args.decimals,
+            robot_types=args.robot_types,
+            type_limits=args.type_limits,
         )
     except PortInUseError as exc:
         print(f"{prog}: error: {exc.strerror}", file=sys.stderr)

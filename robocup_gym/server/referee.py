@@ -86,9 +86,18 @@ class Player:
 
 
 class TeamRegistry:
-    """Sides, uniform numbers and robot types of the two teams (spec §3.4, §9.8)."""
+    """Sides, uniform numbers and robot types of the two teams (spec §3.4, §9.8).
 
-    def __init__(self) -> None:
+    Args:
+        robot_types: The robot types a player may use (rcssserver3d: 0–4).
+        type_limits: Apply the league's per-team robot-type rules (at most 7 of one type, 9 of
+            the two most used, at least 3 types); ``False`` for training set-ups such as eleven
+            robots of one type.
+    """
+
+    def __init__(self, robot_types=(0, 1, 2, 3, 4), type_limits: bool = True) -> None:
+        self.robot_types = frozenset(int(t) for t in robot_types)
+        self.type_limits = bool(type_limits)
         self.names: dict[str, str] = {}
         """side → team name (first distinct name = left, second = right; never reassigned)."""
         self.members: dict[str, dict[int, int]] = {"left": {}, "right": {}}
@@ -110,6 +119,11 @@ class TeamRegistry:
         """
         if not team_name:
             raise InitError("empty team name")
+        if robot_type not in self.robot_types:
+            allowed = ", ".join(map(str, sorted(self.robot_types)))
+            raise InitError(
+                f"robot type {robot_type} is not allowed on this server (allowed: {allowed})"
+            )
         side = self.side_of(team_name)
         if side is None:
             if len(self.names) >= 2:
@@ -128,7 +142,8 @@ class TeamRegistry:
             raise InitError(f"uniform number {unum} is outside 1..{MAX_PLAYERS}")
         elif unum in members:
             raise InitError(f"uniform number {unum} is already taken in team {team_name!r}")
-        self._check_types(team_name, list(members.values()), robot_type)
+        if self.type_limits:
+            self._check_types(team_name, list(members.values()), robot_type)
         members[unum] = robot_type
         return side, unum
 
@@ -179,13 +194,22 @@ class Referee:
         rules: ``False`` switches the automatic referee off ("soccer rules" off in FC Portugal's
             tools): play modes then change only by trainer command.
         rng: for the coin toss of ``(kickOff None)``.
+        robot_types, type_limits: see :class:`TeamRegistry`.
     """
 
-    def __init__(self, host: WorldHost, *, rules: bool = True, rng=None) -> None:
+    def __init__(
+        self,
+        host: WorldHost,
+        *,
+        rules: bool = True,
+        rng=None,
+        robot_types=(0, 1, 2, 3, 4),
+        type_limits: bool = True,
+    ) -> None:
         self.host = host
         self.rules = rules
         self.rng = rng if rng is not None else np.random.default_rng()
-        self.teams = TeamRegistry()
+        self.teams = TeamRegistry(robot_types, type_limits)
         self.half = 1
         self.mode_cycles = 0
         self.kickoffs_this_half = 0

@@ -36,7 +36,7 @@ import signal
 import socket
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import ClassVar
 
 import numpy as np
@@ -106,6 +106,10 @@ class SimServer:
             connection (``None`` = wait forever, as rcssserver3d).
         seed: random seed (noise, coin toss) for reproducible runs.
         physics: :class:`~robocup_gym.sim.physics.PhysicsConfig` of the world.
+        decimals: digits after the point in percepts: 2 as upstream rcssserver3d 0.7.3, 3 as
+            the SPL fork.
+        robot_types: robot types agents may load (``scene``/``init`` of another is refused).
+        type_limits: the league's per-team robot-type rules (off: e.g. eleven robots of type 0).
     """
 
     def __init__(
@@ -124,6 +128,9 @@ class SimServer:
         sync_timeout: float | None = None,
         seed: int | None = None,
         physics: object | None = None,
+        decimals: int = 2,
+        robot_types: Sequence[int] = (0, 1, 2, 3, 4),
+        type_limits: bool = True,
     ) -> None:
         if monitor_interval < 1:
             raise ValueError(f"monitor_interval must be >= 1, got {monitor_interval}")
@@ -138,6 +145,16 @@ class SimServer:
             )
         if sync_timeout is not None and not (0 < sync_timeout < math.inf):
             raise ValueError(f"sync_timeout must be a number of seconds > 0, got {sync_timeout}")
+        if decimals not in (2, 3):
+            raise ValueError(
+                f"decimals must be 2 (rcssserver3d 0.7.3) or 3 (SPL fork), got {decimals}"
+            )
+        bad_types = sorted(set(robot_types) - {0, 1, 2, 3, 4})
+        if bad_types or not robot_types:
+            raise ValueError(
+                f"robot_types must be a non-empty subset of 0–4, got {list(robot_types)}"
+            )
+        self.decimals = int(decimals)
         tune_allocator()  # worlds come and go with the agents: keep the process from growing
         self.host_address = host
         self.requested_ports = (int(agent_port), int(monitor_port))
@@ -149,7 +166,13 @@ class SimServer:
             noise=vision_noise, view_cone_deg=float(view_cone_deg), ground_truth=ground_truth
         )
         self.world_host = WorldHost(vision, physics, seed)
-        self.referee = Referee(self.world_host, rules=rules, rng=self.world_host.rng)
+        self.referee = Referee(
+            self.world_host,
+            rules=rules,
+            rng=self.world_host.rng,
+            robot_types=robot_types,
+            type_limits=type_limits,
+        )
         self.stream = MonitorStream()
         self.agents: list[AgentState] = []
         self.monitors: list[MonitorState] = []
@@ -542,6 +565,12 @@ class SimServer:
         if t is None or not 0 <= t <= 4:
             a.conn.warn("scene %r: robot type %r not in 0..4", act.path, act.args[:1])
             return
+        if t not in self.referee.teams.robot_types:
+            allowed = ", ".join(map(str, sorted(self.referee.teams.robot_types)))
+            a.conn.warn(
+                "scene %r: robot type %s is not allowed here (allowed: %s)", act.path, t, allowed
+            )
+            return
         a.robot_type = int(t)
         a.scene_type = int(t)
 
@@ -822,7 +851,7 @@ class SimServer:
             if i is None:
                 continue
             try:
-                text = format_perception(world.perceive(i, ground_truth=False))
+                text = format_perception(world.perceive(i, ground_truth=False), self.decimals)
             except Exception:
                 log.exception("%r: percept could not be built", a.conn)
                 continue

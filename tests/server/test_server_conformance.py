@@ -91,3 +91,67 @@ def test_trainer_commands_act_in_the_next_cycle(make_server):
             c.send("(syn)")
             _answer(c)
             np.testing.assert_allclose(server.world.ball_position()[:2], (x, 1.0), atol=0.01)
+
+
+def test_percepts_with_two_or_three_decimals(make_server):
+    """2 as upstream rcssserver3d 0.7.3, 3 as the SPL fork (``--decimals``)."""
+    import re
+
+    for decimals in (2, 3):
+        server = make_server(decimals=decimals)
+        with AgentClient(HOST, server.agent_port, timeout=3.0) as c:
+            c.handshake("D", 1)
+            c.send("(syn)")
+            text = _answer(c)
+        value = re.search(r"\(HJ \(n hj1\) \(ax (-?\d+\.\d+)\)\)", text).group(1)
+        assert len(value.split(".")[1]) == decimals
+
+
+def test_allowed_robot_types_and_type_limits(make_server, caplog):
+    import logging
+
+    from .conftest import run_agents
+
+    server = make_server(robot_types=(0,))
+    with AgentClient(HOST, server.agent_port, timeout=1.0) as c, caplog.at_level(logging.WARNING):
+        c.send("(scene rsg/agent/nao/nao_hetero.rsg 2)(syn)")
+        with pytest.raises(TimeoutError):
+            c.recv(timeout=0.5)  # no robot of a type the server does not allow
+    assert server.world.n_robots == 0
+    # without the league's type rules, eleven robots of one type are a team
+    server = make_server(type_limits=False)
+    out = run_agents(server, [("Same", u, 0) for u in range(1, 12)], 3)
+    assert all("(unum" in "".join(msgs) for msgs in out)
+    with pytest.raises(ValueError, match="robot_types must be a non-empty subset"):
+        make_server(robot_types=(7,))
+    with pytest.raises(ValueError, match="decimals must be 2"):
+        make_server(decimals=5)
+
+
+def test_serve_reads_a_config_file_and_flags_win(tmp_path, monkeypatch, capsys):
+    import robocup_gym.server.__main__ as server_main
+
+    seen = {}
+    monkeypatch.setattr(server_main, "serve", lambda **kw: seen.update(kw))
+    cfg = tmp_path / "serve.toml"
+    cfg.write_text(
+        'sync = true\nreal-time = false\nagent-port = 0\nmonitor-port = 0\nhost = "127.0.0.1"\n'
+        "decimals = 3\nrobot-types = [0, 4]\ntype-limits = false\nsync-timeout = 2.5\n"
+    )
+    assert server_main.main(["--config", str(cfg), "--decimals", "2"]) == 0
+    assert seen["sync"] is True and seen["real_time"] is False and seen["host"] == "127.0.0.1"
+    assert seen["decimals"] == 2  # the flag wins over the file
+    assert seen["robot_types"] == (0, 4) and seen["type_limits"] is False
+    assert seen["sync_timeout"] == 2.5
+    bad = tmp_path / "bad.toml"
+    for text, expected in (
+        ("nosuch = 1\n", "unknown option 'nosuch'"),
+        ("agent-port = 70000\n", "70000 is not a port number"),
+        ("sync = 3\n", "sync must be true or false"),
+        ("sync = \n", "not valid TOML"),
+    ):
+        bad.write_text(text)
+        with pytest.raises(SystemExit) as exit_:
+            server_main.main(["--config", str(bad)])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and expected in err and len(err.strip().splitlines()) == 1
