@@ -473,10 +473,32 @@ if typer is not None:
         print(json.dumps(summary), flush=True)
 
 
-def main() -> None:
-    """Entry point of the ``robocup-gym`` script."""
+def main(argv: list[str] | None = None) -> None:
+    """Entry point of the ``robocup-gym`` script. Usage errors (an unknown command or option, a
+    value of the wrong type, a missing argument) are one line on stderr, exit status 2."""
     _require_typer()
-    app()
+    try:  # typer >= 0.20 carries its own copy of click
+        from typer._click import exceptions as cx
+    except ImportError:  # pragma: no cover - older typer with the click package
+        import click.exceptions as cx
+
+    try:
+        code = app(args=argv, standalone_mode=False)
+    except getattr(cx, "NoArgsIsHelpError", ()) as exc:  # `robocup-gym` alone: the help
+        sys.stdout.write(exc.ctx.get_help() + "\n")
+        raise SystemExit(0) from None
+    except cx.UsageError as exc:
+        where = exc.ctx.command_path if exc.ctx is not None else "robocup-gym"
+        message = " ".join(exc.format_message().split())
+        sys.stderr.write(f"error: {message} (see {where} --help)\n")
+        raise SystemExit(2) from None
+    except cx.ClickException as exc:
+        sys.stderr.write(f"error: {' '.join(exc.format_message().split())}\n")
+        raise SystemExit(exc.exit_code) from None
+    except (KeyboardInterrupt, getattr(cx, "Abort", KeyboardInterrupt)):
+        sys.stderr.write("aborted\n")
+        raise SystemExit(130) from None
+    raise SystemExit(code if isinstance(code, int) else 0)
 
 
 if __name__ == "__main__":

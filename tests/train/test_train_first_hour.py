@@ -347,3 +347,24 @@ def test_the_agent_over_the_wire_sees_and_does_what_eval_does(ppo_run, tmp_path)
     assert abs(wire_dx - summary["ball_dx_mean"]) < 0.05
     assert abs(np.mean([r.steps for r in reports]) - summary["length_mean"]) <= 2
     assert np.mean([r.fallen for r in reports]) == pytest.approx(summary["fall_rate"], abs=0.5)
+
+
+@pytest.mark.parametrize(
+    "args, expected",
+    [
+        (["train", "--timesteps", "abc"], "Invalid value for '--timesteps'"),
+        (["eval"], "Missing argument 'run'"),
+        (["nosuchcommand"], "No such command 'nosuchcommand'"),
+        (["train", "--nosuch"], "No such option: --nosuch"),
+    ],
+)
+def test_usage_errors_are_one_line(args, expected):
+    res = subprocess.run(
+        [sys.executable, "-m", "robocup_gym.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    lines = res.stderr.strip().splitlines()
+    assert res.returncode == 2 and len(lines) == 1, res.stderr
+    assert lines[0].startswith("error: ") and expected in lines[0] and "--help" in lines[0]
