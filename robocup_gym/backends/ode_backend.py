@@ -1,21 +1,19 @@
-"""SimSpark's physics step on ODE itself (:class:`robocup_gym.sim.engines.ode.world.OdeWorld`) as a
-backend: run a policy closed-loop on the engine rcssserver3d runs on.
+"""The world on SimSpark's physics step on ODE itself
+(:class:`robocup_gym.sim.engines.ode.world.OdeWorld`) as a backend: the default engine of the
+environments, ``engine="ode"``.
 
-The embedded MuJoCo world is the fast simulator (~4× the environment steps per second, PPO
-twice as fast end to end). This backend answers whether what was learnt there works under
-ODE's own solver, contacts, joint stops and motor rules: ``robocup-gym eval RUN --backend ode``
-evaluates a trained policy here. It is also a training backend for policies that must work on
-rcssserver3d (``robocup-gym train TASK --backend ode``: 1M PPO steps in ~13 min on 2 cores),
-since session 9 found that learnt kicks do not yet carry over between the two engines
-(docs/training.md). It needs the system library ``libode`` (Debian/Ubuntu: ``apt-get install
-libode8``).
+rcssserver3d advances ODE 0.16 once per 20 ms cycle; so does this backend, with the same bodies,
+joints, contact handlers and surface mixing, walls and goals, so that what a policy learns here
+works on the real server (docs/training.md, *Which engine*). It needs the system library
+``libode`` (Debian/Ubuntu: ``apt-get install libode8``; macOS: ``brew install ode``); without
+it the backend says so and names ``engine="mujoco"``.
 
-What it has: the robot of any type 0–4 and the ball on the ground, the hinge effector's rules
-and the one-cycle dead time, and the perceptors a kick policy reads. These are joint angles,
-gyro, accelerometer and the foot force perceptors (from ODE's contact feedback, as SimSpark
-computes them), plus exact ground truth. What it lacks: vision, hearing, the referee (the
-play mode is set and kept, the game clock runs), and the field's walls and goals. Resets are
-instant teleports, as on the MuJoCo backend.
+What it has: the robot of any type 0–4, the ball and the field's walls and goals; the hinge
+effector's rules and the one-cycle dead time; every perceptor (joint angles, gyro,
+accelerometer, the foot force perceptors from ODE's contact feedback as SimSpark computes them,
+vision and hearing, :mod:`robocup_gym.sim.senses`) and exact ground truth. What it lacks: the
+referee (the play mode is set and kept, the game clock runs). Resets are instant teleports, as
+on the MuJoCo backend; ``render()`` and videos draw a MuJoCo scene posed like this world.
 """
 
 from __future__ import annotations

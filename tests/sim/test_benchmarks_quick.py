@@ -51,3 +51,21 @@ def test_ode_compare_quick_reports_the_motions():
     assert set(rows) == {"stand", "kick_D", "ball_roll"}
     assert rows["stand"]["torso_final_m"] < 0.002
     assert rows["kick_D"]["ball_travel_m"][1] == pytest.approx(res["ode_kick_D_ball_m"], abs=1e-3)
+
+
+def test_ode_threads_reports_speed_and_exactness():
+    """``benchmarks/ode_threads.py``: ODE's island threading set up, run and torn down cleanly
+    (a short run: the speed-up and the bit-equality verdict are what it reports)."""
+    if not available():
+        pytest.skip("no double-precision libode here (apt-get install libode8)")
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "ode_threads.py"), "--cycles", "5"],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=300,
+    ).stdout
+    res = json.loads(out.strip().splitlines()[-1])
+    assert res["ode_22_robots_1_thread_cycles_per_s"] > 0
+    assert res["ode_22_robots_2_threads_cycles_per_s"] > 0
+    assert isinstance(res["bit_equal"], bool) and res["largest_state_difference"] >= 0.0

@@ -157,6 +157,17 @@ _SIGNATURES: dict[str, tuple] = {
     "dGeomGetBody": (dID, [dID]),
     "dGeomDestroy": (None, [dID]),
     "dCollide": (ctypes.c_int, [dID, dID, ctypes.c_int, ctypes.POINTER(ContactGeom), ctypes.c_int]),
+    # island threading (measured by benchmarks/ode_threads.py; not used by the world: see there)
+    "dThreadingAllocateMultiThreadedImplementation": (dID, []),
+    "dThreadingAllocateThreadPool": (dID, [ctypes.c_uint, ctypes.c_size_t, ctypes.c_uint, dID]),
+    "dThreadingThreadPoolServeMultiThreadedImplementation": (None, [dID, dID]),
+    "dThreadingImplementationGetFunctions": (dID, [dID]),
+    "dWorldSetStepThreadingImplementation": (dID, [dID, dID, dID]),
+    "dWorldSetStepIslandsProcessingMaxThreadCount": (ctypes.c_uint, [dID, ctypes.c_uint]),
+    "dThreadingImplementationShutdownProcessing": (None, [dID]),
+    "dThreadingThreadPoolWaitIdleState": (None, [dID]),
+    "dThreadingFreeThreadPool": (None, [dID]),
+    "dThreadingFreeImplementation": (None, [dID]),
 }
 
 
