@@ -250,19 +250,25 @@ class WorldHost:
     ) -> None:
         """Move robot ``index`` rigidly: torso centre to ``pos`` (x, y, z), orientation kept
         (or upright with ``heading_deg``, or ``quat``), joint angles and motor targets kept,
-        every velocity zeroed (SimSpark's ``MoveAgent`` / ``MoveAndRotateAgent``)."""
+        every velocity zeroed (SimSpark's ``MoveAgent`` / ``MoveAndRotateAgent``).
+
+        A robot whose motors are all at rest (every target 0) is left asleep where it was put,
+        as on rcssserver3d: ODE's auto-disable keeps a resting robot's bodies disabled through
+        a move, so it hangs there (e.g. 2 mm above the floor: accelerometer 9.81, gyro 0, no
+        foot contact) until its first non-zero joint velocity (fixtures README)."""
         w = self.world
         r = w.robots[index]
         x, y, z = (float(v) for v in pos)
         if not all(math.isfinite(v) for v in (x, y, z)):
             return
         targets = r.targets.copy()
+        asleep = not np.any(targets)
         if heading_deg is not None:
-            w.place_robot(index, x, y, z=z, heading_deg=heading_deg)
+            w.place_robot(index, x, y, z=z, heading_deg=heading_deg, asleep=asleep)
         else:
             a = r.qpos_root
             q = w.data.qpos[a + 3 : a + 7].copy() if quat is None else np.asarray(quat, float)
-            w.place_robot(index, x, y, z=z, quat=q)
+            w.place_robot(index, x, y, z=z, quat=q, asleep=asleep)
         r.targets[:] = targets
 
     def shift(self, index: int, dx: float, dy: float) -> None:

@@ -155,3 +155,32 @@ def test_serve_reads_a_config_file_and_flags_win(tmp_path, monkeypatch, capsys):
             server_main.main(["--config", str(bad)])
         err = capsys.readouterr().err
         assert exit_.value.code == 2 and expected in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
+    """rcssserver3d (fixtures README): after a trainer move the resting robot hangs where it was
+    put, ~2 mm above the floor (accelerometer 9.81, gyro 0, no foot contact), until its first
+    non-zero joint velocity; then it lands."""
+    with (
+        AgentClient(HOST, server.agent_port, timeout=3.0) as c,
+        MonitorClient(HOST, server.monitor_port, timeout=3.0) as m,
+    ):
+        c.handshake("Hover", 1)
+        m.send("(playMode PlayOn)(agent (unum 1) (team Left) (move -1.0 0.0 0.386 -90.0))")
+        time.sleep(0.05)
+        percepts = []
+        for _ in range(6):
+            c.send("(syn)")
+            percepts.append(parse_perception(_answer(c)))
+        i = server.world_host.index(server.agents[0].key)
+        assert server.world.torso_position(i)[2] == pytest.approx(0.386, abs=1e-9)
+        last = percepts[-1]
+        assert not last.force_sensors  # no foot contact
+        np.testing.assert_allclose(last.accel, [0.0, 0.0, 9.81], atol=0.01)
+        np.testing.assert_allclose(last.gyro, 0.0, atol=1e-9)
+        c.send("(he1 0.5)(syn)")  # the first non-zero joint velocity wakes it
+        for _ in range(4):
+            _answer(c)
+            c.send("(syn)")
+        _answer(c)
+        assert server.world.torso_position(i)[2] < 0.385  # landed

@@ -32,6 +32,8 @@ def _snapshot(world: World) -> dict:
         "accel": r.accel.copy(),
         "ball": world.ball_position(),
         "divergences": None,
+        "asleep": r.asleep,  # a robot moved at rest hangs asleep until a motor wakes it
+        "sleep_qpos": r.sleep_qpos.copy(),
     }
 
 
@@ -85,6 +87,8 @@ def test_kick_over_the_network_equals_in_process(make_server, clients):
     if start["q_ref"] is not None:
         r.q_ref[:] = start["q_ref"]
     r.prev_vel, r.accel = start["prev_vel"], start["accel"]
+    r.asleep, r.sleep_qpos = start["asleep"], start["sleep_qpos"]
+    world._update_sleepers()
     mujoco.mj_forward(world.model, world.data)
     for cmd in commands:
         world.step({0: cmd})  # a SimulationDivergedError fails the test
