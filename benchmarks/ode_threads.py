@@ -24,16 +24,12 @@ import numpy as np
 
 def run(threads: int, cycles: int, seed: int = 0) -> tuple[float, list[np.ndarray]]:
     """Cycles per second and the final state (torsos, joints, ball) with ``threads`` threads."""
-    from robocup_gym.sim.engines.ode import OdeWorld
+    from throughput import ode_22_robots  # this folder's benchmark: the same workload
+
     from robocup_gym.sim.engines.ode import lib as ode
 
     lib = ode.load()
-    w = OdeWorld([i % 5 for i in range(22)], seed=seed)
-    for i in range(22):
-        side, k = (-1, i) if i < 11 else (1, i - 11)
-        x, y = side * (1.0 + 1.2 * (k % 4)), -6.0 + 1.5 * k
-        w.place_robot(i, x, y, heading_deg=0.0 if side < 0 else 180.0)
-    w.place_ball((0.0, 0.0))
+    w, commands = ode_22_robots(seed)
     impl = pool = None
     if threads > 1:
         impl = lib.dThreadingAllocateMultiThreadedImplementation()
@@ -43,14 +39,6 @@ def run(threads: int, cycles: int, seed: int = 0) -> tuple[float, list[np.ndarra
         lib.dWorldSetStepThreadingImplementation(w._world, functions, impl)
         lib.dWorldSetStepIslandsProcessingMaxThreadCount(w._world, threads)
     try:
-        rng = np.random.default_rng(seed)
-        commands = [
-            {
-                i: rng.uniform(-1, 1, len(r.model.max_speeds)) * r.model.max_speeds
-                for i, r in enumerate(w.robots)
-            }
-            for _ in range(50)
-        ]
         t0 = time.perf_counter()
         for c in range(cycles):
             w.step(commands[c % len(commands)])

@@ -171,9 +171,10 @@ class OdeWorldRunner:
         self.cycles += done
 
 
-def ode_22_robots_cycles_per_s(cycles: int, seed: int = 0) -> float:
-    """22 robots of mixed types (0–4 in turn) flailing on the full field with the ball, on the
-    ODE engine, one core: cycles per second (a game's worth of physics)."""
+def ode_22_robots(seed: int = 0):
+    """``(world, commands)``: 22 robots of mixed types (0–4 in turn) in two teams' halves of the
+    full field with the ball, on the ODE engine, and 50 cycles of random joint velocities for all
+    of them (a game's worth of physics; also ``benchmarks/ode_threads.py``'s workload)."""
     from robocup_gym.sim.engines.ode import OdeWorld
 
     w = OdeWorld([i % 5 for i in range(22)], seed=seed)
@@ -190,6 +191,12 @@ def ode_22_robots_cycles_per_s(cycles: int, seed: int = 0) -> float:
         }
         for _ in range(50)
     ]
+    return w, commands
+
+
+def ode_22_robots_cycles_per_s(cycles: int, seed: int = 0) -> float:
+    """:func:`ode_22_robots` flailing, one core: cycles per second."""
+    w, commands = ode_22_robots(seed)
     for c in range(10):  # warm up
         w.step(commands[c])
     t0 = time.perf_counter()
