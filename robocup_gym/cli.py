@@ -436,10 +436,7 @@ if typer is not None:
     def experiments_paper(
         scale: Annotated[
             str,
-            typer.Option(
-                help="quick (11–25 min on 2 cores with --engine mujoco; longer on ode) or full "
-                "(5M steps)."
-            ),
+            typer.Option(help="quick (11–25 min on 2 cores) or full (5M steps)."),
         ] = "quick",
         out: Annotated[Path, typer.Option(help="Output folder.")] = Path("runs/paper"),
         only: Annotated[
