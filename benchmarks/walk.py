@@ -24,6 +24,8 @@ import math
 
 import numpy as np
 
+from robocup_gym.envs.observations import heading_frame
+
 COMMANDS = {
     "forward": (0.5, 0.0, 0.0),
     "sideways": (0.0, 0.3, 0.0),
@@ -40,7 +42,7 @@ def run(env, act, command, episodes: int, seed: int) -> dict:
         obs, info = env.reset(seed=seed + k, options={"velocity_command": command})
         start = u.torso_pos.copy()
         heading = math.radians(u.config.robot_start_heading_deg)
-        yaw0 = _yaw(u.ground_truth.torso_quat)
+        heading0 = _heading(u.ground_truth.torso_quat)
         done, steps = False, 0
         while not done:
             obs, _, terminated, truncated, info = env.step(act(obs))
@@ -50,7 +52,7 @@ def run(env, act, command, episodes: int, seed: int) -> dict:
         d = u.torso_pos - start
         fwd = d[0] * math.cos(heading) + d[1] * math.sin(heading)
         left = -d[0] * math.sin(heading) + d[1] * math.cos(heading)
-        dyaw = math.degrees(_wrap(_yaw(u.ground_truth.torso_quat) - yaw0))
+        dyaw = math.degrees(_wrap(_heading(u.ground_truth.torso_quat) - heading0))
         speeds.append(fwd / t)
         lefts.append(left / t)
         turns.append(dyaw / t)
@@ -64,9 +66,10 @@ def run(env, act, command, episodes: int, seed: int) -> dict:
     }
 
 
-def _yaw(quat) -> float:
-    w, x, y, z = quat
-    return math.atan2(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z))  # forward = torso +y
+def _heading(quat) -> float:
+    """Heading of the torso (rad, counter-clockwise from world +x, as the turn command)."""
+    cos, sin = heading_frame(quat)
+    return math.atan2(sin, cos)
 
 
 def _wrap(a: float) -> float:

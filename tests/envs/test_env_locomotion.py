@@ -173,3 +173,25 @@ def test_the_locomotion_benchmarks_print_json_last(script):
         assert res["turn_error_deg_s"] == pytest.approx(30.0, abs=1.0)
     else:
         assert res["success_rate"] == 0.0 and res["front"]["got_up"] == 0
+
+
+def test_the_walk_benchmark_measures_turning_counter_clockwise_positive():
+    """``benchmarks/walk.py`` compares its turn rate with the command's (CCW positive), so a torso
+    turned from heading 10° to 40° must read +30°, and across ±180° the short way."""
+    import importlib.util
+    from pathlib import Path
+
+    from robocup_gym.sim.engines.mujoco.world import heading_to_quat
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "walk.py"
+    spec = importlib.util.spec_from_file_location("walk_benchmark", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+
+    def turned(a_deg: float, b_deg: float) -> float:
+        h = bench._heading
+        return math.degrees(bench._wrap(h(heading_to_quat(b_deg)) - h(heading_to_quat(a_deg))))
+
+    assert turned(10.0, 40.0) == pytest.approx(30.0, abs=1e-9)
+    assert turned(40.0, 10.0) == pytest.approx(-30.0, abs=1e-9)
+    assert turned(170.0, -170.0) == pytest.approx(20.0, abs=1e-9)
