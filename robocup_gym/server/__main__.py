@@ -160,8 +160,8 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
         "--engine",
         choices=("mujoco", "ode"),
         default="mujoco",
-        help="physics engine; serve runs on mujoco for now (the ODE engine has no walls, "
-        "goals or referee yet)",
+        help="physics engine; serve runs on mujoco for now (the ODE engine has no referee "
+        "or monitor scene yet)",
     )
     p.add_argument(
         "--decimals",
@@ -204,8 +204,8 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
     args = parser.parse_args(argv)
     if args.engine != "mujoco":
         parser.error(
-            "serve does not run on the ODE engine yet (it has no walls, goals, referee or "
-            "monitor scene); use --engine mujoco (the default here)"
+            "serve does not run on the ODE engine yet (it has no referee or monitor scene); "
+            "use --engine mujoco (the default here)"
         )
     if args.agent_port == args.monitor_port and args.agent_port != 0:
         parser.error(

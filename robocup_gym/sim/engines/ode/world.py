@@ -13,9 +13,9 @@ joint is not strictly inside its limits, wake the body on a non-zero command, §
 Since session 10 it is the default engine of the environments. It has every body perceptor
 (joint angles, gyro, accelerometer, the foot force perceptors from ODE's contact feedback, as
 SimSpark computes them), and the game state, hearing, vision and perception of
-:mod:`robocup_gym.sim.senses`, the same code as the MuJoCo world's. It has no referee and no
-walls or goals yet (what environments need happens on the open field; ``robocup-gym serve``
-still runs on the MuJoCo world). What it settles is how ODE's own
+:mod:`robocup_gym.sim.senses`, the same code as the MuJoCo world's, and the field's walls and
+goals (:mod:`robocup_gym.sim.field`). It has no referee yet (``robocup-gym serve`` still runs on
+the MuJoCo world). What it settles is how ODE's own
 solver, contact generation, joint stops and motor-at-stop rules behave for a given motion,
 which the MuJoCo translation (:mod:`robocup_gym.sim.engines.mujoco.world`) can then be compared with
 (``benchmarks/ode_compare.py``). It needs the system library ``libode``
