@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import mujoco
 import numpy as np
 
 from robocup_gym.backends import make_backend
@@ -136,7 +137,8 @@ class GetUp(BaseEnv):
             tilt = math.radians(80.0) * (1.0 if side == "front" else -1.0)
             yaw = _quat_about((0.0, 0.0, 1.0), -math.pi / 2)
             pitch = _quat_about((0.0, 1.0, 0.0), tilt)
-            quat = _quat_mul(pitch, yaw)
+            quat = np.zeros(4)
+            mujoco.mju_mulQuat(quat, pitch, yaw)  # the yaw, then the pitch
             n = len(self.robot_model.joints)
             x, y = self.config.robot_start_pos
             # in a world of its own where the environment made its backend, so that the
@@ -246,19 +248,6 @@ class GetUp(BaseEnv):
 
 def _quat_about(axis, angle: float) -> np.ndarray:
     """Unit quaternion (w, x, y, z) of a rotation by ``angle`` rad about unit ``axis``."""
-    s = math.sin(angle / 2)
-    return np.array([math.cos(angle / 2), axis[0] * s, axis[1] * s, axis[2] * s])
-
-
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The rotation ``b`` followed by ``a`` (Hamilton product ``a · b``)."""
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return np.array(
-        [
-            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-        ]
-    )
+    q = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(q, np.asarray(axis, dtype=float), angle)
+    return q
