@@ -13,7 +13,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from robocup_gym.backends import make_backend
@@ -137,8 +136,7 @@ class GetUp(BaseEnv):
             tilt = math.radians(80.0) * (1.0 if side == "front" else -1.0)
             yaw = _quat_about((0.0, 0.0, 1.0), -math.pi / 2)
             pitch = _quat_about((0.0, 1.0, 0.0), tilt)
-            quat = np.zeros(4)
-            mujoco.mju_mulQuat(quat, pitch, yaw)  # the yaw, then the pitch
+            quat = _quat_mul(pitch, yaw)
             n = len(self.robot_model.joints)
             x, y = self.config.robot_start_pos
             # in a world of its own where the environment made its backend, so that the
@@ -247,7 +245,19 @@ class GetUp(BaseEnv):
 
 
 def _quat_about(axis, angle: float) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation by ``angle`` rad about unit ``axis``."""
+    """Unit quaternion (w, x, y, z) of a rotation by ``angle`` rad about unit ``axis``
+    (MuJoCo's ``mju_axisAngle2Quat``)."""
+    import mujoco  # not at import time: importing mujoco fails on a bad MUJOCO_GL
+
     q = np.zeros(4)
     mujoco.mju_axisAngle2Quat(q, np.asarray(axis, dtype=float), angle)
+    return q
+
+
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation ``b`` followed by ``a`` (MuJoCo's ``mju_mulQuat``: ``a · b``)."""
+    import mujoco
+
+    q = np.zeros(4)
+    mujoco.mju_mulQuat(q, np.asarray(a, dtype=float), np.asarray(b, dtype=float))
     return q
