@@ -60,17 +60,13 @@ class EpisodeStatsCallback(BaseCallback):
         self._ep_returns: np.ndarray | None = None
         self._ep_lengths: np.ndarray | None = None
         self._last_row_steps = -1
-        self._rate_t = self._t0
-        self._rate_steps = 0
-        self.steps_per_s = 0.0
 
     # ------------------------------------------------------------------ SB3 hooks
     def _on_training_start(self) -> None:
         # num_timesteps is the model's here (a resumed run's earlier steps included); in
         # _init_callback it is still 0, which made a resumed run's rate count its earlier steps
         self._t0 = time.perf_counter()
-        self._rate_t = self._t0
-        self._rate_steps = self._start_steps = self.num_timesteps
+        self._start_steps = self.num_timesteps
         n = self.training_env.num_envs
         self._ep_returns = np.zeros(n)
         self._ep_lengths = np.zeros(n, dtype=int)
@@ -96,10 +92,6 @@ class EpisodeStatsCallback(BaseCallback):
                 if self._ep_returns is not None:
                     self._ep_returns[i] = 0.0
                     self._ep_lengths[i] = 0
-        now = time.perf_counter()
-        if now - self._rate_t >= 2.0:
-            self.steps_per_s = (self.num_timesteps - self._rate_steps) / (now - self._rate_t)
-            self._rate_t, self._rate_steps = now, self.num_timesteps
         return True
 
     def _on_rollout_end(self) -> None:
