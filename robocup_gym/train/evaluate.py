@@ -156,7 +156,7 @@ class FrameRecorder:
         else:
             raise RuntimeError(
                 "this environment cannot be rendered: it has no render_mode='rgb_array' and no "
-                "embedded MuJoCo world (video needs the mujoco backend)"
+                "in-process world (video needs the ode or mujoco engine, not a real server)"
             )
         self.frames.append(np.asarray(frame, dtype=np.uint8))
 
