@@ -30,7 +30,7 @@ from robocup_gym.backends.base import (
     RobotPose,
 )
 from robocup_gym.robot.nao import NaoModel
-from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError
+from robocup_gym.sim import SimulationDivergedError
 from robocup_gym.sim.render import FollowCamera, ScenePoser
 from robocup_gym.sim.vision import VisionConfig
 from robocup_gym.types import AgentCommand, Perception

@@ -57,7 +57,7 @@ from robocup_gym.server.wire import (
     trainer_commands,
 )
 from robocup_gym.server.worldhost import WorldHost
-from robocup_gym.sim.engines.mujoco.world import SimulationDivergedError
+from robocup_gym.sim import SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator
 from robocup_gym.sim.vision import VisionConfig
 

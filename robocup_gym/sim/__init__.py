@@ -14,10 +14,15 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-__all__ = ["ENGINES", "make_world"]
+__all__ = ["ENGINES", "SimulationDivergedError", "make_world"]
 
 ENGINES = ("ode", "mujoco")
 """The physics engines, default first."""
+
+
+class SimulationDivergedError(RuntimeError):
+    """The physics produced NaN/inf or the engine reported an instability; call the world's
+    ``reset``."""
 
 
 def make_world(robot_types: Sequence[int] = (0,), *, engine: str = "ode", **options: Any):

@@ -42,16 +42,10 @@ from robocup_gym.protocol.effectors import format_command, format_init, format_s
 from robocup_gym.protocol.framing import FrameDecoder, decode_payload, recv_frame, send_frame
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim.pose import heading_to_quat
 from robocup_gym.types import AgentCommand, GroundTruth, Perception
 
 CYCLE_S = 0.02
-
-
-def _yaw_quat(heading_deg: float) -> np.ndarray:
-    """Torso quaternion (w, x, y, z) of an upright robot facing ``heading_deg`` (0 = +x): the
-    torso's forward axis is its +y, so the body is turned by ``heading − 90°`` about z."""
-    half = math.radians(heading_deg - 90.0) / 2.0
-    return np.array([math.cos(half), 0.0, 0.0, math.sin(half)])
 
 
 class _Geometry:
@@ -208,7 +202,7 @@ class AgentConnectionBackend(Backend):
             ball_pos=ball,
             ball_vel=ball_vel,
             torso_pos=head - np.array([0.0, 0.0, self._head_dz]),
-            torso_quat=_yaw_quat(heading),
+            torso_quat=heading_to_quat(heading),
         )
 
     def _need_ground_truth(self, cycles: int = 12) -> None:

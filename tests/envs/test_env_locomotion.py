@@ -181,7 +181,7 @@ def test_the_walk_benchmark_measures_turning_counter_clockwise_positive():
     import importlib.util
     from pathlib import Path
 
-    from robocup_gym.sim.engines.mujoco.world import heading_to_quat
+    from robocup_gym.sim.pose import heading_to_quat
 
     path = Path(__file__).resolve().parents[2] / "benchmarks" / "walk.py"
     spec = importlib.util.spec_from_file_location("walk_benchmark", path)

@@ -34,6 +34,7 @@ except ImportError:  # numpy < 2
     from numpy.core.umath import clip as _clip
 
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim import SimulationDivergedError
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.engines.mujoco.scene import (
@@ -45,6 +46,7 @@ from robocup_gym.sim.engines.mujoco.scene import (
 )
 from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
+from robocup_gym.sim.pose import heading_to_quat, joint_angles_array, joint_index
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import (
@@ -85,10 +87,6 @@ def _contiguous(ids: np.ndarray) -> slice | None:
     if n and np.array_equal(ids, np.arange(ids[0], ids[0] + n)):
         return slice(int(ids[0]), int(ids[0]) + n)
     return None
-
-
-class SimulationDivergedError(RuntimeError):
-    """The physics produced NaN/inf or MuJoCo reported an instability; call :meth:`World.reset`."""
 
 
 @dataclass(kw_only=True)
@@ -141,56 +139,6 @@ class RobotState(AgentState):
     with a moving body wakes it (see :meth:`World.place_robot`)."""
     sleep_qpos: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Root pose (7) and joint angles at which a sleeping robot is held."""
-
-
-def yaw_quat(yaw_rad: float) -> np.ndarray:
-    """Quaternion (w, x, y, z) of a rotation by ``yaw_rad`` about world z."""
-    return np.array([math.cos(yaw_rad / 2), 0.0, 0.0, math.sin(yaw_rad / 2)])
-
-
-def heading_to_quat(heading_deg: float) -> np.ndarray:
-    """Torso orientation for a robot whose forward (+y of the torso) points at ``heading_deg``
-    (0 = world +x, counter-clockwise positive)."""
-    return yaw_quat(math.radians(heading_deg - 90.0))
-
-
-def joint_index(model: NaoModel, name: str) -> int:
-    """Canonical index of the joint called ``name`` (effector, perceptor or Nao-style name).
-
-    Raises:
-        KeyError: naming the robot type and listing the valid effector names.
-    """
-    try:
-        return model.joint_index[name]
-    except KeyError:
-        raise KeyError(
-            f"unknown joint {name!r} for robot type {model.robot_type.index}; valid effector "
-            f"names: {', '.join(model.effector_names)}"
-        ) from None
-
-
-def joint_angles_array(model: NaoModel, angles: Mapping[str, float] | np.ndarray) -> np.ndarray:
-    """Joint angles (degrees) in canonical order, from ``{name: deg}`` (others 0) or an array.
-
-    Raises:
-        KeyError: an unknown joint name.
-        ValueError: an array of the wrong shape or an angle that is not finite (naming it).
-    """
-    n = len(model.joints)
-    if isinstance(angles, Mapping):
-        out = np.zeros(n)
-        for name, v in angles.items():
-            out[joint_index(model, name)] = float(v)
-    else:
-        out = np.asarray(angles, float)
-        if out.shape != (n,):
-            raise ValueError(f"joint angle array must have shape ({n},), got {out.shape}")
-    bad = ~np.isfinite(out)
-    if bad.any():
-        raise ValueError(
-            f"joint angle of {model.effector_names[int(np.argmax(bad))]} is not finite"
-        )
-    return out
 
 
 class World(Senses):

@@ -40,19 +40,15 @@ import mujoco
 import numpy as np
 
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim import SimulationDivergedError
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.engines.mujoco.scene import FRP_GEOMS
-from robocup_gym.sim.engines.mujoco.world import (
-    SimulationDivergedError,
-    heading_to_quat,
-    joint_angles_array,
-    joint_index,
-)
 from robocup_gym.sim.engines.ode import lib as ode
 from robocup_gym.sim.engines.ode.fast import SANE_SPEED, FastLoops
 from robocup_gym.sim.engines.ode.fast import load as load_fast
 from robocup_gym.sim.field import GOAL_BOXES, WALLS
+from robocup_gym.sim.pose import heading_to_quat, joint_angles_array, joint_index
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import ForceResistance, GameState, GroundTruth
@@ -592,7 +588,7 @@ class OdeWorld(Senses):
         self._check_sane()
 
     def _check_sane(self) -> None:
-        """Raise :class:`~robocup_gym.sim.engines.mujoco.world.SimulationDivergedError` (as the
+        """Raise :class:`~robocup_gym.sim.SimulationDivergedError` (as the
         MuJoCo world
         does) when a body left the finite, plausible range (NaN/inf, or 1 km away): ODE blew up.
         Re-placing the ball and every robot recovers."""
