@@ -64,23 +64,27 @@ EPISODE_CYCLES = 60
 40 steps + 20 wait cycles)."""
 
 # ----------------------------------------------------------------------------------------------
-# HOOK for further measurements (the lead adds ``serve_sync_cycles_per_s`` here): every entry is
-# ``name -> function(quick: bool) -> float`` and its result is added to the JSON under ``name``.
-# Example:
-#     from robocup_gym.server.bench import serve_sync_cycles_per_s
-#     EXTRA_MEASUREMENTS["serve_sync_cycles_per_s"] = serve_sync_cycles_per_s
+# Further measurements: every entry is ``name -> function(quick: bool) -> float`` and its result
+# is added to the JSON under ``name``.
 EXTRA_MEASUREMENTS: dict[str, Callable[[bool], float]] = {}
 
 
-def _serve_sync_cycles_per_s(quick: bool) -> float:
-    """``robocup-gym serve`` in sync mode, one agent sending all 22 joints + (syn) each cycle and
-    parsing every percept (the real server does 1,361 cycles/s here with such a client)."""
-    from robocup_gym.server.bench import measure_sync_cycles_per_s
+def _serve_sync_cycles_per_s(engine: str) -> Callable[[bool], float]:
+    def measure(quick: bool) -> float:
+        """``robocup-gym serve --engine <engine>`` in sync mode, one agent sending all 22 joints
+        + (syn) each cycle and parsing every percept (the real server does 1,361 cycles/s here
+        with such a client)."""
+        from robocup_gym.server.bench import measure_sync_cycles_per_s
 
-    return measure_sync_cycles_per_s(0.5 if quick else 3.0)
+        return measure_sync_cycles_per_s(0.5 if quick else 3.0, engine=engine)
+
+    return measure
 
 
-EXTRA_MEASUREMENTS["serve_sync_cycles_per_s"] = _serve_sync_cycles_per_s
+# the MuJoCo engine's key keeps its name from the time serve ran on MuJoCo only
+EXTRA_MEASUREMENTS["serve_sync_cycles_per_s"] = _serve_sync_cycles_per_s("mujoco")
+if ode_available():
+    EXTRA_MEASUREMENTS["serve_ode_sync_cycles_per_s"] = _serve_sync_cycles_per_s("ode")
 # ----------------------------------------------------------------------------------------------
 
 

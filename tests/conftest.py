@@ -2,23 +2,37 @@
 
 from __future__ import annotations
 
+import tempfile
 import threading
 
 import pytest
 
 from robocup_gym.server import SimServer
+from robocup_gym.sim import ENGINES
 
 HOST = "127.0.0.1"
 
 
-@pytest.fixture
-def make_server():
+@pytest.fixture(autouse=True, scope="session")
+def _private_tempdir(tmp_path_factory):
+    """Temporary files of the session under pytest's own folder: Stable-Baselines3 makes a
+    ``SB3-<time>`` folder in the system's temporary directory for every model that learns
+    without a logger of its own, which would otherwise pile up in /tmp run after run."""
+    old = tempfile.tempdir
+    tempfile.tempdir = str(tmp_path_factory.mktemp("tmp"))
+    yield
+    tempfile.tempdir = old
+
+
+@pytest.fixture(params=ENGINES)
+def make_server(request):
     """``make_server(**options)`` → a started :class:`SimServer` on free loopback ports
-    (sync mode, real time off unless overridden); stopped after the test, even on failure."""
+    (sync mode, real time off unless overridden); stopped after the test, even on failure.
+    Every test that uses it runs once per physics engine (``server.engine`` says which)."""
     servers: list[SimServer] = []
 
     def factory(**options) -> SimServer:
-        opts = {"sync": True, "real_time": False, "seed": 1}
+        opts = {"sync": True, "real_time": False, "seed": 1, "engine": request.param}
         opts.update(options)
         server = SimServer(0, 0, HOST, **opts)
         servers.append(server)

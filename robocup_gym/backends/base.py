@@ -62,7 +62,8 @@ class RobotPose:
             team's goal).
         heading_deg: Direction the robot faces, degrees (0 = world +x, counter-clockwise positive).
         joint_angles_deg: Joint angles in degrees, canonical order (see
-            :mod:`robocup_gym.robot.nao`) or by effector/perceptor name (others 0).
+            :mod:`robocup_gym.robot.nao`) or by effector/perceptor name (others 0); ``None``:
+            all 0.
         z: Torso centre height, m; ``None`` puts the robot's lowest point on the ground.
         quat: Full torso orientation ``(w, x, y, z)`` instead of an upright robot facing
             ``heading_deg`` (e.g. lying on its back); the in-process engines place it, a real

@@ -98,13 +98,16 @@ class OdeBackend(Backend):
         w = self.world
         if seed is not None:
             w.reseed(seed)
+        angles = pose.joint_angles_deg
+        if angles is None:  # all 0 (the world's own None keeps the current angles)
+            angles = np.zeros(len(w.robots[0].model.joints))
         w.place_robot(
             0,
             pose.x,
             pose.y,
             heading_deg=pose.heading_deg,
             z=pose.z,
-            joint_angles_deg=pose.joint_angles_deg,
+            joint_angles_deg=angles,
             quat=pose.quat,
         )
         w.place_ball(ball_pos, ball_vel)

@@ -24,6 +24,13 @@ command delay, clipped to each joint's maximum speed); then one trainer frame pu
 at its standing height, places the ball, sets the play mode and game time 0, and the backend
 steps until the monitor and the percept show the new state. Cycles and milliseconds of every
 reset are in :attr:`~Rcssserver3dBackend.last_reset`.
+
+A joint that sits on one of its stops cannot be driven off it: rcssserver3d takes a joint's new
+velocity only while the joint is strictly inside its limits and otherwise keeps the old one
+(spec §8.3), so a joint that the last command pushed onto a stop (a hip yaw after a fall, say)
+stays there for the rest of the session. The reset notices such a joint (on a stop, not moving
+although commanded, for :data:`PINNED_CYCLES` cycles), stops waiting for it, reports it in
+:attr:`ResetStats.pinned` and logs a warning once per joint.
 """
 
 from __future__ import annotations
@@ -431,6 +438,12 @@ def _quat_from_matrix(r: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------------------------------
 
 
+PINNED_CYCLES = 5
+"""Cycles a joint must sit on a stop without moving, although commanded, to count as pinned."""
+_STOP_TOLERANCE_DEG = 0.011
+"""How close to a stop a perceived angle must be to count as on it (``HJ`` has 2 decimals)."""
+
+
 @dataclass
 class ResetStats:
     """How one :meth:`Rcssserver3dBackend.reset_episode` went."""
@@ -446,7 +459,11 @@ class ResetStats:
     max_joint_error_deg: float
     """Largest |start angle − perceived angle| in the returned perception, degrees."""
     converged: bool
-    """All joints reached the tolerance within ``reset_max_cycles``."""
+    """Every joint the server lets move (all but :attr:`pinned`) reached the tolerance within
+    ``reset_max_cycles``."""
+    pinned: tuple[str, ...] = ()
+    """Joints (perceptor names) that sit on a stop the server will not let them leave (see
+    the module docstring); the reset did not wait for them."""
 
 
 def _release(links: list[_Link], server: ServerProcess | None) -> None:
@@ -526,6 +543,8 @@ class Rcssserver3dBackend(Backend):
         self._n = n
         self._vmax = self._model.max_speeds.astype(float)
         self._ranges = self._model.ranges_deg.astype(float)
+        self._perceptor_names = tuple(self._model.perceptor_names)
+        self._pins_reported: set[str] = set()
         self.team = str(team)
         self.requested_unum = int(unum)
         format_init(self.requested_unum, self.team)  # validates both
@@ -941,13 +960,26 @@ class Rcssserver3dBackend(Backend):
         gain = self.reset_gain
         hovered = False
         joint_cycles = 0
+        lo, hi = self._ranges[:, 0], self._ranges[:, 1]
+        stuck = np.zeros(self._n, dtype=int)  # cycles on a stop without moving, commanded
+        q_before = None
         while True:
             q = np.asarray(p.joint_angles_deg, dtype=float)
             q = np.where(np.isfinite(q), q, target)  # never command from a NaN reading
             # the command sent last acts in the server's next physics step, before ours does
             predicted = q + np.degrees(self._targets * CYCLE_S)
             err = target - predicted
-            done = bool(np.abs(err).max() <= tol)
+            # a joint on a stop that should leave it: wait until it moves or counts as pinned
+            off = target - q
+            on_stop = (q >= hi - _STOP_TOLERANCE_DEG) | (q <= lo + _STOP_TOLERANCE_DEG)
+            on_stop &= np.abs(off) > tol
+            if q_before is not None:  # (the controller below keeps commanding it off the stop)
+                still = np.abs(q - q_before) < _STOP_TOLERANCE_DEG
+                stuck = np.where(on_stop & still, stuck + 1, 0)
+            q_before = q
+            pinned = stuck >= PINNED_CYCLES
+            done = bool(np.abs(np.where(pinned, 0.0, err)).max() <= tol)
+            done = done and not (on_stop & ~pinned).any()
             if (done and hovered) or joint_cycles >= self.reset_max_cycles:
                 break
             v = np.clip(gain * np.radians(err) / CYCLE_S, -self._vmax, self._vmax)
@@ -964,8 +996,7 @@ class Rcssserver3dBackend(Backend):
                 and s.torso[2, 3] > z + 0.5 * self.hover_height
             ):
                 hovered = True
-        converged = bool(np.abs(target - (q + np.degrees(self._targets * CYCLE_S))).max() <= tol)
-        if not converged:
+        if not done:
             log.warning(
                 "reset: joints not at their start angles after %d cycles (largest error %.1f deg)",
                 joint_cycles,
@@ -1002,7 +1033,20 @@ class Rcssserver3dBackend(Backend):
         p.ground_truth = self._ground_truth(p)
         self._last = p
         ms = (time.perf_counter() - t0) * 1e3
-        err_now = float(np.abs(target - np.asarray(p.joint_angles_deg, dtype=float)).max())
+        off_now = np.abs(target - np.asarray(p.joint_angles_deg, dtype=float))
+        err_now = float(off_now.max())
+        # a joint counted as pinned that did leave its stop in the end (a slow release) is not
+        pinned &= off_now > tol
+        pinned_names = tuple(n for n, k in zip(self._perceptor_names, pinned, strict=True) if k)
+        new_pins = set(pinned_names) - self._pins_reported
+        if new_pins:
+            self._pins_reported |= new_pins
+            log.warning(
+                "reset: %s sit(s) on a joint stop; rcssserver3d ignores velocity commands for a "
+                "joint that is not strictly inside its limits (spec §8.3), so it stays there",
+                ", ".join(sorted(new_pins)),
+            )
+        converged = done
         self.last_reset = ResetStats(
             cycles=joint_cycles + settle,
             joint_cycles=joint_cycles,
@@ -1010,6 +1054,7 @@ class Rcssserver3dBackend(Backend):
             ms=ms,
             max_joint_error_deg=err_now,
             converged=converged,
+            pinned=pinned_names,
         )
         self.resets += 1
         log.debug("reset %d: %s", self.resets, self.last_reset)

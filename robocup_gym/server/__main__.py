@@ -158,10 +158,10 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
     )
     p.add_argument(
         "--engine",
-        choices=("mujoco", "ode"),
-        default="mujoco",
-        help="physics engine; serve runs on mujoco for now (the ODE engine has no referee "
-        "or monitor scene yet)",
+        choices=("ode", "mujoco"),
+        default="ode",
+        help="physics engine: ode (SimSpark's own step, as rcssserver3d; the default) or "
+        "mujoco (the fast approximation)",
     )
     p.add_argument(
         "--decimals",
@@ -202,11 +202,6 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
     if first.config is not None:
         parser.set_defaults(**_load_config(parser, first.config))
     args = parser.parse_args(argv)
-    if args.engine != "mujoco":
-        parser.error(
-            "serve does not run on the ODE engine yet (it has no referee or monitor scene); "
-            "use --engine mujoco (the default here)"
-        )
     if args.agent_port == args.monitor_port and args.agent_port != 0:
         parser.error(
             f"--agent-port and --monitor-port are both {args.agent_port}; agents and monitors "
@@ -231,6 +226,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
             decimals=args.decimals,
             robot_types=args.robot_types,
             type_limits=args.type_limits,
+            engine=args.engine,
         )
     except PortInUseError as exc:
         print(f"{prog}: error: {exc.strerror}", file=sys.stderr)

@@ -9,16 +9,25 @@ does, so server and client can use both cores), one agent does ``scene``/``init`
 sends all 22 joints (FC Portugal's ``%.5f`` format) + ``(syn)`` per percept, parsing each percept
 with :func:`robocup_gym.protocol.perceptors.parse_perception`.
 
-Run it: ``python -m robocup_gym.server.bench [seconds]``.
+:func:`measure_team_cycles_per_s` is the full-game figure: 22 agents (11 a side, types 0–4
+mixed), each a thread with its own connection that beams to its own spot and then sends 22 joint
+velocities + ``(syn)`` per percept and parses every percept; the server steps when all 22 have
+synced, so this is the cycle rate of a whole game in sync mode.
+
+Run it: ``python -m robocup_gym.server.bench [seconds] [--engine ode|mujoco] [--agents N]``
+(prints one JSON line).
 """
 
 from __future__ import annotations
 
+import argparse
+import json
 import math
 import os
 import re
 import subprocess
 import sys
+import threading
 import time
 
 from robocup_gym.protocol.perceptors import parse_perception
@@ -109,12 +118,12 @@ def run_agent(port: int, seconds: float, host: str = "127.0.0.1") -> tuple[int, 
         return k - warm, (end or time.perf_counter()) - start
 
 
-def measure_sync_cycles_per_s(seconds: float = 3.0) -> float:
+def measure_sync_cycles_per_s(seconds: float = 3.0, engine: str = "ode") -> float:
     """Cycles per second of the server in sync mode with real time off (see module docstring).
 
     Starts the server as a subprocess on free loopback ports and stops it afterwards.
     """
-    proc, agent_port, _ = start_server_process("--sync", "--no-real-time")
+    proc, agent_port, _ = start_server_process("--sync", "--no-real-time", "--engine", engine)
     try:
         cycles, elapsed = run_agent(agent_port, seconds)
     finally:
@@ -122,6 +131,95 @@ def measure_sync_cycles_per_s(seconds: float = 3.0) -> float:
     return cycles / elapsed
 
 
+def run_team(
+    port: int, n_agents: int, seconds: float, host: str = "127.0.0.1"
+) -> tuple[int, float]:
+    """Connect ``n_agents`` agents (one thread each; left team first, robot types 0–4 in turn),
+    beam them apart and step them all for ``seconds``; returns (cycles of agent 0, elapsed s).
+
+    Raises:
+        RuntimeError: an agent's thread failed (its error is chained).
+    """
+    names = nao_model(0).effector_names
+    stop = threading.Event()
+    joined = threading.Barrier(n_agents + 1)
+    counts = [0] * n_agents
+    errors: list[BaseException] = []
+    window: list[float] = []
+
+    def agent_main(i: int) -> None:
+        side, k = ("Left", i) if i < (n_agents + 1) // 2 else ("Right", i - (n_agents + 1) // 2)
+        try:
+            with AgentClient(host, port) as agent:
+                agent.handshake(side, k + 1, i % 5, syn=True)
+                agent.send(f"(beam {-1.0 - 1.5 * (k % 4):.2f} {-7.5 + 1.4 * k:.2f} 0)(syn)")
+                parse_perception(agent.recv(), i % 5)
+                joined.wait()
+                while not stop.is_set():
+                    v = 0.5 * math.sin(counts[i] * 0.05)
+                    msg = "".join(
+                        f"({n} {v if n in ('he1', 'lae1', 'rae1') else 0.0:.5f})" for n in names
+                    )
+                    agent.send(msg + "(syn)")
+                    parse_perception(agent.recv(), i % 5)
+                    counts[i] += 1
+        except BaseException as exc:  # reported by the caller
+            errors.append(exc)
+            stop.set()
+            joined.abort()
+
+    threads = [threading.Thread(target=agent_main, args=(i,), daemon=True) for i in range(n_agents)]
+    for t in threads:
+        t.start()
+    try:
+        joined.wait(timeout=120.0)
+        time.sleep(0.5)  # warm-up
+        c0, t0 = counts[0], time.perf_counter()
+        time.sleep(seconds)
+        c1, t1 = counts[0], time.perf_counter()
+        window.extend((c1 - c0, t1 - t0))
+    except threading.BrokenBarrierError:
+        pass
+    finally:
+        stop.set()
+        for t in threads:
+            t.join(30.0)
+    if errors or not window:
+        raise RuntimeError(f"an agent failed: {errors[0] if errors else 'no start'}") from (
+            errors[0] if errors else None
+        )
+    return int(window[0]), window[1]
+
+
+def measure_team_cycles_per_s(
+    seconds: float = 5.0, engine: str = "ode", n_agents: int = 22
+) -> float:
+    """Cycles per second of a sync-mode game with ``n_agents`` agents (see module docstring),
+    server as a subprocess on free loopback ports, real time off."""
+    proc, agent_port, _ = start_server_process(
+        "--sync", "--no-real-time", "--no-type-limits", "--engine", engine
+    )
+    try:
+        cycles, elapsed = run_team(agent_port, n_agents, seconds)
+    finally:
+        stop_server_process(proc)
+    return cycles / elapsed
+
+
 if __name__ == "__main__":  # pragma: no cover
-    secs = float(sys.argv[1]) if len(sys.argv) > 1 else 3.0
-    print(f"serve_sync_cycles_per_s: {measure_sync_cycles_per_s(secs):.0f}")
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("seconds", type=float, nargs="?", default=3.0)
+    parser.add_argument("--engine", choices=("ode", "mujoco"), default="ode")
+    parser.add_argument("--agents", type=int, default=22, help="agents of the full-game figure")
+    args = parser.parse_args()
+    one = measure_sync_cycles_per_s(args.seconds, args.engine)
+    team = measure_team_cycles_per_s(args.seconds, args.engine, args.agents)
+    print(
+        json.dumps(
+            {
+                "engine": args.engine,
+                "serve_sync_cycles_per_s": round(one),
+                f"serve_{args.agents}_agents_cycles_per_s": round(team, 1),
+            }
+        )
+    )

@@ -22,7 +22,6 @@ import numpy as np
 
 from robocup_gym.protocol.constants import DEFAULT_ENVIRONMENT, PLAY_MODES, play_mode_id
 from robocup_gym.protocol.values import fmt_g
-from robocup_gym.sim.engines.mujoco.world import World
 
 SLT_THRESHOLD = 0.005
 
@@ -147,6 +146,18 @@ def _robot_layout(robot_type: int) -> list[tuple[str, str, object]]:
     return out
 
 
+def _transforms(pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """(n, 16) column-major 4×4 transforms (SparkMonitor's ``SLT``) of bodies with centres
+    ``pos`` (n, 3) and rotations ``rot`` (n, 3, 3)."""
+    out = np.zeros((len(pos), 16))
+    out[:, 0:3] = rot[:, :, 0]  # column j = body axis j
+    out[:, 4:7] = rot[:, :, 1]
+    out[:, 8:11] = rot[:, :, 2]
+    out[:, 12:15] = pos
+    out[:, 15] = 1.0
+    return out
+
+
 def _fmt16(row: list[float]) -> str:
     return "(SLT " + " ".join([f"{v:g}" for v in row]) + ")"
 
@@ -171,15 +182,15 @@ class MonitorStream:
         self._layouts: dict[int, list[tuple[str, str, object]]] = {}
         self._sent: dict[int, np.ndarray] = {}
         """Per agent key: the SLT values last sent for its bodies, (n_bodies, 16)."""
-        self._ids_world: World | None = None
-        self._ids: dict[str, np.ndarray] = {}
+        self._order: dict[int, np.ndarray] = {}
+        """Per robot type: the model's body index of each body of the monitor layout."""
         self._ball_sent: np.ndarray | None = None
         self._structure: tuple | None = None
         self._env_sent: dict[str, object] = {}
         self._team_names_sent: set[str] = set()
 
     # ------------------------------------------------------------------ environment
-    def _game_values(self, world: World, half: int, teams: dict[str, str]) -> dict[str, object]:
+    def _game_values(self, world, half: int, teams: dict[str, str]) -> dict[str, object]:
         g = world.game
         return {
             "team_left": teams.get("left"),
@@ -190,7 +201,7 @@ class MonitorStream:
             "play_mode": play_mode_id(g.play_mode) if g.play_mode in PLAY_MODES else 21,
         }
 
-    def _env_full(self, world: World, half: int, teams: dict[str, str]) -> str:
+    def _env_full(self, world, half: int, teams: dict[str, str]) -> str:
         vals = self._game_values(world, half, teams)
         parts = [ENVIRONMENT_HEADER, f"(time {fmt_g(world.game.game_time)})"]
         for key in ("team_left", "team_right"):
@@ -201,7 +212,7 @@ class MonitorStream:
         self._env_sent = dict(vals)
         return "(" + "".join(parts) + ")"
 
-    def _env_delta(self, world: World, half: int, teams: dict[str, str]) -> str:
+    def _env_delta(self, world, half: int, teams: dict[str, str]) -> str:
         vals = self._game_values(world, half, teams)
         parts = [f"(time {fmt_g(world.game.game_time)})"]
         for key in ("team_left", "team_right", "half", "score_left", "score_right", "play_mode"):
@@ -221,20 +232,16 @@ class MonitorStream:
     def needs_full(self, robots: list[RobotView]) -> bool:
         return self.structure_of(robots) != self._structure
 
-    def _poses(self, world: World, r: RobotView) -> np.ndarray:
+    def _poses(self, world, r: RobotView) -> np.ndarray:
         """(n_bodies, 16) column-major world transforms of the robot's bodies, layout order."""
-        rs = world.robots[r.robot_index]  # type: ignore[index]
+        index = r.robot_index
         layout = self._layout(r.robot_type)
-        ids = self._body_ids(world, rs.prefix, layout)
-        d = world.data
-        out = np.zeros((len(ids), 16))
-        mats = d.xmat[ids]  # row-major R: R[i][j] at 3i+j; column j = body axis j
-        out[:, 0:3] = mats[:, [0, 3, 6]]
-        out[:, 4:7] = mats[:, [1, 4, 7]]
-        out[:, 8:11] = mats[:, [2, 5, 8]]
-        out[:, 12:15] = d.xpos[ids]
-        out[:, 15] = 1.0
-        return out
+        order = self._order.get(r.robot_type)
+        if order is None:  # layout position → position in the model's body list
+            names = [b.name for b in world.robots[index].model.bodies]  # type: ignore[index]
+            order = self._order[r.robot_type] = np.array([names.index(b) for b, _, _ in layout])
+        pos, rot = world.body_frames(index)
+        return _transforms(pos[order], rot[order])
 
     def _layout(self, robot_type: int) -> list[tuple[str, str, object]]:
         lay = self._layouts.get(robot_type)
@@ -242,27 +249,9 @@ class MonitorStream:
             lay = self._layouts[robot_type] = _robot_layout(robot_type)
         return lay
 
-    def _body_ids(self, world: World, prefix: str, layout) -> np.ndarray:
-        if world is not self._ids_world:
-            self._ids_world = world
-            self._ids = {}
-        ids = self._ids.get(prefix)
-        if ids is None:
-            ids = np.array([world.model.body(prefix + b).id for b, _, _ in layout])
-            self._ids[prefix] = ids
-        return ids
-
-    def _ball_pose(self, world: World) -> np.ndarray:
-        m, d = world.model, world.data
-        b = m.body("ball").id
-        out = np.zeros(16)
-        mat = d.xmat[b]
-        out[0:3] = mat[[0, 3, 6]]
-        out[4:7] = mat[[1, 4, 7]]
-        out[8:11] = mat[[2, 5, 8]]
-        out[12:15] = d.xpos[b]
-        out[15] = 1.0
-        return out
+    def _ball_pose(self, world) -> np.ndarray:
+        pos, rot = world.ball_frame()
+        return _transforms(pos[None], rot[None])[0]
 
     def _robot_full(self, r: RobotView, poses: np.ndarray) -> str:
         team = {"left": "matLeft", "right": "matRight"}.get(r.side or "", "matTeam")
@@ -345,9 +334,7 @@ class MonitorStream:
         return "".join(parts)
 
     # ------------------------------------------------------------------ frames
-    def full_frame(
-        self, world: World, robots: list[RobotView], half: int, teams: dict[str, str]
-    ) -> str:
+    def full_frame(self, world, robots: list[RobotView], half: int, teams: dict[str, str]) -> str:
         """A full frame; the delta state is reset to what it contains."""
         env = self._env_full(world, half, teams)
         ball = self._ball_pose(world)
@@ -370,9 +357,7 @@ class MonitorStream:
         self._structure = self.structure_of(robots)
         return "".join(parts)
 
-    def delta_frame(
-        self, world: World, robots: list[RobotView], half: int, teams: dict[str, str]
-    ) -> str:
+    def delta_frame(self, world, robots: list[RobotView], half: int, teams: dict[str, str]) -> str:
         """A delta frame relative to what was sent before (call only if not :meth:`needs_full`)."""
         env = self._env_delta(world, half, teams)
         ball = self._ball_pose(world)

@@ -449,7 +449,7 @@ class Referee:
 
     def _body_x_extent(self, index: int) -> tuple[float, float]:
         w = self.host.world
-        xs = w.data.xpos[w.robots[index].robot_bodies, 0]
+        xs = w.body_frames(index)[0][:, 0]
         return float(xs.min()), float(xs.max())
 
     def _keep_in_halves(self) -> None:
@@ -467,14 +467,14 @@ class Referee:
             own = -1.0 if p.side == "left" else 1.0
             if p.side != kicker:
                 into_other = hi > 0 if p.side == "left" else lo < 0
-                xy = w.data.xpos[w.robots[p.index].robot_bodies, :2]
+                xy = w.body_frames(p.index)[0][:, :2]
                 in_circle = bool(np.any(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
                 if into_other or in_circle:
                     self._move_x(p.index, own * FREE_KICK_MOVE)
             else:
                 into_other = hi > 0 if p.side == "left" else lo < 0
                 if into_other:
-                    xy = w.data.xpos[w.robots[p.index].robot_bodies, :2]
+                    xy = w.body_frames(p.index)[0][:, :2]
                     inside = bool(np.all(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
                     if not inside:
                         self._move_x(p.index, own * FREE_KICK_MOVE)

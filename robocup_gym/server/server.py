@@ -57,7 +57,7 @@ from robocup_gym.server.wire import (
     trainer_commands,
 )
 from robocup_gym.server.worldhost import WorldHost
-from robocup_gym.sim import SimulationDivergedError
+from robocup_gym.sim import ENGINES, SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator
 from robocup_gym.sim.vision import VisionConfig
 
@@ -88,7 +88,8 @@ class MonitorState:
 
 
 class SimServer:
-    """rcssserver3d-compatible server around the embedded MuJoCo world.
+    """rcssserver3d-compatible server around the embedded world (SimSpark's step on ODE by
+    default, or the MuJoCo approximation).
 
     Args:
         agent_port: TCP port for agents (0 = any free port; see :attr:`agent_port` after binding).
@@ -105,7 +106,10 @@ class SimServer:
         sync_timeout: seconds a sync-mode cycle waits for a silent agent before closing its
             connection (``None`` = wait forever, as rcssserver3d).
         seed: random seed (noise, coin toss) for reproducible runs.
-        physics: :class:`~robocup_gym.sim.physics.PhysicsConfig` of the world.
+        physics: :class:`~robocup_gym.sim.physics.PhysicsConfig` of the MuJoCo world (only with
+            ``engine="mujoco"``).
+        engine: ``"ode"`` (SimSpark's own step: the physics of rcssserver3d, the default) or
+            ``"mujoco"`` (the fast approximation).
         decimals: digits after the point in percepts: 2 as upstream rcssserver3d 0.7.3, 3 as
             the SPL fork.
         robot_types: robot types agents may load (``scene``/``init`` of another is refused).
@@ -131,7 +135,10 @@ class SimServer:
         decimals: int = 2,
         robot_types: Sequence[int] = (0, 1, 2, 3, 4),
         type_limits: bool = True,
+        engine: str = "ode",
     ) -> None:
+        if engine not in ENGINES:
+            raise ValueError(f"unknown engine {engine!r}; engines: {', '.join(ENGINES)}")
         if monitor_interval < 1:
             raise ValueError(f"monitor_interval must be >= 1, got {monitor_interval}")
         for what, port in (("agent", agent_port), ("monitor", monitor_port)):
@@ -165,7 +172,8 @@ class SimServer:
         vision = VisionConfig(
             noise=vision_noise, view_cone_deg=float(view_cone_deg), ground_truth=ground_truth
         )
-        self.world_host = WorldHost(vision, physics, seed)
+        self.engine = engine
+        self.world_host = WorldHost(vision, physics, seed, engine=engine)
         self.referee = Referee(
             self.world_host,
             rules=rules,
@@ -197,7 +205,7 @@ class SimServer:
     # ------------------------------------------------------------------ lifecycle
     @property
     def world(self):
-        """The current :class:`~robocup_gym.sim.engines.mujoco.world.World` (replaced when robots
+        """The current world (:func:`robocup_gym.sim.make_world`; replaced when robots
         change)."""
         return self.world_host.world
 
@@ -948,7 +956,7 @@ def serve(
         [
             "sync mode" if server.sync else "real-time agents (no sync)",
             "real time" if server.real_time else "as fast as possible",
-            "MuJoCo engine",
+            {"ode": "SimSpark's physics on ODE", "mujoco": "MuJoCo engine"}[server.engine],
         ]
     )
     print(

@@ -1,34 +1,34 @@
-"""The embedded :class:`~robocup_gym.sim.engines.mujoco.world.World` behind the server, with a
-changing robot set.
+"""The embedded world behind the server (on either physics engine), with a changing robot set.
 
-A ``World`` compiles its MuJoCo model once, for a fixed list of robots. Agents of the server
-connect, load robots of any type (``scene``) and disconnect at any time, so :class:`WorldHost`
-**rebuilds the World with state transfer** whenever the set of robots changes: the new World gets
-the robots in connection order, and everything that was already there — ball, every surviving
-robot's root and joint positions/velocities (matched by joint name), motor targets, team, uniform
-number, sensor state, vision phase and calibration, simulation time, cycle counter, game state and
-random generator — is copied over. A rebuild costs a model compilation (~20–50 ms for a few
-robots); it happens only on ``scene`` and on disconnect/kill, and all changes of one cycle are
-merged into one rebuild. Parked robots were rejected: every parked Nao would cost physics time in
-every step.
+A world is built once for a fixed list of robots (MuJoCo compiles a model for it; ODE creates
+its bodies and the table of geom pairs that can touch). Agents of the server connect, load robots
+of any type (``scene``) and disconnect at any time, so :class:`WorldHost` **rebuilds the world
+with state transfer** whenever the set of robots changes: the new world gets the robots in
+connection order, and everything that was already there — ball, every surviving robot's pose,
+velocities, motor targets and agent state (the world's ``export_robot_state`` /
+``import_robot_state``: team, uniform number, sensor state, vision phase and calibration),
+simulation time, cycle counter, game state and random generator — is copied over. A rebuild
+costs ~5–50 ms for a few robots (0.2 s with 22 on ODE); it happens only on ``scene`` and on
+disconnect/kill, and all changes of one cycle are merged into one rebuild. Parked robots were
+rejected: every parked Nao would cost physics time in every step.
 
-The host also recovers from a diverged simulation (:meth:`recover`): the World is reset, each robot
-is put back at its home position (its sideline slot after ``init``) and the clocks, game state and
-teams are restored.
+The host also recovers from a diverged simulation (:meth:`recover`): a fresh world is built,
+each robot is put back at its home position (its sideline slot after ``init``) and the clocks,
+game state and teams are restored.
+
+Nothing here depends on the engine: the world is made by :func:`robocup_gym.sim.make_world`.
 """
 
 from __future__ import annotations
 
-import copy
 import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
-from robocup_gym.sim.engines.mujoco.world import World
+from robocup_gym.sim import make_world
 from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.vision import VisionConfig
 
@@ -54,12 +54,13 @@ class Slot:
 
 
 class WorldHost:
-    """Owns the current World and the mapping agent ↔ robot index.
+    """Owns the current world and the mapping agent ↔ robot index.
 
     Args:
-        vision: ``See`` settings passed to every World.
-        physics: MuJoCo settings (``None`` = World default).
+        vision: ``See`` settings passed to every world.
+        physics: MuJoCo settings (``None`` = the world's default; only with ``engine="mujoco"``).
         seed: Seeds the server's random generator (vision noise, beam noise, calibration).
+        engine: ``"ode"`` (SimSpark's own step, the default) or ``"mujoco"``.
     """
 
     def __init__(
@@ -67,24 +68,23 @@ class WorldHost:
         vision: VisionConfig | None = None,
         physics: object | None = None,
         seed: int | None = None,
+        engine: str = "ode",
     ) -> None:
+        if physics is not None and engine != "mujoco":
+            raise ValueError("physics settings are MuJoCo's; they need engine='mujoco'")
         self.vision = vision or VisionConfig()
         self.physics = physics
+        self.engine = engine
         self.rng = np.random.default_rng(seed)
         self.slots: list[Slot] = []
         self._index: dict[int, int] = {}
         self.world = self._new_world([])
         self.rebuilds = 0
         self.divergences = 0
-        self._joint_layout: dict[str, list[tuple[str, int, int, int, int]]] = {}
-        self._geom_robot: list[int] = []
-        """Robot index of every geom of the current World's model (-1: not a robot's)."""
-        self._ball_geom = 0
-        self._refresh_maps()
 
     # ------------------------------------------------------------------ lookups
     def index(self, key: int) -> int | None:
-        """Robot index of owner ``key`` in the current World, or ``None``."""
+        """Robot index of owner ``key`` in the current world, or ``None``."""
         return self._index.get(key)
 
     def slot(self, key: int) -> Slot | None:
@@ -96,26 +96,22 @@ class WorldHost:
         return len(self.slots)
 
     # ------------------------------------------------------------------ rebuild
-    def _new_world(self, slots: Sequence[Slot]) -> World:
-        return World(
-            robot_types=[s.robot_type for s in slots],
-            teams=[s.team for s in slots],
-            physics=self.physics,  # type: ignore[arg-type]
-            dead_time_cycles=0,
-            vision=self.vision,
-            seed=None,
-        )
+    def _new_world(self, slots: Sequence[Slot]):
+        options: dict = {"dead_time_cycles": 0, "vision": self.vision, "seed": None}
+        if self.engine == "mujoco":  # team colours of the rendered model, its physics settings
+            options.update(teams=[s.team for s in slots], physics=self.physics)
+        return make_world([s.robot_type for s in slots], engine=self.engine, **options)
 
     def change_robots(self, add: Sequence[tuple[int, int]], remove: Sequence[int]) -> list[int]:
         """Add robots ``(key, type)`` and remove those of the keys in ``remove`` in one rebuild.
 
         New robots appear at the pre-init spot (several new ones side by side, 1 m apart in x).
-        Returns the keys that were added. If the World cannot be built with the new robots (e.g.
+        Returns the keys that were added. If the world cannot be built with the new robots (e.g.
         MuJoCo runs out of memory), the additions are dropped (logged) and only the removals are
         done.
 
         Raises:
-            Exception: only if even the removal-only rebuild fails (the old World is kept).
+            Exception: only if even the removal-only rebuild fails (the old world is kept).
         """
         remove_set = set(remove)
         keep = [s for s in self.slots if s.key not in remove_set]
@@ -147,30 +143,14 @@ class WorldHost:
         world.time = old.time
         world.cycle = old.cycle
         world.game = old.game
-        m_old, d_old = old.model, old.data
-        m_new, d_new = world.model, world.data
-        # ball
-        self._copy_joint_group(m_old, d_old, m_new, d_new, "ball", "ball")
-        new_layout = _joint_layout(m_new, world)
-        old_layout = self._joint_layout
+        world.place_ball(old.ball_position(), old.ball_velocity(), old.ball_angular_velocity())
         for j, s in enumerate(slots):
             i = old_index.get(s.key)
-            r_new = world.robots[j]
-            if i is None:
-                continue
-            r_old = old.robots[i]
-            world.import_robot_state(j, old.export_robot_state(i))
-            src = {name: (qa, qn, da, dn) for name, qa, qn, da, dn in old_layout[r_old.prefix]}
-            for name, qa, qn, da, dn in new_layout[r_new.prefix]:
-                got = src.get(name)
-                if got is None or got[1] != qn or got[3] != dn:
-                    continue
-                d_new.qpos[qa : qa + qn] = d_old.qpos[got[0] : got[0] + qn]
-                d_new.qvel[da : da + dn] = d_old.qvel[got[2] : got[2] + dn]
+            if i is not None:
+                world.import_robot_state(j, old.export_robot_state(i))
         self.world = world
         self.slots = slots
         self._index = {s.key: j for j, s in enumerate(slots)}
-        self._joint_layout = new_layout
         for k, s in enumerate(new):
             j = self._index[s.key]
             r = world.robots[j]
@@ -179,65 +159,45 @@ class WorldHost:
             x, y, z = PRE_INIT_POS
             self._place_pre_init(j, x + 1.0 * k, y, z)
         world.forward()
-        self._refresh_maps()
+        old.close()
         self.rebuilds += 1
 
     def _place_pre_init(self, index: int, x: float, y: float, z: float) -> None:
         n = len(self.world.robots[index].model.joints)
         self.world.place_robot(index, x, y, z=z, heading_deg=90.0, joint_angles_deg=np.zeros(n))
 
-    @staticmethod
-    def _copy_joint_group(m_old, d_old, m_new, d_new, old_name: str, new_name: str) -> None:
-        jo, jn = m_old.joint(old_name).id, m_new.joint(new_name).id
-        qo, qn = int(m_old.jnt_qposadr[jo]), int(m_new.jnt_qposadr[jn])
-        do, dn = int(m_old.jnt_dofadr[jo]), int(m_new.jnt_dofadr[jn])
-        d_new.qpos[qn : qn + 7] = d_old.qpos[qo : qo + 7]
-        d_new.qvel[dn : dn + 6] = d_old.qvel[do : do + 6]
-
-    def _refresh_maps(self) -> None:
-        world = self.world
-        m = world.model
-        if not self._joint_layout:
-            self._joint_layout = _joint_layout(m, world)
-        geom_robot = [-1] * m.ngeom
-        for r in world.robots:
-            for g in r.robot_geoms:
-                geom_robot[g] = r.index
-        self._geom_robot = geom_robot
-        self._ball_geom = m.geom("ball").id
-
     # ------------------------------------------------------------------ divergence
     def recover(self) -> None:
-        """Reset a diverged World and put everything back where it belongs (logged by caller).
-
-        Clocks, game state, teams, uniform numbers and motor-free robots at their home positions
-        (sideline slot or pre-init spot); the ball goes to the centre spot.
-        """
-        w = self.world
-        keep_time, keep_cycle, keep_game = w.time, w.cycle, w.game
+        """Replace a diverged world by a fresh one and put everything back where it belongs
+        (logged by the caller): clocks, game state, teams, uniform numbers and the agents' state
+        (hearing, vision phase, calibration) are kept; every robot is put at its home position
+        (sideline slot or pre-init spot) with its motors at rest; the ball goes to the centre
+        spot."""
+        old = self.world
+        world = self._new_world(self.slots)
+        world.rng = self.rng
+        world.time, world.cycle, world.game = old.time, old.cycle, old.game
         keep = ("team", "team_name", "unum", "announce_team", "perception_counter")
         keep += ("calibration", "heard", "hear_capacity")
-        saved = [{f: copy.copy(getattr(r, f)) for f in keep} for r in w.robots]
-        w.reset()
-        w.rng = self.rng
-        w.time, w.cycle, w.game = keep_time, keep_cycle, keep_game
-        for j, (r, s) in enumerate(zip(w.robots, self.slots, strict=True)):
-            for f, v in saved[j].items():
-                setattr(r, f, v)
+        for r_old, r_new in zip(old.robots, world.robots, strict=True):
+            for f in keep:
+                setattr(r_new, f, getattr(r_old, f))
+        self.world = world
+        for j, s in enumerate(self.slots):
             if s.home is None:
                 x, y, z = PRE_INIT_POS
                 self._place_pre_init(j, x, y, z)
             else:
                 hx, hy, hz, heading = s.home
-                w.place_robot(j, hx, hy, z=hz, heading_deg=heading)
-        w.place_ball((0.0, 0.0, BALL_RADIUS))
+                world.place_robot(j, hx, hy, z=hz, heading_deg=heading)
+        world.place_ball((0.0, 0.0, BALL_RADIUS))
+        old.close()
         self.divergences += 1
 
     def sane(self) -> bool:
-        """False if the state is finite but absurd (a body 100 m away, a joint turned 1000 rad):
-        an instability the World's own check did not catch."""
-        d = self.world.data
-        return bool(np.abs(d.qpos).max(initial=0.0) < 1e3 and np.abs(d.xpos).max() < 100.0)
+        """False if the state is finite but absurd (a body 100 m away): an instability the
+        world's own check did not catch."""
+        return bool(np.abs(self.world.body_positions()).max(initial=0.0) < 100.0)
 
     # ------------------------------------------------------------------ helpers for the rules
     def teleport(
@@ -257,19 +217,17 @@ class WorldHost:
         a move, so it hangs there (e.g. 2 mm above the floor: accelerometer 9.81, gyro 0, no
         foot contact) until its first non-zero joint velocity (fixtures README)."""
         w = self.world
-        r = w.robots[index]
         x, y, z = (float(v) for v in pos)
         if not all(math.isfinite(v) for v in (x, y, z)):
             return
-        targets = r.targets.copy()
+        targets = w.motor_targets(index)
         asleep = not np.any(targets)
         if heading_deg is not None:
             w.place_robot(index, x, y, z=z, heading_deg=heading_deg, asleep=asleep)
         else:
-            a = r.qpos_root
-            q = w.data.qpos[a + 3 : a + 7].copy() if quat is None else np.asarray(quat, float)
+            q = w.torso_quat(index) if quat is None else np.asarray(quat, float)
             w.place_robot(index, x, y, z=z, quat=q, asleep=asleep)
-        r.targets[:] = targets
+        w.set_motor_targets(index, targets)
 
     def shift(self, index: int, dx: float, dy: float) -> None:
         """Translate robot ``index`` by (dx, dy), keeping its height and orientation."""
@@ -277,27 +235,11 @@ class WorldHost:
         self.teleport(index, (p[0] + dx, p[1] + dy, p[2]))
 
     def ball_touchers(self) -> set[int]:
-        """Robot indices with a contact with the ball after the last physics step."""
-        d = self.world.data
-        ncon = d.ncon
-        out: set[int] = set()
-        if ncon == 0:
-            return out
-        ball = self._ball_geom
-        geom_robot = self._geom_robot
-        for g1, g2 in d.contact.geom[:ncon].tolist():  # a few pairs: plain Python is fastest
-            if g1 == ball:
-                i = geom_robot[g2]
-            elif g2 == ball:
-                i = geom_robot[g1]
-            else:
-                continue
-            if i >= 0:
-                out.add(i)
-        return out
+        """Robot indices with a contact with the ball in the last physics step."""
+        return self.world.ball_touchers()
 
     def ball_position(self) -> np.ndarray:
-        """Ball centre (a copy) from the World's data."""
+        """Ball centre (a copy) from the world."""
         return self.world.ball_position()
 
     def ball_pos_vel(self) -> tuple[list[float], list[float]]:
@@ -306,7 +248,7 @@ class WorldHost:
         return w.ball_position().tolist(), w.ball_velocity().tolist()
 
     def ball_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Ball (position, linear velocity, angular velocity) from the World's data."""
+        """Ball (position, linear velocity, angular velocity) from the world."""
         w = self.world
         return w.ball_position(), w.ball_velocity(), w.ball_angular_velocity()
 
@@ -324,23 +266,3 @@ class WorldHost:
         if not (np.isfinite(new_p).all() and np.isfinite(v).all()):
             return
         self.world.place_ball(new_p, v, w)
-
-
-def _joint_layout(m, world: World) -> dict[str, list[tuple[str, int, int, int, int]]]:
-    """Per robot prefix: (joint name without prefix, qpos adr, qpos n, dof adr, dof n)."""
-    sizes = {
-        int(mujoco.mjtJoint.mjJNT_FREE): (7, 6),
-        int(mujoco.mjtJoint.mjJNT_BALL): (4, 3),
-        int(mujoco.mjtJoint.mjJNT_SLIDE): (1, 1),
-        int(mujoco.mjtJoint.mjJNT_HINGE): (1, 1),
-    }
-    prefixes = [r.prefix for r in world.robots]
-    out: dict[str, list[tuple[str, int, int, int, int]]] = {p: [] for p in prefixes}
-    for j in range(m.njnt):
-        name = m.joint(j).name
-        for p in prefixes:
-            if name.startswith(p):
-                qn, dn = sizes[int(m.jnt_type[j])]
-                out[p].append((name[len(p) :], int(m.jnt_qposadr[j]), qn, int(m.jnt_dofadr[j]), dn))
-                break
-    return out

@@ -20,6 +20,9 @@ engine hook                   what it returns
 ``torso_position(i)``         torso centre, world, m
 ``_head_pose(i)``             head centre (world, m) and rotation matrix (columns = head axes)
 ``_part_positions(i)``        world positions of :data:`~robocup_gym.sim.vision.PLAYER_PARTS`
+``place_robot(i, x, y, …)``   teleport a robot (``beam`` uses it)
+``motor_targets(i)``          the active joint velocity targets, rad/s (kept through a beam)
+``set_motor_targets(i, v)``   restore them
 ============================  ==============================================================
 
 and the state the mixin keeps: ``robots`` (each an :class:`AgentState`), ``game``
@@ -140,6 +143,46 @@ class Senses:
             self.game.game_time = round(self.game.game_time + dt, 10)
         for r in self.robots:
             r.perception_counter += 1
+
+    # ------------------------------------------------------------------ beam
+    BEAM_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
+    """Play modes in which an agent's ``beam`` is applied (spec §9.4)."""
+    BEAM_HEIGHT_M = 0.4
+    """Torso centre height a beamed robot is put at, m (it then falls onto its feet)."""
+
+    def _beam_pose(
+        self, index: int, x: float, y: float, rot_deg: float
+    ) -> tuple[float, float, float] | None:
+        """Where SimSpark's ``beam`` to ``(x, y, rot_deg)`` in robot ``index``'s team frame puts
+        its torso: world ``(x, y, heading_deg)``, with the spec's noise when vision noise is on,
+        clamped to the own half; ``None`` when the beam is not applied (play mode, or a value
+        that is not finite)."""
+        if self.game.play_mode not in self.BEAM_MODES:
+            return None
+        if not all(math.isfinite(float(v)) for v in (x, y, rot_deg)):
+            return None
+        r = self.robot(index)
+        if self.vision_config.noise:
+            x += self.rng.uniform(-1, 1) * 0.05
+            y += self.rng.uniform(-1, 1) * 0.05
+            rot_deg += self.rng.uniform(-1, 1) * 10.0
+        x = min(max(x, -15.0), 0.0)
+        y = min(max(y, -10.0), 10.0)
+        if r.team == "right":
+            return -x, -y, rot_deg + 180.0
+        return x, y, rot_deg
+
+    def beam(self, index: int, x: float, y: float, rot_deg: float) -> bool:
+        """SimSpark ``beam`` in the robot's team frame (spec §9.4): only in BeforeKickOff and the
+        goal modes; adds the spec's noise when vision noise is on; torso at z = 0.4 m, upright,
+        motor targets kept. Returns whether the beam was applied."""
+        pose = self._beam_pose(index, x, y, rot_deg)
+        if pose is None:
+            return False
+        targets = self.motor_targets(index)
+        self.place_robot(index, pose[0], pose[1], z=self.BEAM_HEIGHT_M, heading_deg=pose[2])
+        self.set_motor_targets(index, targets)
+        return True
 
     # ------------------------------------------------------------------ hear / say
     def say(self, index: int, message: str) -> None:

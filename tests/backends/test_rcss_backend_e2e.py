@@ -119,13 +119,21 @@ def test_repeated_resets_recover_a_fallen_robot(make_server, backends):
             ball_pos=(1.3, -2.0, 0.041),
             ball_vel=(0.5, 0.0, 0.0),
         )
-        assert b.last_reset.converged, b.last_reset
+        stats = b.last_reset
+        # a joint the flailing left pushed onto a stop stays there (rcssserver3d takes a new
+        # velocity only strictly inside the limits, spec §8.3): it is reported, not waited for
+        pinned = np.isin(MODEL.perceptor_names, stats.pinned)
+        assert stats.converged, stats
+        lo, hi = MODEL.ranges_deg.T
+        q = p.joint_angles_deg
+        assert np.all(np.minimum(np.abs(q - lo), np.abs(q - hi))[pinned] < 0.02), stats
+        assert stats.joint_cycles < 60, stats
         gt = p.ground_truth
         np.testing.assert_allclose(gt.torso_pos[:2], (1.0, -2.0), atol=0.02)
         _, x, y, _ = gt.torso_quat
         assert 1 - 2 * (x * x + y * y) > 0.99  # upright
         assert (_heading_deg(gt.torso_quat) - heading + 180) % 360 - 180 == pytest.approx(0, abs=3)
-        np.testing.assert_allclose(p.joint_angles_deg, START, atol=1.0)
+        np.testing.assert_allclose(q[~pinned], START[~pinned], atol=1.0)
         np.testing.assert_allclose(gt.ball_vel, (0.5, 0.0, 0.0))
         # the ball rolls (sliding, then rolling at ~5/7 of the speed); the velocity estimate
         # from the monitor stream follows the exact one

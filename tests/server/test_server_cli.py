@@ -10,7 +10,11 @@ import sys
 import pytest
 
 from robocup_gym.protocol.perceptors import parse_perception
-from robocup_gym.server.bench import measure_sync_cycles_per_s, start_server_process
+from robocup_gym.server.bench import (
+    measure_sync_cycles_per_s,
+    measure_team_cycles_per_s,
+    start_server_process,
+)
 from robocup_gym.server.client import AgentClient
 
 from .conftest import HOST
@@ -63,3 +67,8 @@ def test_cli_port_in_use_is_a_clear_error():
 
 def test_benchmark_runs():
     assert measure_sync_cycles_per_s(0.5) > 20
+
+
+def test_team_benchmark_runs_a_sync_game_of_several_agents():
+    """The full-game figure's code path (22 agents there): every agent steps, none stalls."""
+    assert measure_team_cycles_per_s(0.5, engine="ode", n_agents=3) > 5

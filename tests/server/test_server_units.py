@@ -11,6 +11,7 @@ from robocup_gym.protocol.framing import FrameDecoder
 from robocup_gym.server.referee import InitError, Player, Referee, TeamRegistry
 from robocup_gym.server.wire import Connection, fast_joint_message, salvage
 from robocup_gym.server.worldhost import WorldHost
+from robocup_gym.sim import ENGINES
 from robocup_gym.sim.vision import VisionConfig
 
 
@@ -60,13 +61,14 @@ def test_sideline_slots():
 
 
 # ---------------------------------------------------------------------------- world host
-def test_rebuild_keeps_the_state_of_surviving_robots():
-    host = WorldHost(VisionConfig(noise=False), seed=3)
+@pytest.mark.parametrize("engine", ENGINES)
+def test_rebuild_keeps_the_state_of_surviving_robots(engine):
+    host = WorldHost(VisionConfig(noise=False), seed=3, engine=engine)
     host.change_robots([(10, 0)], [])
     w = host.world
     w.place_robot(0, -2.0, 1.0, z=0.4, heading_deg=30.0, joint_angles_deg={"he1": 20.0})
     w.set_team(0, "left", "A", 5)
-    w.robots[0].targets[:] = 0.5
+    w.set_motor_targets(0, np.full(22, 0.5))
     w.place_ball((3.0, 1.0, 0.042), (1.0, 0.0, 0.0))
     w.time = 12.34
     torso = w.torso_position(0)
@@ -77,7 +79,7 @@ def test_rebuild_keeps_the_state_of_surviving_robots():
     assert host.index(10) == 0 and host.index(11) == 1 and host.index(12) == 2
     np.testing.assert_allclose(w2.torso_position(0), torso)
     np.testing.assert_allclose(w2.joint_angles_deg(0), angles)
-    np.testing.assert_allclose(w2.robots[0].targets, 0.5)
+    np.testing.assert_allclose(w2.motor_targets(0), 0.5)
     assert (w2.robots[0].team, w2.robots[0].team_name, w2.robots[0].unum) == ("left", "A", 5)
     np.testing.assert_allclose(w2.ball_position(), [3.0, 1.0, 0.042])
     np.testing.assert_allclose(w2.ball_velocity(), [1.0, 0.0, 0.0])
@@ -89,8 +91,33 @@ def test_rebuild_keeps_the_state_of_surviving_robots():
     np.testing.assert_allclose(host.world.ball_position(), [3.0, 1.0, 0.042])
 
 
-def test_recover_restores_clocks_teams_and_homes():
-    host = WorldHost(seed=1)
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_rebuild_does_not_change_a_moving_robots_future(engine):
+    """A robot in motion goes on exactly as if no robot had joined (one far away does)."""
+    rng = np.random.default_rng(0)
+    commands = rng.uniform(-3.0, 3.0, (40, 22))
+    hosts = [WorldHost(VisionConfig(noise=False), seed=3, engine=engine) for _ in range(2)]
+    for host in hosts:
+        host.change_robots([(10, 0)], [])
+        host.world.place_robot(0, 5.0, 5.0, heading_deg=30.0)
+        host.world.place_ball((-3.0, 0.0))
+    for k, cmd in enumerate(commands):
+        for h, host in enumerate(hosts):
+            if k == 20 and h == 1:  # joins mid-motion, far from robot 10
+                host.change_robots([(11, 2)], [])
+            host.world.command(0, cmd)
+            host.world.step()
+    a, b = (host.world for host in hosts)
+    assert b.n_robots == 2
+    assert np.abs(a.joint_angles_deg(0)).max() > 10.0  # it did move
+    np.testing.assert_allclose(b.torso_position(0), a.torso_position(0), atol=1e-9)
+    np.testing.assert_allclose(b.joint_angles_deg(0), a.joint_angles_deg(0), atol=1e-7)
+    np.testing.assert_allclose(b.torso_quat(0), a.torso_quat(0), atol=1e-9)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_recover_restores_clocks_teams_and_homes(engine):
+    host = WorldHost(seed=1, engine=engine)
     host.change_robots([(1, 0)], [])
     w = host.world
     w.set_team(0, "left", "A", 1)

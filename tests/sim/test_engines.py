@@ -208,3 +208,89 @@ def test_a_diverged_state_is_a_clear_error_and_placement_recovers(engine):
     for _ in range(5):
         w.step()
     assert w.torso_position(0)[2] > 0.3 and np.isfinite(w.joint_angles_deg(0)).all()
+
+
+# ---------------------------------------------------------------------------- what a server uses
+def test_both_engines_give_the_same_body_frames():
+    """The monitor draws each body from ``body_frames``: the same poses on both engines."""
+    if not available():
+        pytest.skip("no libode here")
+    a, b = make_world("mujoco", (4,)), make_world("ode", (4,))
+    angles = np.linspace(-20.0, 20.0, 24)
+    for w in (a, b):
+        w.place_robot(0, 1.0, 2.0, heading_deg=30.0, joint_angles_deg=angles)
+        w.place_ball((3.0, 0.0))
+    (pa, ra), (pb, rb) = a.body_frames(0), b.body_frames(0)
+    assert pa.shape == (len(a.robots[0].model.bodies), 3) and ra.shape[1:] == (3, 3)
+    np.testing.assert_allclose(pa, pb, atol=1e-9)
+    np.testing.assert_allclose(ra, rb, atol=1e-9)
+    np.testing.assert_allclose(pa[0], a.torso_position(0), atol=1e-12)
+    np.testing.assert_allclose(a.ball_frame()[0], b.ball_frame()[0], atol=1e-9)
+    np.testing.assert_allclose(a.torso_quat(0), b.torso_quat(0), atol=1e-9)
+
+
+def test_ball_touchers_are_the_robots_touching_the_ball(engine):
+    w = make_world(engine, (0, 0))
+    _stand(w, 0, x=-1.0)
+    _stand(w, 1, x=3.0, y=3.0)
+    foot = w.body_frames(0)[0][[b.name for b in w.robots[0].model.bodies].index("rfoot")]
+    w.place_ball((foot[0] + 0.12, foot[1]))  # just in front of the right foot: no contact
+    w.step()
+    assert w.ball_touchers() == set()
+    w.place_ball((foot[0] + 0.11, foot[1]))  # ball (r 4.2 cm) against the foot's toe end
+    w.step()
+    assert w.ball_touchers() == {0}
+    w.place_ball((10.0, 0.0))
+    w.step()
+    assert w.ball_touchers() == set()
+
+
+def test_command_queues_for_the_next_step_and_beam_keeps_the_motors(engine):
+    w = make_world(engine, dead_time_cycles=0, vision=EXACT)  # (noise would move the beam)
+    _stand(w)
+    w.set_team(0, "left", "A", 1)
+    w.command(0, {"he1": 1.0})
+    w.command(0, {"he2": -0.5})  # a second command in the cycle adds to the first
+    assert not w.motor_targets(0).any()  # nothing acts before the step
+    w.step()
+    t = w.motor_targets(0)
+    assert t[0] == pytest.approx(1.0) and t[1] == pytest.approx(-0.5) and not t[2:].any()
+    assert w.joint_angles_deg(0)[0] > 0.5
+    w.set_game(play_mode="PlayOn")
+    assert not w.beam(0, -3.0, 1.0, 0.0)  # beam only before kick-off and after goals
+    w.set_game(play_mode="BeforeKickOff")
+    assert w.beam(0, -3.0, 1.0, 90.0)
+    np.testing.assert_allclose(w.torso_position(0), [-3.0, 1.0, 0.4], atol=1e-9)
+    np.testing.assert_allclose(w.motor_targets(0), t)
+    w.command(0, AgentCommand({}, beam=(-5.0, -2.0, 0.0)))
+    np.testing.assert_allclose(w.torso_position(0)[:2], [-5.0, -2.0], atol=1e-9)
+    with pytest.raises(ValueError, match="he1"):
+        w.command(0, {"he1": math.inf})
+
+
+def test_a_robot_moves_between_worlds_exactly(engine):
+    """``export_robot_state``/``import_robot_state`` (the server's rebuilds): a robot in motion,
+    with a command still in its dead time, goes on in a new world as in the old one."""
+    rng = np.random.default_rng(1)
+    commands = rng.uniform(-4.0, 4.0, (30, 22))
+    a = make_world(engine, seed=2)
+    _stand(a)
+    a.place_ball((-0.8, -0.055))
+    for c in commands[:15]:
+        a.step({0: c})
+    b = make_world(engine, (2, 0), seed=2)  # other robots, another size
+    b.place_robot(0, 5.0, 5.0)
+    b.import_robot_state(1, a.export_robot_state(0))
+    b.place_ball(a.ball_position(), a.ball_velocity(), a.ball_angular_velocity())
+    b.forward()
+    np.testing.assert_allclose(b.torso_position(1), a.torso_position(0), atol=1e-12)
+    for c in commands[15:]:
+        a.step({0: c})
+        b.step({1: c})
+    # (ODE keeps nothing between steps; MuJoCo's solver warm start stays behind: ~1e-6°)
+    tol = {"ode": 1e-9, "mujoco": 1e-5}[engine]
+    np.testing.assert_allclose(b.torso_position(1), a.torso_position(0), atol=tol)
+    np.testing.assert_allclose(b.joint_angles_deg(1), a.joint_angles_deg(0), atol=tol)
+    np.testing.assert_allclose(b.accelerometer(1), a.accelerometer(0), atol=1e3 * tol)
+    with pytest.raises(ValueError, match="type"):
+        b.import_robot_state(0, a.export_robot_state(0))  # type 0 into a type-2 robot

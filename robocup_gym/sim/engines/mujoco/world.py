@@ -198,6 +198,9 @@ class World(Senses):
         """Centre-of-mass quantities (``subtree_com``, ``cvel``) lag the last step."""
         m = self.model
         self._ball_body = m.body("ball").id
+        self._ball_geom = m.geom("ball").id
+        self._geom_robot: list[int] | None = None
+        """Robot index of every geom (-1: not a robot's), built on first use."""
         self._ball_qpos = int(m.jnt_qposadr[m.joint("ball").id])
         self._ball_qvel = int(m.jnt_dofadr[m.joint("ball").id])
         # Ball drag (spec §5) as damping of its free joint: translational dofs are world-frame
@@ -564,20 +567,47 @@ class World(Senses):
     _ARRAY_STATE = ("targets", "q_ref", "motor_lost", "accel", "prev_vel")
 
     def export_robot_state(self, index: int) -> dict:
-        """Robot ``index``'s simulation and agent state other than its MuJoCo pose: motor targets,
-        creep reference and which motors lost motion, accelerometer history, pending commands,
-        team/uniform, hearing, FRP memory. With :meth:`import_robot_state` it moves a robot into
-        a rebuilt world (the ``serve`` server rebuilds its world when robots join)."""
+        """Everything of robot ``index`` a rebuilt world needs to go on with it: its pose and
+        velocities (root and joints), motor targets, creep reference and which motors lost
+        motion, accelerometer history, pending commands, team/uniform, hearing, FRP memory. With
+        :meth:`import_robot_state` it moves a robot into a new world (the ``serve`` server
+        rebuilds its world when robots join or leave)."""
         r = self.robot(index)
+        d = self._data
         out = {name: copy.deepcopy(getattr(r, name)) for name in self._AGENT_STATE}
         out.update({name: getattr(r, name).copy() for name in self._ARRAY_STATE})
-        out["pending"] = [(due, vel.copy()) for due, vel, _ in r.pending]
+        out["pending"] = [(due - self.cycle, vel.copy()) for due, vel, _ in r.pending]
+        out["robot_type"] = r.model.robot_type.index
+        a, b = r.qpos_root, r.qvel_root
+        out["root_qpos"] = d.qpos[a : a + 7].copy()
+        out["root_qvel"] = d.qvel[b : b + 6].copy()
+        out["joint_qpos"] = d.qpos[r.qpos_joints].copy()
+        out["joint_qvel"] = d.qvel[r.qvel_joints].copy()
         return out
 
     def import_robot_state(self, index: int, state: Mapping) -> None:
         """Restore what :meth:`export_robot_state` returned into robot ``index`` (of the same
-        type). Arrays are copied in place: a robot's arrays are views into the world's."""
+        type; also from a world of another size). Arrays are copied in place: a robot's arrays
+        are views into the world's.
+
+        Raises:
+            ValueError: the state is of a robot of another type.
+        """
         r = self.robot(index)
+        kind = state.get("robot_type", r.model.robot_type.index)
+        if kind != r.model.robot_type.index:
+            raise ValueError(
+                f"robot state of type {kind} cannot go into robot {index} of "
+                f"type {r.model.robot_type.index}"
+            )
+        if "root_qpos" in state:
+            d = self._data
+            a, b = r.qpos_root, r.qvel_root
+            d.qpos[a : a + 7] = state["root_qpos"]
+            d.qvel[b : b + 6] = state["root_qvel"]
+            d.qpos[r.qpos_joints] = state["joint_qpos"]
+            d.qvel[r.qvel_joints] = state["joint_qvel"]
+            self._poses_stale = self._com_stale = True
         for name in self._AGENT_STATE:
             if name in state:
                 setattr(r, name, copy.deepcopy(state[name]))
@@ -586,9 +616,9 @@ class World(Senses):
                 getattr(r, name)[:] = state[name]
         if "pending" in state:
             r.pending = []
-            for due, vel in state["pending"]:
+            for wait, vel in state["pending"]:  # cycles still to wait, velocities
                 vel = np.array(vel, float)
-                r.pending.append((due, vel, not np.isnan(vel).any()))
+                r.pending.append((self.cycle + wait, vel, not np.isnan(vel).any()))
         self._update_sleepers()
 
     # ------------------------------------------------------------------ properties
@@ -920,29 +950,6 @@ class World(Senses):
                 if inside is not None:
                     take &= inside
             np.copyto(r.targets, clipped, where=take)
-
-    def beam(self, index: int, x: float, y: float, rot_deg: float) -> bool:
-        """SimSpark ``beam`` in the robot's team frame (spec §9.4): only in BeforeKickOff and the
-        goal modes; adds the spec's noise when vision noise is on; torso at z = 0.4 m, upright.
-        Returns whether the beam was applied."""
-        if self.game.play_mode not in ("BeforeKickOff", "Goal_Left", "Goal_Right"):
-            return False
-        if not all(math.isfinite(float(v)) for v in (x, y, rot_deg)):
-            return False
-        r = self.robot(index)
-        if self.vision_config.noise:
-            x += self.rng.uniform(-1, 1) * 0.05
-            y += self.rng.uniform(-1, 1) * 0.05
-            rot_deg += self.rng.uniform(-1, 1) * 10.0
-        x = min(max(x, -15.0), 0.0)
-        y = min(max(y, -10.0), 10.0)
-        heading = rot_deg
-        if r.team == "right":
-            x, y, heading = -x, -y, rot_deg + 180.0
-        vel = r.targets.copy()
-        self.place_robot(index, x, y, z=0.4, heading_deg=heading)
-        r.targets[:] = vel
-        return True
 
     # ------------------------------------------------------------------ stepping
     def step(
@@ -1316,6 +1323,69 @@ class World(Senses):
     def _part_positions(self, index: int) -> np.ndarray:
         """World positions of robot ``index``'s parts seen by vision (``PLAYER_PARTS``), m."""
         return self._posed().xpos[self.robots[index].part_bodies]
+
+    # ------------------------------------------------------------------ what a server reads
+    def torso_quat(self, index: int = 0) -> np.ndarray:
+        """Torso orientation of robot ``index`` as a unit quaternion ``(w, x, y, z)``."""
+        a = self.robot(index).qpos_root
+        return self._data.qpos[a + 3 : a + 7].copy()
+
+    def motor_targets(self, index: int) -> np.ndarray:
+        """Robot ``index``'s active motor targets, rad/s, canonical order (a copy)."""
+        return self.robot(index).targets.copy()
+
+    def set_motor_targets(self, index: int, targets: np.ndarray) -> None:
+        """Set robot ``index``'s motor targets (rad/s, canonical order) as they are, without the
+        hinge effector's rules: to restore what :meth:`motor_targets` returned after a placement
+        (which zeroes them)."""
+        self.robot(index).targets[:] = targets
+
+    def body_frames(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every body of robot ``index`` in its model's order (``model.bodies``, torso first):
+        centres ``(n, 3)`` (world, m) and rotations ``(n, 3, 3)`` (columns = body axes)."""
+        r = self.robot(index)
+        d = self._posed()
+        return d.xpos[r.robot_bodies].copy(), d.xmat[r.robot_bodies].reshape(-1, 3, 3).copy()
+
+    def ball_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """Ball centre (world, m) and rotation matrix."""
+        d = self._posed()
+        b = self._ball_body
+        return d.xpos[b].copy(), d.xmat[b].reshape(3, 3).copy()
+
+    def body_positions(self) -> np.ndarray:
+        """Centres of every body of the world (robots' parts, the ball; world, m), for a sanity
+        check of the whole state."""
+        return self._posed().xpos
+
+    def ball_touchers(self) -> set[int]:
+        """Indices of the robots with a part in contact with the ball in the last step."""
+        d = self._data
+        ncon = d.ncon
+        out: set[int] = set()
+        if ncon == 0:
+            return out
+        geom_robot = self._geom_robot
+        if geom_robot is None:
+            geom_robot = self._geom_robot = [-1] * self.model.ngeom
+            for r in self.robots:
+                for g in r.robot_geoms:
+                    geom_robot[g] = r.index
+        ball = self._ball_geom
+        for g1, g2 in d.contact.geom[:ncon].tolist():  # a few pairs: plain Python is fastest
+            if g1 == ball:
+                i = geom_robot[g2]
+            elif g2 == ball:
+                i = geom_robot[g1]
+            else:
+                continue
+            if i >= 0:
+                out.add(i)
+        return out
+
+    def close(self) -> None:
+        """Nothing to free by hand (MuJoCo's model and data go with the object); kept for the
+        ODE world's interface, whose ``close`` frees the engine's bodies."""
 
     # ------------------------------------------------------------------ misc
     def state(self) -> np.ndarray:

@@ -73,7 +73,7 @@ def _configure(lib: ctypes.CDLL) -> None:
     lib.ode_realise.argtypes = [_p, ctypes.c_int, _p, _p, _p, _p, _p, ctypes.c_int]
     lib.ode_realise.restype = None
     lib.ode_collide.argtypes = [_p, _p, _p, ctypes.c_int, _p, _p, _p, ctypes.c_int, _p, _p]
-    lib.ode_collide.argtypes += [_p, _p, ctypes.c_int, _p, _p, _p]
+    lib.ode_collide.argtypes += [_p, _p, ctypes.c_int, _p, _p, _p, _p, ctypes.c_int]
     lib.ode_collide.restype = ctypes.c_int
     lib.ode_read.argtypes = [_p, ctypes.c_int, _p, _p, ctypes.c_int, _p, _p, _p]
     lib.ode_read.restype = None
@@ -97,6 +97,8 @@ class FastLoops:
             fills (``OdeWorld``'s state snapshot).
         sensed_out: ``(pair index array, position array (n, 3))`` that :meth:`collide` fills
             for the sensed contacts (the world's own arrays).
+        hit: ``int32`` array, one entry per pair: :meth:`collide` writes its ``stamp`` into the
+            entry of every pair that made a contact (the world's own array).
     """
 
     def __init__(
@@ -113,6 +115,7 @@ class FastLoops:
         pair_slots,
         state,
         sensed_out,
+        hit,
     ):
         self._lib = load()
         self._fns = OdeFunctions(
@@ -187,7 +190,9 @@ class FastLoops:
             ctypes.addressof(self._slot_geoms),
             compiled.address(self._pair_slots),
             compiled.address(self._aabb),
+            compiled.address(hit),
         )
+        self._hit = hit
 
     def read(self) -> None:
         """Fill the world's state snapshot (``OdeWorld._read_state``)."""
@@ -206,7 +211,8 @@ class FastLoops:
             fns, n, joints, child, compiled.address(targets), limits, vmax, ode.PARAM_VEL
         )
 
-    def collide(self) -> int:
+    def collide(self, stamp: int) -> int:
         """Contact joints for this step; returns how many sensed contacts it wrote to the
-        world's pair and position arrays (``OdeWorld._collide`` does the same in Python)."""
-        return self._lib.ode_collide(*self._collide_args)
+        world's pair and position arrays, and marks the pairs that touched with ``stamp``
+        (``OdeWorld._collide`` does the same in Python)."""
+        return self._lib.ode_collide(*self._collide_args, stamp)

@@ -107,11 +107,14 @@ static int apart(const double* a, const double* b) {
  * position are written out. Returns the number of sensed contacts. A pair whose geoms both have
  * an AABB slot (slots[2p], slots[2p+1] >= 0; not the ground plane) and whose boxes are apart is
  * skipped, exactly as dCollide would skip it, but without its cost: with many robots most pairs
- * are far apart. aabb holds 6 numbers per slot geom (slot_geoms), filled here. */
+ * are far apart. aabb holds 6 numbers per slot geom (slot_geoms), filled here. Every pair that
+ * made a contact gets hit[p] = stamp (the caller's cycle number), so the caller can tell which
+ * pairs touched in this step without anything being cleared first. */
 int ode_collide(const ode_fns* f, dID world, dID group, int npairs, dID* pairs,
                 const dSurfaceParameters* surfaces, const int* sensed, int max_contacts,
                 dContactGeom* buf, dJointFeedback* feedback, int* out_pair, double* out_pos,
-                int nslots, dID* slot_geoms, const int* slots, double* aabb) {
+                int nslots, dID* slot_geoms, const int* slots, double* aabb, int* hit,
+                int stamp) {
   dContact contact;
   for (int j = 0; j < 4; j++) contact.fdir1[j] = 0.0;
   for (int k = 0; k < nslots; k++) f->dGeomGetAABB(slot_geoms[k], aabb + 6 * k);
@@ -122,6 +125,7 @@ int ode_collide(const ode_fns* f, dID world, dID group, int npairs, dID* pairs,
     int n = f->dCollide(pairs[4 * p], pairs[4 * p + 1], max_contacts, buf,
                         (int)sizeof(dContactGeom));
     if (!n) continue;
+    hit[p] = stamp;
     contact.surface = surfaces[p];
     for (int k = 0; k < n; k++) {
       contact.geom = buf[k];

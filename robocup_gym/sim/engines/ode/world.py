@@ -10,31 +10,29 @@ contact surfaces mixed from each side's handler as SimSpark does (§7.3); drag b
 (§7.5); the hinge effector's rules (clip to the joint's max speed, ignore commands while the
 joint is not strictly inside its limits, wake the body on a non-zero command, §8.3).
 
-Since session 10 it is the default engine of the environments. It has every body perceptor
-(joint angles, gyro, accelerometer, the foot force perceptors from ODE's contact feedback, as
-SimSpark computes them), and the game state, hearing, vision and perception of
-:mod:`robocup_gym.sim.senses`, the same code as the MuJoCo world's, and the field's walls and
-goals (:mod:`robocup_gym.sim.field`). It has no referee yet (``robocup-gym serve`` still runs on
-the MuJoCo world). What it settles is how ODE's own
-solver, contact generation, joint stops and motor-at-stop rules behave for a given motion,
-which the MuJoCo translation (:mod:`robocup_gym.sim.engines.mujoco.world`) can then be compared with
-(``benchmarks/ode_compare.py``). It needs the system library ``libode``
-(:mod:`robocup_gym.sim.engines.ode.lib`).
+It is the default engine of the environments (since session 10) and of ``robocup-gym serve``
+(since session 11). It has every body perceptor (joint angles, gyro, accelerometer, the foot
+force perceptors from ODE's contact feedback, as SimSpark computes them), and the game state,
+hearing, vision and perception of :mod:`robocup_gym.sim.senses`, the same code as the MuJoCo
+world's, and the field's walls and goals (:mod:`robocup_gym.sim.field`). It needs the system
+library ``libode`` (:mod:`robocup_gym.sim.engines.ode.lib`).
 
-It offers the part of :class:`robocup_gym.sim.engines.mujoco.world.World`'s interface that scripted
-motions
-use (``place_robot``, ``place_ball``, ``step``, ``ball_position``, ``torso_position``, …), so
-:func:`robocup_gym.sim.fidelity.scripted_kick` runs on either.
+It has the MuJoCo world's interface (:class:`robocup_gym.sim.engines.mujoco.world.World`):
+placing robots and the ball, commanding joints (``step`` or ``command``), ``beam``, readings,
+and what the server's referee and monitor use (``body_frames``, ``ball_frame``,
+``ball_touchers``, ``motor_targets``, ``export_robot_state``/``import_robot_state`` for its
+rebuilds). ``benchmarks/ode_compare.py`` compares the two engines motion by motion.
 """
 
 from __future__ import annotations
 
 import contextlib
+import copy
 import ctypes
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import mujoco
 import numpy as np
@@ -51,7 +49,7 @@ from robocup_gym.sim.field import GOAL_BOXES, WALLS
 from robocup_gym.sim.pose import heading_to_quat, joint_angles_array, joint_index
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
-from robocup_gym.types import ForceResistance, GameState, GroundTruth
+from robocup_gym.types import AgentCommand, ForceResistance, GameState, GroundTruth
 
 WORLD_CFM = 1e-5
 """SimSpark's world CFM (spec §7.1); the world ERP stays ODE's default 0.2."""
@@ -280,6 +278,20 @@ class OdeWorld(Senses):
         """Contact feedback slots for the contacts of foot/toe geoms (SimSpark's ``FRP``)."""
         self._feedback_view = np.frombuffer(self._feedback, dtype=np.float64).reshape(-1, 16)
         """The slots as numbers: force on body 1 in columns 0–2, on body 2 in 8–10."""
+        self._hit = np.full(len(self._pairs), -1, dtype=np.int32)
+        """Per pair, the stamp of the last collision pass in which it made a contact."""
+        self._stamp = 0
+        """Number of collision passes so far (the stamp of the latest)."""
+        robot_of = {g: i for i, r in enumerate(self.robots) for g in r.geoms}
+        ball_pairs = [
+            (p, robot_of[pair[0]])
+            for p, pair in enumerate(self._pairs)
+            if pair[1] == self._ball_geom and pair[0] in robot_of
+        ]
+        self._ball_pairs = np.array([p for p, _ in ball_pairs], dtype=np.int64)
+        self._ball_pair_robot = np.array([i for _, i in ball_pairs], dtype=np.int64)
+        self._queued: dict[int, np.ndarray] = {}
+        """Commands given with :meth:`command` for the next :meth:`step`."""
         self._out_pair = np.zeros(len(self._feedback), dtype=np.int32)
         self._out_pos = np.zeros((len(self._feedback), 3))
         self._pair_frp = [(p[5], p[6]) for p in self._pairs]
@@ -436,6 +448,7 @@ class OdeWorld(Senses):
             self._pair_slots,
             (self._state_bodies, self._state, self._all_joints, self._angles, self._rates),
             (self._out_pair, self._out_pos),
+            self._hit,
         )
 
     @property
@@ -460,7 +473,8 @@ class OdeWorld(Senses):
         """Teleport robot ``index`` with zero velocities and motor targets, as the trainer's
         ``move`` does; ``z`` = torso centre height (``None``: lowest point 1 mm deep, ODE's
         resting depth, as :meth:`robocup_gym.sim.engines.mujoco.world.World.place_robot` puts it),
-        ``joint_angles_deg`` in canonical order or by name (others 0), ``quat`` a full torso
+        ``joint_angles_deg`` in canonical order or by name (others 0; ``None`` keeps the current
+        angles, as the MuJoCo world does: a rigid move), ``quat`` a full torso
         orientation ``(w, x, y, z)`` instead of upright facing ``heading_deg``. ``asleep``
         leaves every body disabled, as ODE's auto-disable leaves a robot that was resting when
         moved. ``forward`` is accepted for the MuJoCo world's interface (nothing to recompute
@@ -475,7 +489,7 @@ class OdeWorld(Senses):
         if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
             raise ValueError(f"quat must be 4 finite numbers, got {quat!r}")
         angles = (
-            np.zeros(len(model.joints))
+            self.joint_angles_deg(index)
             if joint_angles_deg is None
             else joint_angles_array(model, joint_angles_deg)
         )
@@ -499,6 +513,7 @@ class OdeWorld(Senses):
         for h in r.joints:
             lib.dJointSetHingeParam(h, ode.PARAM_VEL, 0.0)
         r.pending.clear()
+        self._queued.pop(index, None)
         r.prev_vel[:] = 0.0
         r.accel[:] = (0.0, 0.0, phys.GRAVITY)
         r.frp = {}
@@ -556,15 +571,46 @@ class OdeWorld(Senses):
         self._fresh = False
 
     # ------------------------------------------------------------------ stepping
+    def command(self, index: int, command: AgentCommand | Mapping[str, float] | np.ndarray) -> None:
+        """Give robot ``index`` its command for the next :meth:`step` (as the MuJoCo world's
+        ``command``): joint velocities in rad/s (by name, or an array in canonical order), or an
+        :class:`~robocup_gym.types.AgentCommand` whose ``beam`` and ``say`` act at once. A
+        second command before the step overrides the first joint by joint.
+
+        Raises:
+            KeyError: an unknown joint name (listing the valid ones).
+            ValueError: a NaN/inf velocity (naming the joint) or an array of the wrong shape.
+        """
+        r = self.robot(index)
+        if isinstance(command, AgentCommand):
+            arr = self._command_array(r, command.joint_velocities)
+            if command.beam is not None:
+                self.beam(index, *command.beam)
+            if command.say is not None:
+                self.say(index, command.say)
+        else:
+            arr = self._command_array(r, command)
+        old = self._queued.get(index)
+        if old is not None:
+            arr = np.where(np.isnan(arr), old, arr)
+        self._queued[index] = arr
+
     def step(self, commands: Mapping[int, Mapping[str, float] | np.ndarray] | None = None) -> None:
         """Advance one 20 ms cycle: realise due commands (target rad/s, clipped to the joint's
         max speed, ignored for a joint not strictly inside its limits, a non-zero one wakes the
-        joint's child body), drag on every body, collisions, one ``dWorldStep(0.02)``."""
+        joint's child body), drag on every body, collisions, one ``dWorldStep(0.02)``.
+        ``commands`` (robot index → velocities) come on top of those given with
+        :meth:`command` since the last step."""
         commands = commands or {}
         arrays = [  # all validated before any is queued
             None if commands.get(i) is None else self._command_array(r, commands[i])
             for i, r in enumerate(self.robots)
         ]
+        if self._queued:
+            for i, queued in self._queued.items():
+                a = arrays[i]
+                arrays[i] = queued if a is None else np.where(np.isnan(a), queued, a)
+            self._queued = {}
         for i, (r, cmd) in enumerate(zip(self.robots, arrays, strict=True)):
             r.pending.append(cmd)
             if len(r.pending) > self.dead_time_cycles:
@@ -631,21 +677,24 @@ class OdeWorld(Senses):
     def _collide_and_step(self) -> None:
         """Contacts for the current poses, one ``dWorldStep(0.02)``, the force perceptors."""
         lib = self._lib
+        self._stamp += 1
+        stamp = self._stamp
         if self.engine_seconds is None:
-            sensed = self._fast.collide() if self._fast is not None else self._collide()
+            sensed = self._fast.collide(stamp) if self._fast is not None else self._collide(stamp)
             lib.dWorldStep(self._world, phys.CYCLE_S)
         else:  # measuring: the engine's own share (collision and dWorldStep)
             t0 = time.perf_counter()
-            sensed = self._fast.collide() if self._fast is not None else self._collide()
+            sensed = self._fast.collide(stamp) if self._fast is not None else self._collide(stamp)
             lib.dWorldStep(self._world, phys.CYCLE_S)
             self.engine_seconds += time.perf_counter() - t0
         self._read_feedback(sensed)  # the number of sensed contacts
         lib.dJointGroupEmpty(self._contacts)
 
-    def _collide(self) -> int:
+    def _collide(self, stamp: int) -> int:
         """Contact joints for the current poses (the Python loop; ``ode_step.c``'s
         ``ode_collide`` does the same): the contacts of foot/toe geoms get feedback slots in
-        order, their pairs and positions go to ``_out_pair``/``_out_pos``; returns how many."""
+        order, their pairs and positions go to ``_out_pair``/``_out_pos``; returns how many.
+        Every pair that touches gets ``stamp`` in ``_hit``."""
         lib = self._lib
         buf, contact = self._contact_buf, self._contact
         size = ctypes.sizeof(ode.ContactGeom)
@@ -662,6 +711,7 @@ class OdeWorld(Senses):
                 continue
             n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
             if n:
+                self._hit[p] = stamp
                 contact.surface = surface
                 for k in range(n):
                     contact.geom = buf[k]
@@ -939,6 +989,118 @@ class OdeWorld(Senses):
         """Joint angular velocities of robot ``index`` in rad/s, canonical order."""
         self._read_state()
         return self._rates[self.robots[index].joint_slice].copy()
+
+    # ------------------------------------------------------------------ what a server reads
+    def motor_targets(self, index: int) -> np.ndarray:
+        """Robot ``index``'s active motor targets (each hinge's ODE motor velocity), rad/s,
+        canonical order."""
+        get = self._lib.dJointGetHingeParam
+        return np.array([get(h, ode.PARAM_VEL) for h in self.robot(index).joints])
+
+    def set_motor_targets(self, index: int, targets: np.ndarray) -> None:
+        """Set robot ``index``'s motor targets (rad/s, canonical order) as they are, without the
+        hinge effector's rules or waking a body: to restore what :meth:`motor_targets` returned
+        after a placement (which zeroes them)."""
+        r = self.robot(index)
+        values = np.asarray(targets, dtype=float)
+        if values.shape != (len(r.joints),) or not np.isfinite(values).all():
+            raise ValueError(f"motor targets must be {len(r.joints)} finite numbers")
+        for h, v in zip(r.joints, values.tolist(), strict=True):
+            self._lib.dJointSetHingeParam(h, ode.PARAM_VEL, v)
+
+    def body_frames(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every body of robot ``index`` in its model's order (``model.bodies``, torso first):
+        centres ``(n, 3)`` (world, m) and rotations ``(n, 3, 3)`` (columns = body axes)."""
+        r = self.robot(index)
+        rows = self._read_state()[[self._row[b] for b in r.bodies]]
+        return rows[:, 0:3].copy(), rows[:, 3:12].reshape(-1, 3, 3).copy()
+
+    def ball_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """Ball centre (world, m) and rotation matrix."""
+        row = self._body(self._ball)
+        return row[0:3].copy(), row[3:12].reshape(3, 3).copy()
+
+    def body_positions(self) -> np.ndarray:
+        """Centres of every body of the world (robots' parts, the ball; world, m), for a sanity
+        check of the whole state."""
+        return self._read_state()[:, 0:3]
+
+    def ball_touchers(self) -> set[int]:
+        """Indices of the robots with a part in contact with the ball in the last step."""
+        if not len(self._ball_pairs):
+            return set()
+        touched = self._hit[self._ball_pairs] == self._stamp
+        return set(self._ball_pair_robot[touched].tolist())
+
+    def forward(self) -> None:
+        """Nothing to do: ODE keeps no derived quantities (kept for the MuJoCo world's
+        interface, whose ``forward`` recomputes body poses after a change of state)."""
+
+    def export_robot_state(self, index: int) -> dict:
+        """Everything of robot ``index`` a rebuilt world needs to go on with it: every body's
+        pose, velocities and whether ODE has it disabled, motor targets, pending commands,
+        accelerometer history, foot contacts, and the agent's state (team, hearing, vision
+        phase and calibration). With :meth:`import_robot_state` it moves a robot into a new
+        world (the ``serve`` server rebuilds its world when robots join or leave)."""
+        lib = self._lib
+        r = self.robot(index)
+        bodies = [
+            (
+                self._vec(lib.dBodyGetPosition(b)),
+                np.array(lib.dBodyGetQuaternion(b)[:4]),
+                self._vec(lib.dBodyGetLinearVel(b)),
+                self._vec(lib.dBodyGetAngularVel(b)),
+                bool(lib.dBodyIsEnabled(b)),
+            )
+            for b in r.bodies
+        ]
+        agent = {f.name: copy.deepcopy(getattr(r, f.name)) for f in fields(AgentState)}
+        return {
+            "robot_type": r.model.robot_type.index,
+            "bodies": bodies,
+            "targets": self.motor_targets(index),
+            "pending": [None if c is None else c.copy() for c in r.pending],
+            "queued": None if index not in self._queued else self._queued[index].copy(),
+            "prev_vel": r.prev_vel.copy(),
+            "accel": r.accel.copy(),
+            "frp": copy.deepcopy(r.frp),
+            "last_frp": copy.deepcopy(r.last_frp),
+            "agent": agent,
+        }
+
+    def import_robot_state(self, index: int, state: Mapping) -> None:
+        """Restore what :meth:`export_robot_state` returned (from a robot of the same type, in
+        any ODE world) into robot ``index``.
+
+        Raises:
+            ValueError: the state is of a robot of another type.
+        """
+        lib = self._lib
+        r = self.robot(index)
+        if state["robot_type"] != r.model.robot_type.index:
+            raise ValueError(
+                f"robot state of type {state['robot_type']} cannot go into robot {index} of "
+                f"type {r.model.robot_type.index}"
+            )
+        for b, (pos, quat, vel, ang, enabled) in zip(r.bodies, state["bodies"], strict=True):
+            lib.dBodySetPosition(b, *map(float, pos))
+            lib.dBodySetQuaternion(b, ode.Vec4(*map(float, quat)))
+            lib.dBodySetLinearVel(b, *map(float, vel))
+            lib.dBodySetAngularVel(b, *map(float, ang))
+            (lib.dBodyEnable if enabled else lib.dBodyDisable)(b)
+        self.set_motor_targets(index, state["targets"])
+        r.pending = [None if c is None else c.copy() for c in state["pending"]]
+        if state["queued"] is None:
+            self._queued.pop(index, None)
+        else:
+            self._queued[index] = state["queued"].copy()
+        r.prev_vel[:] = state["prev_vel"]
+        r.accel[:] = state["accel"]
+        r.frp = copy.deepcopy(state["frp"])
+        r.last_frp = copy.deepcopy(state["last_frp"])
+        for name, value in state["agent"].items():
+            setattr(r, name, copy.deepcopy(value))
+        self._fresh = False
 
     def asleep(self, index: int = 0) -> bool:
         """Whether every body of robot ``index`` is disabled by ODE's auto-disable."""
