@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import tempfile
 import threading
 
@@ -15,13 +16,18 @@ HOST = "127.0.0.1"
 
 @pytest.fixture(autouse=True, scope="session")
 def _private_tempdir(tmp_path_factory):
-    """Temporary files of the session under pytest's own folder: Stable-Baselines3 makes a
-    ``SB3-<time>`` folder in the system's temporary directory for every model that learns
-    without a logger of its own, which would otherwise pile up in /tmp run after run."""
-    old = tempfile.tempdir
-    tempfile.tempdir = str(tmp_path_factory.mktemp("tmp"))
+    """Temporary files of the session under pytest's own folder, for this process and every
+    child (``TMPDIR``): Stable-Baselines3 makes a ``SB3-<time>`` folder in the temporary
+    directory for every model that learns without a logger of its own, which would otherwise
+    pile up in /tmp run after run."""
+    old, old_env = tempfile.tempdir, os.environ.get("TMPDIR")
+    tempfile.tempdir = os.environ["TMPDIR"] = str(tmp_path_factory.mktemp("tmp"))
     yield
     tempfile.tempdir = old
+    if old_env is None:
+        os.environ.pop("TMPDIR", None)
+    else:
+        os.environ["TMPDIR"] = old_env
 
 
 @pytest.fixture(params=ENGINES)

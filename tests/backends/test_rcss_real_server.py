@@ -63,3 +63,161 @@ def test_real_server_launch_reset_step_close(real_binary):
     finally:
         b.close()
     wait_until(lambda: not pid_alive(pid), timeout=15, what="rcssserver3d exit")
+
+
+# ---------------------------------------------------------------------------- the long suite
+def _gravity_in_torso(quat: np.ndarray) -> np.ndarray:
+    """World up (what a resting accelerometer measures, normalised) in the torso frame of a
+    torso with orientation ``quat`` (w, x, y, z)."""
+    w, x, y, z = quat
+    rot = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+    return rot.T @ np.array([0.0, 0.0, 1.0])
+
+
+@pytest.mark.parametrize("robot_type", [0, 1, 2, 3, 4])
+@pytest.mark.parametrize("task", ["RobocupGym/VelocityKick-v0", "RobocupGym/SimpleKick-v0"])
+def test_kick_tasks_on_every_robot_type_for_20_resets_and_400_steps(real_binary, task, robot_type):
+    """Both kick tasks, each robot type: ≥ 20 resets and ≥ 400 steps of random actions on one
+    launched server; after every reset the monitor's ground truth agrees with the robot's own
+    perceptors (a robot standing still measures gravity where the monitor's torso orientation
+    puts it; the start pose's joints are where the reset drove them)."""
+    import gymnasium
+
+    import robocup_gym.envs  # noqa: F401  (registers the environments)
+
+    env = gymnasium.make(
+        task, backend="rcssserver3d", backend_options={"binary": real_binary}, robot_type=robot_type
+    )
+    try:
+        backend = env.unwrapped.backend
+        env.action_space.seed(robot_type)
+        resets, steps, since_reset = 0, 0, 0
+        obs, _ = env.reset(seed=0)
+        resets += 1
+        while resets < 20 or steps < 400:
+            obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+            steps += 1
+            since_reset += 1
+            assert env.observation_space.contains(obs) and math.isfinite(reward)
+            p = backend.last_perception
+            assert p is not None and p.ground_truth is not None
+            assert np.isfinite(p.joint_angles_deg).all()
+            if terminated or truncated or since_reset >= 20:
+                obs, _ = env.reset()
+                resets += 1
+                since_reset = 0
+                stats = backend.last_reset
+                assert stats.converged, stats
+                p = backend.last_perception
+                gt = p.ground_truth
+                acc = np.asarray(p.accel, dtype=float)
+                up = _gravity_in_torso(np.asarray(gt.torso_quat, dtype=float))
+                cos = float(acc @ up / np.linalg.norm(acc))
+                assert cos > math.cos(math.radians(8.0)), (acc, up, stats)
+                assert gt.torso_pos[2] > 0.25, gt
+        assert resets >= 20 and steps >= 400
+    finally:
+        env.close()
+
+
+def test_four_servers_at_once_on_ports_the_os_chose(real_binary):
+    """Four environments, each with its own launched server, side by side: distinct ports,
+    every one steps, every server is gone after close."""
+    backends = [
+        Rcssserver3dBackend(binary=real_binary, startup_timeout=60, timeout=20) for _ in range(4)
+    ]
+    pids = []
+    try:
+        ports = {(b.server.agent_port, b.server.monitor_port) for b in backends}
+        assert len(ports) == 4 and all(a != m for a, m in ports)
+        for k, b in enumerate(backends):
+            pids.append(b.server.pid)
+            p = b.reset_episode(RobotPose(-1.0 - k, 0.0), ball_pos=(-0.8 - k, -0.055, 0.042))
+            assert b.last_reset.converged, b.last_reset
+        for _ in range(50):
+            for b in backends:
+                p = b.step(AgentCommand({"he1": 0.5}))
+                assert p.ground_truth is not None
+    finally:
+        for b in backends:
+            b.close()
+    for pid in pids:
+        wait_until(lambda pid=pid: not pid_alive(pid), timeout=15, what="rcssserver3d exit")
+
+
+_VEC_ENV_SCRIPT = """
+import sys, time
+import gymnasium
+import robocup_gym.envs
+from stable_baselines3.common.vec_env import SubprocVecEnv
+
+class ServerPid(gymnasium.Wrapper):
+    @property
+    def server_pid(self):
+        return self.env.unwrapped.backend.server.pid
+
+def make():
+    return ServerPid(gymnasium.make("RobocupGym/VelocityKick-v0", backend="rcssserver3d",
+                                    backend_options={"binary": sys.argv[1]}))
+
+if __name__ == "__main__":
+    venv = SubprocVecEnv([make, make])
+    venv.reset()
+    print(" ".join(str(pid) for pid in venv.get_attr("server_pid")), flush=True)
+    time.sleep(600)
+"""
+
+
+def test_subproc_vec_env_parent_killed_leaves_no_server(real_binary, tmp_path):
+    """A ``SubprocVecEnv`` of two real-server environments whose parent is SIGKILLed: its
+    workers and their servers all go (nothing is left running)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    script = tmp_path / "vec.py"
+    script.write_text(_VEC_ENV_SCRIPT)
+    proc = subprocess.Popen(
+        [sys.executable, str(script), real_binary], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        line = proc.stdout.readline()
+        pids = [int(x) for x in line.split()]
+        assert len(pids) == 2 and all(pid_alive(p) for p in pids), line
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(10)
+        proc.stdout.close()
+    for pid in pids:
+        wait_until(lambda pid=pid: not pid_alive(pid), timeout=20, what="server exit")
+
+
+def test_a_real_server_killed_mid_episode_is_a_clear_error_and_the_env_goes_on(real_binary):
+    import os
+    import signal
+
+    from robocup_gym.backends.base import BackendError
+
+    b = Rcssserver3dBackend(binary=real_binary, startup_timeout=60, timeout=20)
+    try:
+        b.reset_episode(RobotPose(-1.0, 0.0), ball_pos=(-0.8, -0.055, 0.042))
+        for _ in range(10):
+            b.step(AgentCommand({"he1": 0.5}))
+        old = b.server.pid
+        os.kill(old, signal.SIGKILL)
+        with pytest.raises(BackendError, match="rcssserver3d"):
+            for _ in range(50):
+                b.step(AgentCommand({"he1": 0.5}))
+        p = b.reset_episode(RobotPose(-1.0, 0.0), ball_pos=(-0.8, -0.055, 0.042))
+        assert b.server.pid != old and p.ground_truth is not None
+        for _ in range(20):
+            b.step(AgentCommand({"he1": 0.5}))
+    finally:
+        b.close()

@@ -1,0 +1,271 @@
+"""A published team's own skills on ``robocup-gym serve``: FC Portugal's walk, kick and get-up.
+
+Issue 18 asks whether a team's unchanged agent behaves on ``serve`` as on rcssserver3d. This runs
+FC Portugal's public codebase (https://github.com/m-abr/FCPCodebase; not part of this project:
+clone it and build its C++ modules once, see below) against an in-process ``robocup-gym serve``
+(sync mode, real time off, the server's default noise) on each engine and robot type, and
+measures, from the server's ground truth:
+
+* **walk**: distance covered in 10 s (500 cycles) of its ``Walk`` skill towards a far target,
+  standing start; a fall ends the trial (counted);
+* **kick**: ball travel of its ``Basic_Kick`` (walk up to the ball, kick towards +x), measured
+  3 s after the kick motion ends;
+* **get-up**: cycles of its ``Get_Up`` skill from lying on the front / on the back (after its
+  ``Fall_Front`` / ``Fall_Back`` poses and a settle), and whether the robot is still up 1 s later.
+
+Anchors from a real rcssserver3d 0.7.3 (issue 18/21, the same codebase): walk 8.14 m in 10 s on
+type 0 (0.76–0.85 m/s on types 1–4), kick median 3.05 m, get-up ~66 cycles from the front and
+~55 from the back (up in 12 of 17 tries from the back).
+
+Set-up (once)::
+
+    git clone https://github.com/m-abr/FCPCodebase /path/to/FCPCodebase
+    sudo apt-get install libgsl-dev                   # its localisation module needs GSL
+    python3 -m venv /path/to/fcp-venv && /path/to/fcp-venv/bin/pip install numpy pybind11 psutil
+
+Run (the C++ modules are built on the first run, by the codebase's own builder)::
+
+    python benchmarks/team_code.py --fcp /path/to/FCPCodebase --python /path/to/fcp-venv/bin/python
+
+Prints one line per engine × type and the whole result as one JSON object last. The agent runs
+in a child process with the codebase's interpreter (this file in ``--child`` mode imports only
+the codebase's modules); the server runs here, where every cycle's ground truth is recorded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+WALK_CYCLES = 500
+SETTLE_CYCLES = 30
+KICK_WAIT_CYCLES = 150
+UP_CHECK_CYCLES = 50
+
+
+# ---------------------------------------------------------------------------------- the agent side
+def _child(args: argparse.Namespace) -> None:  # pragma: no cover - runs FC Portugal's code
+    """Run the trials with FC Portugal's agent; print one JSON line per trial (server times)."""
+    os.chdir(args.fcp)
+    sys.path.insert(0, args.fcp)
+    sys.argv = [sys.argv[0]]
+    from scripts.commons.Script import Script  # the codebase's own modules
+
+    Script.build_cpp_modules()  # (before its modules that load them are imported)
+    from agent.Base_Agent import Base_Agent
+
+    player = Base_Agent("127.0.0.1", args.port, args.mport, 1, args.type, "FCP", False, False)
+    w, r, b, scom = player.world, player.world.robot, player.behavior, player.scom
+
+    def cycle() -> None:
+        scom.commit_and_send(r.get_command())
+        scom.receive()
+
+    def hold(pose: str, cycles: int) -> None:
+        for _ in range(cycles):
+            b.execute(pose)
+            cycle()
+
+    def emit(**fields) -> None:
+        print(json.dumps(fields), flush=True)
+
+    scom.unofficial_set_play_mode("PlayOn")
+    for trial in range(args.trials):
+        y = -6.0 + 3.0 * (trial % 5)
+        if "walk" in args.tests:
+            scom.unofficial_beam((-8.0, y, r.beam_height), 0)
+            hold("Zero_Bent_Knees", SETTLE_CYCLES)
+            t0, fell = w.time_server, False
+            for _ in range(WALK_CYCLES):
+                b.execute("Walk", (15.0, y), True, 0, True, None)
+                cycle()
+                if b.is_ready("Get_Up"):
+                    fell = True
+                    break
+            emit(test="walk", t0=t0, t1=w.time_server, fell=fell)
+            if fell:
+                b.execute_to_completion("Get_Up")
+        if "kick" in args.tests:
+            scom.unofficial_move_ball((0.0, y, 0.042))
+            scom.unofficial_beam((-0.6, y + 0.1, r.beam_height), 0)
+            hold("Zero_Bent_Knees", SETTLE_CYCLES)
+            t0, done = w.time_server, False
+            for _ in range(600):
+                done = b.execute("Basic_Kick", 0)
+                cycle()
+                if done or b.is_ready("Get_Up"):
+                    break
+            t_kick = w.time_server
+            hold("Zero_Bent_Knees", KICK_WAIT_CYCLES)
+            emit(test="kick", t0=t0, t_kick=t_kick, t1=w.time_server, done=bool(done))
+            if b.is_ready("Get_Up"):
+                b.execute_to_completion("Get_Up")
+        if "getup" in args.tests:
+            for side in ("front", "back"):
+                scom.unofficial_beam((5.0, y, r.beam_height), 0)
+                hold("Zero_Bent_Knees", SETTLE_CYCLES)
+                pose = "Fall_Front" if side == "front" else "Fall_Back"
+                for _ in range(200):
+                    b.execute(pose)
+                    cycle()
+                    if b.is_ready("Get_Up"):
+                        break
+                hold(pose, SETTLE_CYCLES)
+                t0, n, done = w.time_server, 0, False
+                while not done and n < 400:
+                    done = b.execute("Get_Up")
+                    cycle()
+                    n += 1
+                chosen = {1: "front", 2: "back", 3: "flip"}.get(b.objects["Get_Up"].state, "?")
+                t_up = w.time_server
+                hold("Zero_Bent_Knees", UP_CHECK_CYCLES)
+                emit(
+                    test="getup",
+                    side=side,
+                    chosen=chosen,
+                    cycles=n,
+                    done=bool(done),
+                    t0=t0,
+                    t_up=t_up,
+                    t1=w.time_server,
+                )
+    player.terminate()
+
+
+# --------------------------------------------------------------------------------- the server side
+def _median(values: list[float]) -> float | None:
+    v = sorted(values)
+    if not v:
+        return None
+    m = len(v) // 2
+    return v[m] if len(v) % 2 else 0.5 * (v[m - 1] + v[m])
+
+
+def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
+    """FC Portugal's agent of type ``robot_type`` on an in-process server on ``engine``."""
+    import numpy as np
+
+    from robocup_gym.server import SimServer
+
+    server = SimServer(0, 0, "127.0.0.1", sync=True, real_time=False, seed=0, engine=engine)
+    truth: dict[float, tuple] = {}
+
+    def record(srv: SimServer) -> None:
+        for a in srv.agents:
+            i = srv.world_host.index(a.key) if a.has_robot else None
+            if i is not None:
+                w = srv.world
+                truth[round(w.time, 3)] = (w.torso_position(i), w.torso_up(i), w.ball_position())
+
+    server.on_cycle = record
+    server.start_in_thread()
+    cmd = [
+        args.python,
+        str(Path(__file__).resolve()),
+        "--child",
+        "--fcp",
+        str(Path(args.fcp).resolve()),
+        "--port",
+        str(server.agent_port),
+        "--mport",
+        str(server.monitor_port),
+        "--type",
+        str(robot_type),
+        "--trials",
+        str(args.trials),
+        "--tests",
+        args.tests,
+    ]
+    started = time.perf_counter()
+    try:
+        env = dict(os.environ)  # its C++ builder calls python3.X from PATH: the given interpreter's
+        env["PATH"] = str(Path(args.python).parent) + os.pathsep + env.get("PATH", "")
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout, env=env)
+    finally:
+        server.stop()
+    trials = []
+    for line in proc.stdout.splitlines():
+        if line.startswith("{"):
+            trials.append(json.loads(line))
+    if not trials:
+        raise RuntimeError(
+            f"FC Portugal's agent reported nothing (exit {proc.returncode}):\n"
+            + (proc.stdout + proc.stderr)[-3000:]
+        )
+
+    def at(t: float) -> tuple:
+        return truth[min(truth, key=lambda k: abs(k - t))]
+
+    walks, kicks, ups = [], [], {"front": [], "back": []}
+    for tr in trials:
+        if tr["test"] == "walk":
+            p0, p1 = at(tr["t0"])[0], at(tr["t1"])[0]
+            secs = max(tr["t1"] - tr["t0"], 1e-9)
+            walks.append((float(np.hypot(*(p1 - p0)[:2])), secs, tr["fell"]))
+        elif tr["test"] == "kick":
+            b0, b1 = at(tr["t0"])[2], at(tr["t1"])[2]
+            kicks.append((float(np.hypot(*(b1 - b0)[:2])), tr["done"]))
+        elif tr["test"] == "getup":
+            torso, up, _ = at(tr["t1"])
+            stays = bool(tr["done"] and torso[2] > 0.28 and up[2] > math.cos(math.radians(30)))
+            ups[tr["side"]].append((tr["cycles"], tr["done"], stays, tr["chosen"]))
+    out = {
+        "engine": engine,
+        "robot_type": robot_type,
+        "wall_s": round(time.perf_counter() - started, 1),
+    }
+    if walks:
+        full = [d for d, s, fell in walks if not fell]
+        out["walk_m_in_10s"] = [round(d, 2) for d, _, _ in walks]
+        out["walk_speed_mps_median"] = round(_median([d / s for d, s, f in walks if not f]) or 0, 3)
+        out["walk_falls"] = sum(f for _, _, f in walks)
+        out["walk_m_in_10s_median"] = _median([round(d, 2) for d in full])
+    if kicks:
+        out["kick_m"] = [round(d, 2) for d, _ in kicks]
+        out["kick_m_median"] = _median([d for d, _ in kicks])
+    for side, rows in ups.items():
+        if rows:
+            done = [c for c, d, _, _ in rows if d]
+            out[f"getup_{side}_cycles"] = [c for c, _, _, _ in rows]
+            out[f"getup_{side}_cycles_median"] = _median(done)
+            out[f"getup_{side}_stays_up"] = f"{sum(s for _, _, s, _ in rows)}/{len(rows)}"
+            out[f"getup_{side}_chosen"] = sorted({c for _, _, _, c in rows})
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--fcp", required=True, help="an FCPCodebase checkout")
+    parser.add_argument(
+        "--python", default=sys.executable, help="interpreter with numpy + pybind11 for it"
+    )
+    parser.add_argument("--engines", default="ode,mujoco")
+    parser.add_argument("--types", default="0,1,2,3,4")
+    parser.add_argument("--trials", type=int, default=3, help="trials per test and type")
+    parser.add_argument("--tests", default="walk,kick,getup")
+    parser.add_argument("--timeout", type=float, default=900.0, help="seconds per engine × type")
+    parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--port", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--mport", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--type", type=int, default=0, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        _child(args)
+        return
+    results = []
+    for engine in args.engines.split(","):
+        for t in (int(x) for x in args.types.split(",")):
+            r = run_one(args, engine, t)
+            results.append(r)
+            print({k: v for k, v in r.items() if not isinstance(v, list)}, flush=True)
+    print(json.dumps({"fcp_on_serve": results}))
+
+
+if __name__ == "__main__":
+    main()
