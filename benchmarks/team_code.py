@@ -26,6 +26,12 @@ Set-up (once)::
 Run (the C++ modules are built on the first run, by the codebase's own builder)::
 
     python benchmarks/team_code.py --fcp /path/to/FCPCodebase --python /path/to/fcp-venv/bin/python
+    python benchmarks/team_code.py ... --engines real      # a real rcssserver3d (RCSSSERVER3D)
+
+``--engines`` lists what to run on: ``ode`` and ``mujoco`` are ``robocup-gym serve`` in-process
+on that engine (ground truth read from its world every cycle), ``real`` a real rcssserver3d
+launched by :class:`robocup_gym.backends.process.ServerProcess` (sync mode, real time off;
+ground truth from its monitor stream, every cycle).
 
 Prints one line per engine × type and the whole result as one JSON object last. The agent runs
 in a child process with the codebase's interpreter (this file in ``--child`` mode imports only
@@ -43,6 +49,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 WALK_CYCLES = 500
 SETTLE_CYCLES = 30
 KICK_WAIT_CYCLES = 150
@@ -51,7 +59,8 @@ UP_CHECK_CYCLES = 50
 
 # ---------------------------------------------------------------------------------- the agent side
 def _child(args: argparse.Namespace) -> None:  # pragma: no cover - runs FC Portugal's code
-    """Run the trials with FC Portugal's agent; print one JSON line per trial (server times)."""
+    """Run the trials with FC Portugal's agent; print one JSON line per trial (game times:
+    the play mode is PlayOn throughout, so the game clock runs with every cycle)."""
     os.chdir(args.fcp)
     sys.path.insert(0, args.fcp)
     sys.argv = [sys.argv[0]]
@@ -81,29 +90,29 @@ def _child(args: argparse.Namespace) -> None:  # pragma: no cover - runs FC Port
         if "walk" in args.tests:
             scom.unofficial_beam((-8.0, y, r.beam_height), 0)
             hold("Zero_Bent_Knees", SETTLE_CYCLES)
-            t0, fell = w.time_server, False
+            t0, fell = w.time_game, False
             for _ in range(WALK_CYCLES):
                 b.execute("Walk", (15.0, y), True, 0, True, None)
                 cycle()
                 if b.is_ready("Get_Up"):
                     fell = True
                     break
-            emit(test="walk", t0=t0, t1=w.time_server, fell=fell)
+            emit(test="walk", t0=t0, t1=w.time_game, fell=fell)
             if fell:
                 b.execute_to_completion("Get_Up")
         if "kick" in args.tests:
             scom.unofficial_move_ball((0.0, y, 0.042))
             scom.unofficial_beam((-0.6, y + 0.1, r.beam_height), 0)
             hold("Zero_Bent_Knees", SETTLE_CYCLES)
-            t0, done = w.time_server, False
+            t0, done = w.time_game, False
             for _ in range(600):
                 done = b.execute("Basic_Kick", 0)
                 cycle()
                 if done or b.is_ready("Get_Up"):
                     break
-            t_kick = w.time_server
+            t_kick = w.time_game
             hold("Zero_Bent_Knees", KICK_WAIT_CYCLES)
-            emit(test="kick", t0=t0, t_kick=t_kick, t1=w.time_server, done=bool(done))
+            emit(test="kick", t0=t0, t_kick=t_kick, t1=w.time_game, done=bool(done))
             if b.is_ready("Get_Up"):
                 b.execute_to_completion("Get_Up")
         if "getup" in args.tests:
@@ -117,13 +126,13 @@ def _child(args: argparse.Namespace) -> None:  # pragma: no cover - runs FC Port
                     if b.is_ready("Get_Up"):
                         break
                 hold(pose, SETTLE_CYCLES)
-                t0, n, done = w.time_server, 0, False
+                t0, n, done = w.time_game, 0, False
                 while not done and n < 400:
                     done = b.execute("Get_Up")
                     cycle()
                     n += 1
                 chosen = {1: "front", 2: "back", 3: "flip"}.get(b.objects["Get_Up"].state, "?")
-                t_up = w.time_server
+                t_up = w.time_game
                 hold("Zero_Bent_Knees", UP_CHECK_CYCLES)
                 emit(
                     test="getup",
@@ -133,7 +142,7 @@ def _child(args: argparse.Namespace) -> None:  # pragma: no cover - runs FC Port
                     done=bool(done),
                     t0=t0,
                     t_up=t_up,
-                    t1=w.time_server,
+                    t1=w.time_game,
                 )
     player.terminate()
 
@@ -147,24 +156,81 @@ def _median(values: list[float]) -> float | None:
     return v[m] if len(v) % 2 else 0.5 * (v[m - 1] + v[m])
 
 
-def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
-    """FC Portugal's agent of type ``robot_type`` on an in-process server on ``engine``."""
-    import numpy as np
+class _ServeTruth:
+    """``robocup-gym serve`` in this process on one engine; ground truth from its world."""
 
-    from robocup_gym.server import SimServer
+    def __init__(self, engine: str) -> None:
+        from robocup_gym.server import SimServer
 
-    server = SimServer(0, 0, "127.0.0.1", sync=True, real_time=False, seed=0, engine=engine)
-    truth: dict[float, tuple] = {}
+        self.server = SimServer(
+            0, 0, "127.0.0.1", sync=True, real_time=False, seed=0, engine=engine
+        )
+        self.truth: dict[float, tuple] = {}
+        self.server.on_cycle = self._record
+        self.server.start_in_thread()
+        self.agent_port, self.monitor_port = self.server.agent_port, self.server.monitor_port
 
-    def record(srv: SimServer) -> None:
+    def _record(self, srv) -> None:
         for a in srv.agents:
             i = srv.world_host.index(a.key) if a.has_robot else None
             if i is not None:
                 w = srv.world
-                truth[round(w.time, 3)] = (w.torso_position(i), w.torso_up(i), w.ball_position())
+                key = round(w.game.game_time, 3)
+                self.truth[key] = (w.torso_position(i), w.torso_up(i), w.ball_position())
 
-    server.on_cycle = record
-    server.start_in_thread()
+    def stop(self) -> None:
+        self.server.stop()
+
+
+class _RealTruth:
+    """A real rcssserver3d launched for the run; ground truth from its monitor stream (a
+    monitor frame every cycle), read by a thread here."""
+
+    def __init__(self) -> None:
+        import threading
+
+        from robocup_gym.backends.process import ServerProcess
+        from robocup_gym.backends.rcssserver3d_backend import _MonitorTracker
+        from robocup_gym.server.client import MonitorClient
+
+        self.proc = ServerProcess(sync=True, real_time=False, monitor_step=0.02)
+        self.proc.start()
+        self.agent_port, self.monitor_port = self.proc.agent_port, self.proc.monitor_port
+        self.truth: dict[float, tuple] = {}
+        self._tracker = _MonitorTracker()
+        self._tracker.set_agent("left", 1)
+        self._client = MonitorClient("127.0.0.1", self.monitor_port, timeout=60.0)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._read, daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        while not self._stop.is_set():
+            try:
+                frame = self._client.recv()
+            except Exception:  # the server went away at the end
+                return
+            t = self._tracker
+            t.feed(frame)
+            if t.need_full and not t.full_requested:
+                self._client.send("(reqfullstate)")
+                t.full_requested = True
+            s = t.newest()
+            if s is not None and s.torso is not None:
+                up = s.torso[:3, 2] / max(float(np.linalg.norm(s.torso[:3, 2])), 1e-12)
+                self.truth[round(s.game_time, 3)] = (s.torso[:3, 3].copy(), up, s.ball_pos.copy())
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._client.close()
+        self.proc.stop()
+
+
+def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
+    """FC Portugal's agent of type ``robot_type`` on ``engine`` (``ode``/``mujoco``: serve in
+    this process; ``real``: a real rcssserver3d)."""
+    host = _RealTruth() if engine == "real" else _ServeTruth(engine)
+    truth = host.truth
     cmd = [
         args.python,
         str(Path(__file__).resolve()),
@@ -172,9 +238,9 @@ def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
         "--fcp",
         str(Path(args.fcp).resolve()),
         "--port",
-        str(server.agent_port),
+        str(host.agent_port),
         "--mport",
-        str(server.monitor_port),
+        str(host.monitor_port),
         "--type",
         str(robot_type),
         "--trials",
@@ -188,7 +254,7 @@ def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
         env["PATH"] = str(Path(args.python).parent) + os.pathsep + env.get("PATH", "")
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout, env=env)
     finally:
-        server.stop()
+        host.stop()
     trials = []
     for line in proc.stdout.splitlines():
         if line.startswith("{"):

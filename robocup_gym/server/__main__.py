@@ -8,6 +8,7 @@ import sys
 
 from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT
 from robocup_gym.server.server import PortInUseError, serve
+from robocup_gym.sim.engines.ode.lib import OdeUnavailableError
 
 
 def port_number(text: str) -> int:
@@ -230,6 +231,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
         )
     except PortInUseError as exc:
         print(f"{prog}: error: {exc.strerror}", file=sys.stderr)
+        return 2
+    except OdeUnavailableError as exc:
+        print(f"{prog}: error: {exc} (here: --engine mujoco)", file=sys.stderr)
         return 2
     except (OSError, ValueError) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)

@@ -72,3 +72,15 @@ def test_benchmark_runs():
 def test_team_benchmark_runs_a_sync_game_of_several_agents():
     """The full-game figure's code path (22 agents there): every agent steps, none stalls."""
     assert measure_team_cycles_per_s(0.5, engine="ode", n_agents=3) > 5
+
+
+def test_without_libode_serve_says_so_in_one_line_and_names_the_other_engine(tmp_path):
+    import os
+
+    env = dict(os.environ, ROBOCUP_GYM_LIBODE=str(tmp_path / "no-libode.so"))
+    args = [sys.executable, "-m", "robocup_gym.server", "--agent-port", "0", "--monitor-port", "0"]
+    res = subprocess.run(args, capture_output=True, text=True, timeout=60, env=env)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Open Dynamics Engine" in lines[0], res.stderr
+    assert "--engine mujoco" in lines[0] and "Traceback" not in res.stderr
