@@ -1,8 +1,8 @@
 """A published team's own skills on ``robocup-gym serve``: FC Portugal's walk, kick and get-up.
 
 Issue 18 asks whether a team's unchanged agent behaves on ``serve`` as on rcssserver3d. This runs
-FC Portugal's public codebase (https://github.com/m-abr/FCPCodebase; not part of this project:
-clone it and build its C++ modules once, see below) against an in-process ``robocup-gym serve``
+FC Portugal's public codebase (https://github.com/m-abr/FCPCodebase; not part of this project,
+see below for what it needs) against an in-process ``robocup-gym serve``
 (sync mode, real time off, the server's default noise) on each engine and robot type, and
 measures, from the server's ground truth:
 
@@ -17,15 +17,11 @@ Anchors from a real rcssserver3d 0.7.3 (issue 18/21, the same codebase): walk 8.
 type 0 (0.76–0.85 m/s on types 1–4), kick median 3.05 m, get-up ~66 cycles from the front and
 ~55 from the back (up in 12 of 17 tries from the back).
 
-Set-up (once)::
+It needs an FCPCodebase checkout that runs (its C++ modules built, as its own scripts do on
+their first run) and an interpreter that runs it (numpy < 2, which the codebase was written
+for, and pybind11)::
 
-    git clone https://github.com/m-abr/FCPCodebase /path/to/FCPCodebase
-    sudo apt-get install libgsl-dev                   # its localisation module needs GSL
-    python3 -m venv /path/to/fcp-venv && /path/to/fcp-venv/bin/pip install numpy pybind11 psutil
-
-Run (the C++ modules are built on the first run, by the codebase's own builder)::
-
-    python benchmarks/team_code.py --fcp /path/to/FCPCodebase --python /path/to/fcp-venv/bin/python
+    python benchmarks/team_code.py --fcp /path/to/FCPCodebase --python /path/to/its/python
     python benchmarks/team_code.py ... --engines real      # a real rcssserver3d (RCSSSERVER3D)
 
 ``--engines`` lists what to run on: ``ode`` and ``mujoco`` are ``robocup-gym serve`` in-process
@@ -64,10 +60,7 @@ def _child(args: argparse.Namespace) -> None:  # pragma: no cover - runs FC Port
     os.chdir(args.fcp)
     sys.path.insert(0, args.fcp)
     sys.argv = [sys.argv[0]]
-    from scripts.commons.Script import Script  # the codebase's own modules
-
-    Script.build_cpp_modules()  # (before its modules that load them are imported)
-    from agent.Base_Agent import Base_Agent
+    from agent.Base_Agent import Base_Agent  # the codebase's own modules
 
     player = Base_Agent("127.0.0.1", args.port, args.mport, 1, args.type, "FCP", False, False)
     w, r, b, scom = player.world, player.world.robot, player.behavior, player.scom
@@ -97,7 +90,13 @@ def _child(args: argparse.Namespace) -> None:  # pragma: no cover - runs FC Port
                 if b.is_ready("Get_Up"):
                     fell = True
                     break
-            emit(test="walk", t0=t0, t1=w.time_game, fell=fell)
+            emit(
+                test="walk",
+                t0=t0,
+                t1=w.time_game,
+                fell=fell,
+                own_xy=[round(float(v), 3) for v in r.loc_head_position[:2]],
+            )
             if fell:
                 b.execute_to_completion("Get_Up")
         if "kick" in args.tests:
@@ -250,9 +249,7 @@ def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
     ]
     started = time.perf_counter()
     try:
-        env = dict(os.environ)  # its C++ builder calls python3.X from PATH: the given interpreter's
-        env["PATH"] = str(Path(args.python).parent) + os.pathsep + env.get("PATH", "")
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout, env=env)
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
     finally:
         host.stop()
     trials = []

@@ -42,6 +42,7 @@ import math
 import re
 import select
 import socket
+import subprocess
 import time
 import weakref
 from collections.abc import Mapping, Sequence
@@ -438,6 +439,9 @@ def _quat_from_matrix(r: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------------------------------
 
 
+WAKE_RAD_S = 1e-4
+"""Joint velocity sent with the reset's placement frame, rad/s: the smallest non-zero value of
+the 4-decimal wire format, to wake the robot's bodies (see ``reset_episode``)."""
 PINNED_CYCLES = 5
 """Cycles a joint must sit on a stop without moving, although commanded, to count as pinned."""
 _STOP_TOLERANCE_DEG = 0.011
@@ -529,7 +533,7 @@ class Rcssserver3dBackend(Backend):
         unum: int = 0,
         timeout: float = 10.0,
         startup_timeout: float = 30.0,
-        reset_tolerance_deg: float = 0.5,
+        reset_tolerance_deg: float = 0.05,
         reset_max_cycles: int = 200,
         reset_gain: float = 1.0,
         hover_height: float = 0.3,
@@ -585,6 +589,8 @@ class Rcssserver3dBackend(Backend):
         self._links: list[_Link] = []
         self._last: Perception | None = None
         self._closed = False
+        self._broken = False
+        """A connection broke (set by :meth:`_connection_lost`; cleared by a relaunch)."""
         self._warned_async = False
         self._stand_cache: dict[tuple[float, ...], float] = {}
         self._kinematics: Any = None
@@ -640,13 +646,22 @@ class Rcssserver3dBackend(Backend):
         """Launch mode: a server that exited or was killed (its step raised a clear
         :class:`BackendError`) is replaced by a new one here, so that the environment resets and
         goes on; connect mode cannot restart someone else's server."""
-        if self.connect_mode or self.server is None or self.server.running:
+        if self.connect_mode or self.server is None:
+            return
+        proc = self.server.proc
+        if self._broken and self.server.running and proc is not None:
+            # a killed server closes its sockets a moment before it can be reaped
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(2.0)
+        if self.server.running and not self._broken:
             return
         log.warning(
-            "rcssserver3d (pid %s) is gone (exit code %s); starting a new one",
+            "rcssserver3d (pid %s) is gone or its connection broke (exit code %s); starting a "
+            "new one",
             self.server.pid,
-            self.server.proc.returncode if self.server.proc is not None else None,
+            proc.returncode if proc is not None else None,
         )
+        self._broken = False
         self._close_links()
         self.server.stop()
         self.server = None
@@ -760,8 +775,7 @@ class Rcssserver3dBackend(Backend):
                 "waiting for another agent?)"
             )
         except ConnectionError as exc:
-            self._check_server()
-            self._fail(str(exc))
+            self._connection_lost(exc)
         return self._parse(frame)
 
     def _check_server(self) -> None:
@@ -770,6 +784,13 @@ class Rcssserver3dBackend(Backend):
                 self.server.check_alive()
             except ServerStartError as exc:
                 raise BackendError(str(exc)) from None
+
+    def _connection_lost(self, exc: ConnectionError) -> None:
+        """A connection to the server broke: remember it (the next reset replaces a launched
+        server, see :meth:`_relaunch_if_dead`) and raise the clear error."""
+        self._broken = True
+        self._check_server()
+        self._fail(str(exc))
 
     def _fail(self, what: str) -> None:
         where = f"rcssserver3d at {self.host}:{self.agent_port}/{self.monitor_port}"
@@ -788,8 +809,7 @@ class Rcssserver3dBackend(Backend):
         try:
             frames = mon.available(timeout)
         except ConnectionError as exc:
-            self._check_server()
-            self._fail(str(exc))
+            self._connection_lost(exc)
         tracker = self._tracker
         for f in frames:
             tracker.feed(f)
@@ -842,8 +862,7 @@ class Rcssserver3dBackend(Backend):
                 self._monitor.send(trainer, self.timeout)
             self._agent.send(message, self.timeout)
         except ConnectionError as exc:
-            self._check_server()
-            self._fail(str(exc))
+            self._connection_lost(exc)
         p = self._recv_percept()
         if wait:
             self._sync_monitor(p)
@@ -1010,9 +1029,19 @@ class Rcssserver3dBackend(Backend):
             + tc.ball(bpos, bvel)
             + tc.set_time(0.0)
         )
+        # the two cycles after the placement get the smallest non-zero joint velocities the wire
+        # carries (1e-4 rad/s: 2e-6 rad a cycle): a non-zero command wakes the joint's body, so
+        # the robot is awake once it is put down, as the in-process engines place it, instead of
+        # hanging asleep where the hover's idle cycles and the move left it (ODE's auto-disable).
+        # Measured on rcssserver3d 0.7.3: a wake in the placement's own cycle or the next is
+        # undone by the move; in the second it holds (both feet then carry ~22.5 N, as
+        # in-process)
         zero = self._velocity_text(np.zeros(self._n))
         p = self._exchange(zero, final, wait=False)
-        settle = 1
+        wake = self._velocity_text(np.full(self._n, WAKE_RAD_S))
+        p = self._exchange(wake, wait=False)
+        p = self._exchange(wake, wait=False)
+        settle = 3
         deadline = time.monotonic() + self.reset_timeout
         while not self._reset_visible(p, pose, z):
             # wait (a little) for the monitor frame of this very cycle before running another:
@@ -1025,7 +1054,7 @@ class Rcssserver3dBackend(Backend):
                     f"the reset did not show within {self.reset_timeout:.1f} s ({settle} cycles) "
                     "after the trainer commands (is the monitor port that of the same server?)"
                 )
-            p = self._exchange(zero, wait=False)
+            p = self._exchange(self._velocity_text(np.zeros(self._n)), wait=False)
             settle += 1
         self._tracker.restart_velocities(
             bvel, p.game.game_time, p.game.play_mode not in FROZEN_CLOCK_MODES
@@ -1098,8 +1127,10 @@ class Rcssserver3dBackend(Backend):
             out[:] = arr
         if not np.isfinite(out).all():
             raise ValueError("joint_angles_deg must be finite")
-        # keep targets strictly inside the stops: the server ignores commands at a stop
-        margin = 0.05
+        # keep targets strictly inside the stops (the server ignores commands at a stop), and
+        # farther from a stop than the tolerance, so that a joint left on that stop is clearly
+        # not at its target (it is either driven off the stop or counted as pinned)
+        margin = max(0.05, 2.0 * self.reset_tolerance_deg)
         return np.clip(out, self._ranges[:, 0] + margin, self._ranges[:, 1] - margin)
 
     def _standing_z(self, angles_deg: np.ndarray) -> float:

@@ -116,11 +116,13 @@ def test_kick_tasks_on_every_robot_type_for_20_resets_and_400_steps(real_binary,
                 assert stats.converged, stats
                 p = backend.last_perception
                 gt = p.ground_truth
+                assert gt.torso_pos[2] > 0.25, gt
+                if stats.pinned:  # lands on a leg left bent by a pinned joint: not at rest
+                    continue
                 acc = np.asarray(p.accel, dtype=float)
                 up = _gravity_in_torso(np.asarray(gt.torso_quat, dtype=float))
                 cos = float(acc @ up / np.linalg.norm(acc))
                 assert cos > math.cos(math.radians(8.0)), (acc, up, stats)
-                assert gt.torso_pos[2] > 0.25, gt
         assert resets >= 20 and steps >= 400
     finally:
         env.close()

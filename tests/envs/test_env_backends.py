@@ -35,7 +35,9 @@ def test_registry_builds_by_name_and_accepts_new_entries():
         make_backend("test-fake")
 
 
-def test_planned_backend_error_names_it():
+def test_planned_backend_error_names_it(monkeypatch, tmp_path):
+    monkeypatch.delenv("RCSSSERVER3D", raising=False)  # (a machine with a real server)
+    monkeypatch.setenv("PATH", str(tmp_path))
     with pytest.raises(BackendNotAvailableError) as e:
         make_backend("rcssserver3d")
     assert "rcssserver3d" in str(e.value) and "mujoco" in str(e.value)

@@ -54,7 +54,9 @@ def test_registered_env_passes_checkers(env_id):
         env.close()
 
 
-def test_missing_backend_is_a_clear_error():
+def test_missing_backend_is_a_clear_error(monkeypatch, tmp_path):
+    monkeypatch.delenv("RCSSSERVER3D", raising=False)  # (a machine with a real server)
+    monkeypatch.setenv("PATH", str(tmp_path))
     with pytest.raises(BackendNotAvailableError, match=r"rcssserver3d.*not available.*'mujoco'"):
         gym.make("RobocupGym/SimpleKick-v0", backend="rcssserver3d")
     with pytest.raises(BackendNotAvailableError, match=r"unknown backend 'bullet'"):
