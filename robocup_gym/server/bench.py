@@ -14,6 +14,9 @@ mixed), each a thread with its own connection that beams to its own spot and the
 velocities + ``(syn)`` per percept and parses every percept; the server steps when all 22 have
 synced, so this is the cycle rate of a whole game in sync mode.
 
+Where a real rcssserver3d is installed (``RCSSSERVER3D`` or on ``PATH``) the one-agent figure is
+also measured on it, in the same run (``real_sync_cycles_per_s``, ``serve_vs_real``).
+
 Run it: ``python -m robocup_gym.server.bench [seconds] [--engine ode|mujoco] [--agents N]``
 (prints one JSON line).
 """
@@ -131,6 +134,23 @@ def measure_sync_cycles_per_s(seconds: float = 3.0, engine: str = "ode") -> floa
     return cycles / elapsed
 
 
+def measure_real_sync_cycles_per_s(seconds: float = 3.0) -> float | None:
+    """The same one-agent figure on a real rcssserver3d where one is installed (``RCSSSERVER3D``
+    or on ``PATH``; launched in sync mode, real time off, on OS-chosen ports), else ``None``."""
+    from robocup_gym.backends.process import RcssServerNotFoundError, ServerProcess
+
+    try:
+        proc = ServerProcess(sync=True, real_time=False)
+    except RcssServerNotFoundError:
+        return None
+    proc.start()
+    try:
+        cycles, elapsed = run_agent(proc.agent_port, seconds)
+    finally:
+        proc.stop()
+    return cycles / elapsed
+
+
 def run_team(
     port: int, n_agents: int, seconds: float, host: str = "127.0.0.1"
 ) -> tuple[int, float]:
@@ -213,13 +233,15 @@ if __name__ == "__main__":  # pragma: no cover
     parser.add_argument("--agents", type=int, default=22, help="agents of the full-game figure")
     args = parser.parse_args()
     one = measure_sync_cycles_per_s(args.seconds, args.engine)
+    real = measure_real_sync_cycles_per_s(args.seconds)
     team = measure_team_cycles_per_s(args.seconds, args.engine, args.agents)
-    print(
-        json.dumps(
-            {
-                "engine": args.engine,
-                "serve_sync_cycles_per_s": round(one),
-                f"serve_{args.agents}_agents_cycles_per_s": round(team, 1),
-            }
-        )
-    )
+    out = {
+        "engine": args.engine,
+        "serve_sync_cycles_per_s": round(one),
+        f"serve_{args.agents}_agents_cycles_per_s": round(team, 1),
+        f"serve_{args.agents}_agents_x_real_time": round(team / 50.0, 2),
+    }
+    if real is not None:
+        out["real_sync_cycles_per_s"] = round(real)
+        out["serve_vs_real"] = round(one / real, 2)
+    print(json.dumps(out))

@@ -223,3 +223,29 @@ def test_a_real_server_killed_mid_episode_is_a_clear_error_and_the_env_goes_on(r
             b.step(AgentCommand({"he1": 0.5}))
     finally:
         b.close()
+
+
+def test_serve_sends_the_real_servers_first_monitor_frame(real_binary):
+    """A RoboViz-style monitor connecting to ``robocup-gym serve`` gets the real server's first
+    full frame (environment, static scene, ball) byte for byte; only the resting ball's height
+    differs in its last digits (it settles into the ground over the first cycles)."""
+    import re
+
+    from robocup_gym.backends.process import ServerProcess
+    from robocup_gym.server import SimServer
+    from robocup_gym.server.client import MonitorClient
+
+    sp = ServerProcess(real_binary, sync=True, real_time=False)
+    sp.start()
+    try:
+        with MonitorClient("127.0.0.1", sp.monitor_port, timeout=20) as m:
+            real = m.recv()
+    finally:
+        sp.stop()
+    with SimServer(0, 0, "127.0.0.1", sync=True, real_time=False) as s:
+        with MonitorClient("127.0.0.1", s.monitor_port, timeout=20) as m:
+            ours = m.recv()
+    ball = re.compile(r"0 0 0 (0\.04\d*) 1\)\(nd StaticMesh \(setVisible 1\) \(load models/soccerball")
+    (z_real,), (z_ours,) = ball.findall(real), ball.findall(ours)
+    assert abs(float(z_real) - float(z_ours)) < 2e-3
+    assert ball.sub("BALL", real) == ball.sub("BALL", ours)
