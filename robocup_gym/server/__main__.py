@@ -75,6 +75,12 @@ def _load_config(parser: argparse.ArgumentParser, path: str) -> dict:
     for key, value in data.items():
         dest = key.replace("-", "_")
         action = actions.get(dest)
+        negated = actions.get(dest[3:]) if dest.startswith("no_") else None
+        if action is None and isinstance(negated, argparse.BooleanOptionalAction):
+            if not isinstance(value, bool):  # `no-rules = true` is `rules = false`
+                parser.error(f"--config {path}: {key} must be true or false, got {value!r}")
+            out[negated.dest] = not value
+            continue
         if action is None:
             valid = ", ".join(sorted(d.replace("_", "-") for d in actions))
             parser.error(f"--config {path}: unknown option {key!r}; valid: {valid}")
@@ -89,8 +95,8 @@ def _load_config(parser: argparse.ArgumentParser, path: str) -> dict:
                 parser.error(f"--config {path}: {key}: {exc}")
             except ValueError:
                 parser.error(f"--config {path}: {key}: {value!r} is not valid")
-            if action.choices is not None and value not in action.choices:
-                parser.error(f"--config {path}: {key} must be one of {list(action.choices)}")
+        if action.choices is not None and value not in action.choices:
+            parser.error(f"--config {path}: {key} must be one of {list(action.choices)}")
         out[dest] = value
     return out
 
@@ -142,9 +148,25 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
         help="mypos/myorien/ballpos in See (default off; `robocup-gym agent` without a monitor "
         "port needs it)",
     )
-    p.add_argument("--no-vision-noise", action="store_true", help="exact vision, no beam noise")
-    p.add_argument("--full-vision", action="store_true", help="360 degree view cones")
-    p.add_argument("--no-rules", action="store_true", help="no automatic referee")
+    p.add_argument(
+        "--vision-noise",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="vision noise, calibration offset and beam noise, as rcssserver3d (--no-vision-noise: "
+        "exact vision)",
+    )
+    p.add_argument(
+        "--full-vision",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="unrestricted vision: 360 degree view cones (default: 120 degrees)",
+    )
+    p.add_argument(
+        "--rules",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="the automatic referee (--no-rules: play modes only by trainer command)",
+    )
     p.add_argument(
         "--monitor-interval",
         type=positive_int,
@@ -218,9 +240,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
             sync=args.sync,
             real_time=args.real_time,
             ground_truth=args.ground_truth,
-            vision_noise=not args.no_vision_noise,
+            vision_noise=args.vision_noise,
             view_cone_deg=360.0 if args.full_vision else 120.0,
-            rules=not args.no_rules,
+            rules=args.rules,
             monitor_interval=args.monitor_interval,
             sync_timeout=args.sync_timeout,
             seed=args.seed,

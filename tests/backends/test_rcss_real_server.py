@@ -242,10 +242,14 @@ def test_serve_sends_the_real_servers_first_monitor_frame(real_binary):
             real = m.recv()
     finally:
         sp.stop()
-    with SimServer(0, 0, "127.0.0.1", sync=True, real_time=False) as s:
-        with MonitorClient("127.0.0.1", s.monitor_port, timeout=20) as m:
-            ours = m.recv()
-    ball = re.compile(r"0 0 0 (0\.04\d*) 1\)\(nd StaticMesh \(setVisible 1\) \(load models/soccerball")
+    with (
+        SimServer(0, 0, "127.0.0.1", sync=True, real_time=False) as s,
+        MonitorClient("127.0.0.1", s.monitor_port, timeout=20) as m,
+    ):
+        ours = m.recv()
+    ball = re.compile(
+        r"0 0 0 (0\.04\d*) 1\)\(nd StaticMesh \(setVisible 1\) \(load models/soccerball"
+    )
     (z_real,), (z_ours,) = ball.findall(real), ball.findall(ours)
     assert abs(float(z_real) - float(z_ours)) < 2e-3
     assert ball.sub("BALL", real) == ball.sub("BALL", ours)

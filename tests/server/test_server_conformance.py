@@ -143,12 +143,22 @@ def test_serve_reads_a_config_file_and_flags_win(tmp_path, monkeypatch, capsys):
     assert seen["decimals"] == 2  # the flag wins over the file
     assert seen["robot_types"] == (0, 4) and seen["type_limits"] is False
     assert seen["sync_timeout"] == 2.5
+    assert seen["engine"] == "ode" and seen["rules"] is True and seen["vision_noise"] is True
+    # rcssserver3d-style switches, also in their `no-` spellings
+    cfg.write_text("no-rules = true\nvision-noise = false\nfull-vision = true\nengine = 'mujoco'\n")
+    assert server_main.main(["--config", str(cfg)]) == 0
+    assert seen["rules"] is False and seen["vision_noise"] is False
+    assert seen["view_cone_deg"] == 360.0 and seen["engine"] == "mujoco"
+    assert server_main.main(["--config", str(cfg), "--rules", "--vision-noise"]) == 0
+    assert seen["rules"] is True and seen["vision_noise"] is True
     bad = tmp_path / "bad.toml"
     for text, expected in (
         ("nosuch = 1\n", "unknown option 'nosuch'"),
         ("agent-port = 70000\n", "70000 is not a port number"),
         ("sync = 3\n", "sync must be true or false"),
         ("sync = \n", "not valid TOML"),
+        ("no-rules = 1\n", "no-rules must be true or false"),
+        ("engine = 'bullet'\n", "engine must be one of"),
     ):
         bad.write_text(text)
         with pytest.raises(SystemExit) as exit_:
