@@ -253,3 +253,38 @@ def test_serve_sends_the_real_servers_first_monitor_frame(real_binary):
     (z_real,), (z_ours,) = ball.findall(real), ball.findall(ours)
     assert abs(float(z_real) - float(z_ours)) < 2e-3
     assert ball.sub("BALL", real) == ball.sub("BALL", ours)
+
+
+@pytest.mark.parametrize("pose_name", ["zero", "crouch"])
+def test_real_resets_start_awake_and_standing_as_in_process(real_binary, pose_name):
+    """After a reset (also one after the robot stood idle, when ODE's auto-disable would leave it
+    asleep and hanging), the real robot stands on both feet as the in-process ODE engine places
+    it: each foot's force and the gyro of the first perception agree."""
+    from robocup_gym.backends import make_backend
+
+    model = nao_model(0)
+    angles = (
+        np.zeros(len(model.joints))
+        if pose_name == "zero"
+        else resolve_angles(model, PAPER_STANDING_POSE_DEG, "pose")
+    )
+    pose = RobotPose(-1.0, 0.0, joint_angles_deg=angles)
+    ball = (-0.8, -0.055, 0.042)
+    ode = make_backend("ode")
+    real = Rcssserver3dBackend(binary=real_binary, startup_timeout=60, timeout=20)
+    try:
+        ref = ode.reset_episode(pose, ball_pos=ball)
+        rng = np.random.default_rng(0)
+        for k in range(4):
+            for _ in range(5 if k % 2 else 30):  # small random steps (none reach a stop), or idling
+                real.step(AgentCommand(rng.uniform(-0.1, 0.1, 22) if k % 2 else np.zeros(22)))
+            p = real.reset_episode(pose, ball_pos=ball)
+            assert real.last_reset.converged and not real.last_reset.pinned, real.last_reset
+            for foot in ("lf", "rf"):
+                got, want = p.force_sensors.get(foot), ref.force_sensors[foot]
+                assert got is not None, f"{foot} carries nothing: the robot hangs asleep"
+                assert abs(got.force[2] - want.force[2]) < 3.0, (foot, got, want)
+            assert np.abs(p.gyro).max() < 1.0, p.gyro
+    finally:
+        real.close()
+        ode.close()
