@@ -1,0 +1,187 @@
+"""A real RCSSServerMJ (``rcssservermj``, the ``rcsssmj`` package) as a child process, and a
+minimal agent connection to it.
+
+:class:`RcssServerMJProcess` starts ``python -m rcsssmj`` with this interpreter (so it uses the
+same ``rcsssmj`` and MuJoCo as the in-process world) in sync mode, real time off and without its
+viewer, on two ports the OS reports free (retried on new ones if a port was taken meanwhile), in a
+private working folder (the server writes ``console.log`` into its working directory). The child
+gets SIGINT when this process dies (Linux), and :meth:`~RcssServerMJProcess.stop` ends it
+(SIGINT, then SIGKILL after a grace period). :class:`LeagueAgentLink` speaks the agent protocol:
+4-byte length-prefixed messages, ``(init <robot> <team> <number>)``, then one message of joint
+commands per perception.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Mapping
+
+from robocup_gym.backends.base import BackendError
+from robocup_gym.backends.process import _death_signal_preexec, free_ports
+from robocup_gym.protocol.framing import FrameDecoder, encode_frame, recv_frame
+
+__all__ = ["LeagueAgentLink", "RcssServerMJProcess", "format_pd_commands"]
+
+
+class RcssServerMJProcess:
+    """One ``rcssservermj`` child process (see the module docstring).
+
+    Args:
+        startup_timeout: Seconds to wait for the agent port to accept.
+        stop_grace_s: Seconds between SIGINT and SIGKILL in :meth:`stop`.
+
+    Raises:
+        robocup_gym.robot.league.RcsssmjUnavailableError: ``rcsssmj`` is not installed.
+        BackendError: the server did not start (with the end of its output).
+    """
+
+    def __init__(self, *, startup_timeout: float = 30.0, stop_grace_s: float = 5.0) -> None:
+        from robocup_gym.robot.league import league_robot_names
+
+        league_robot_names()  # raises the clear error without rcsssmj
+        self.stop_grace_s = float(stop_grace_s)
+        self.folder = tempfile.mkdtemp(prefix="robocup_gym_rcssservermj_")
+        self.proc: subprocess.Popen | None = None
+        self.agent_port = self.monitor_port = 0
+        last = ""
+        for _ in range(3):
+            self.agent_port, self.monitor_port = free_ports(2)
+            self._spawn()
+            if self._wait_until_stepping(startup_timeout):
+                return
+            last = self.log_tail()
+            self.stop()
+        raise BackendError(f"rcssservermj did not start. Its output ends with:\n{last}")
+
+    def _wait_until_stepping(self, timeout: float) -> bool:
+        """Whether the server's simulation has stepped within ``timeout`` s: its first monitor
+        message (sent after a step) says so. rcsssmj 0.2.1 crashes when a player joins before
+        its first step, so a port that accepts is not enough (and a probe on the agent port
+        would leave an agent connection behind)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and self.proc is not None:
+            if self.proc.poll() is not None:
+                return False
+            try:
+                with socket.create_connection(("127.0.0.1", self.monitor_port), timeout=1.0) as s:
+                    recv_frame(s, FrameDecoder(), max(0.5, deadline - time.monotonic()))
+                    return True
+            except (OSError, ConnectionError, TimeoutError):
+                time.sleep(0.05)
+        return False
+
+    def _spawn(self) -> None:
+        log = open(os.path.join(self.folder, "server.out"), "wb")  # noqa: SIM115
+        cmd = [sys.executable, "-m", "rcsssmj", "--host", "127.0.0.1"]
+        cmd += ["--aport", str(self.agent_port), "--mport", str(self.monitor_port)]
+        cmd += ["--sync", "--no-realtime", "--no-render"]
+        try:
+            self.proc = subprocess.Popen(
+                cmd,
+                cwd=self.folder,
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+                preexec_fn=_death_signal_preexec(signal.SIGINT),
+                close_fds=True,
+            )
+        finally:
+            log.close()
+
+    @property
+    def pid(self) -> int | None:
+        return None if self.proc is None else self.proc.pid
+
+    @property
+    def running(self) -> bool:
+        return self.proc is not None and self.proc.poll() is None
+
+    def log_tail(self, chars: int = 2000) -> str:
+        """The end of the server's output."""
+        try:
+            with open(os.path.join(self.folder, "server.out"), "rb") as f:
+                return f.read()[-chars:].decode("utf-8", "replace")
+        except OSError:
+            return ""
+
+    def stop(self) -> None:
+        """SIGINT, wait ``stop_grace_s``, SIGKILL if needed. Idempotent."""
+        proc, self.proc = self.proc, None
+        if proc is not None and proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(self.stop_grace_s)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(5)
+
+    def close(self) -> None:
+        """:meth:`stop` and remove the working folder."""
+        self.stop()
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+    def __enter__(self) -> RcssServerMJProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        with contextlib.suppress(Exception):
+            self.close()
+
+
+def format_pd_commands(commands: Mapping[str, object]) -> bytes:
+    """The wire text of joint commands ``name → PDCommand`` (``(name q dq kp kd tau)``, degrees
+    and degrees per second; numbers written exactly, as Python's ``repr``), then ``(syn)``."""
+    parts = [
+        f"({name} {c.q_deg!r} {c.dq_deg_s!r} {c.kp!r} {c.kd!r} {c.tau!r})"  # type: ignore[attr-defined]
+        for name, c in commands.items()
+    ]
+    return ("".join(parts) + "(syn)").encode()
+
+
+class LeagueAgentLink:
+    """One agent connection to an RCSSServerMJ: ``init``, then perceptions and commands.
+
+    Args:
+        port: The server's agent port.
+        robot, team, number: What the ``init`` message asks for.
+        timeout: Seconds a receive may take.
+    """
+
+    def __init__(
+        self, port: int, robot: str, team: str, number: int, *, timeout: float = 20.0
+    ) -> None:
+        self.timeout = float(timeout)
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=timeout)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._decoder = FrameDecoder()
+        self.send(f"(init {robot} {team} {int(number)})".encode())
+
+    def send(self, payload: bytes) -> None:
+        self.sock.sendall(encode_frame(payload))
+
+    def recv(self) -> bytes:
+        """The next message (a perception), as bytes."""
+        return bytes(recv_frame(self.sock, self._decoder, self.timeout))
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            self.sock.close()
+
+    def __enter__(self) -> LeagueAgentLink:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

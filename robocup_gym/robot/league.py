@@ -1,0 +1,140 @@
+"""The league's current robots (RCSSServerMJ, since 2026): Booster T1, K1 and whatever else the
+installed ``rcsssmj`` ships, as data read from ``rcsssmj``'s own model files.
+
+Nothing here is a copy: every number comes from the MJCF files of the installed ``rcsssmj``
+package, through its own model loader (``rcsssmj.resources.spec_provider``). ``rcsssmj`` is an
+optional dependency (``pip install robocup-gym[mj]``); without it :func:`league_robot` says so.
+
+Units as the league's protocol uses them: joint commands are ``(<name> q dq kp kd tau)`` in
+degrees, degrees per second, N·m per rad and N·m·s per rad, and N·m; :class:`LeagueRobot` keeps
+the model's SI ranges (rad, N·m) and gives degrees where the wire uses them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["LeagueRobot", "RcsssmjUnavailableError", "league_robot", "league_robot_names"]
+
+
+class RcsssmjUnavailableError(ImportError):
+    """The ``rcsssmj`` package (the league's server) is not installed."""
+
+
+def _rcsssmj_resources() -> Path:
+    try:
+        import rcsssmj.resources as res
+    except ImportError as exc:
+        raise RcsssmjUnavailableError(
+            "the league's robots come from the rcsssmj package, which is not installed "
+            f"({exc}); install it with: pip install 'robocup-gym[mj]' (or pip install rcsssmj)"
+        ) from exc
+    return Path(res.__file__).parent
+
+
+def league_robot_names() -> list[str]:
+    """The robots the installed ``rcsssmj`` ships (e.g. ``["K1", "T1", "ant"]``), sorted.
+
+    Raises:
+        RcsssmjUnavailableError: ``rcsssmj`` is not installed.
+    """
+    robots = _rcsssmj_resources() / "robots"
+    return sorted(p.name for p in robots.iterdir() if (p / "robot.xml").is_file())
+
+
+@dataclass(frozen=True)
+class LeagueJoint:
+    """One actuated joint of a league robot."""
+
+    name: str
+    """The joint's name in the model (``Left_Knee_Pitch``)."""
+    effector: str
+    """The name joint commands use (``lle4``): its actuators are ``<effector>_pos``, ``_vel``
+    and ``_tau``."""
+    range_rad: tuple[float, float]
+    """Limits, rad."""
+    force_range: tuple[float, float]
+    """The actuator's torque limits, N·m: the PD torque is clamped to these."""
+
+    @property
+    def range_deg(self) -> tuple[float, float]:
+        """Limits in degrees (the wire's unit)."""
+        return (math.degrees(self.range_rad[0]), math.degrees(self.range_rad[1]))
+
+
+@dataclass(frozen=True)
+class LeagueRobot:
+    """A robot of RCSSServerMJ, read from ``rcsssmj``'s model of it."""
+
+    name: str
+    """Model name, as ``(init <name> <team> <number>)`` requests it (``T1``, ``K1``)."""
+    model_file: Path
+    """The MJCF file in the installed ``rcsssmj``."""
+    joints: tuple[LeagueJoint, ...]
+    """Actuated joints, in the model's order (the order of the ``HJ`` perceptors)."""
+    sensors: tuple[str, ...]
+    """Names of the model's sensors (without the per-player prefix)."""
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(j.name for j in self.joints)
+
+    @property
+    def effector_names(self) -> tuple[str, ...]:
+        """The joint command names (``he1``, …), model order."""
+        return tuple(j.effector for j in self.joints)
+
+    def joint(self, name: str) -> LeagueJoint:
+        """The joint called ``name``.
+
+        Raises:
+            KeyError: naming the robot's joints.
+        """
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(
+            f"{self.name} has no joint {name!r}; its joints: {', '.join(self.joint_names)}"
+        )
+
+
+def league_robot(name: str) -> LeagueRobot:
+    """The league robot ``name`` (``"T1"``, ``"K1"``, …) from the installed ``rcsssmj``.
+
+    Raises:
+        RcsssmjUnavailableError: ``rcsssmj`` is not installed.
+        ValueError: no such robot (naming those there are).
+    """
+    names = league_robot_names()
+    if name not in names:
+        raise ValueError(f"unknown league robot {name!r}; rcsssmj ships: {', '.join(names)}")
+    import mujoco
+    from rcsssmj.resources.spec_provider import ModelSpecProvider
+
+    spec = ModelSpecProvider().load_robot_spec(name)
+    model = spec.compile()
+    effector = {}  # joint id -> command name, from the joint's torque actuator
+    for k in range(model.nu):
+        actuator = model.actuator(k).name
+        if actuator.endswith("_tau"):
+            effector[int(model.actuator_trnid[k][0])] = actuator[: -len("_tau")]
+    joints = []
+    for j in range(model.njnt):
+        if int(model.jnt_type[j]) not in (
+            int(mujoco.mjtJoint.mjJNT_HINGE),
+            int(mujoco.mjtJoint.mjJNT_SLIDE),
+        ):
+            continue
+        lo, hi = (float(v) for v in model.jnt_range[j])
+        flo, fhi = (float(v) for v in model.jnt_actfrcrange[j])
+        joint = model.joint(j).name
+        joints.append(LeagueJoint(joint, effector.get(j, joint), (lo, hi), (flo, fhi)))
+    sensors = tuple(model.sensor(k).name for k in range(model.nsensor))
+    return LeagueRobot(
+        name=name,
+        model_file=_rcsssmj_resources() / "robots" / name / "robot.xml",
+        joints=tuple(joints),
+        sensors=sensors,
+    )

@@ -1,0 +1,7 @@
+"""The league's current simulator, RCSSServerMJ, in-process: its own simulation classes stepped
+exactly as its server steps them (:class:`~robocup_gym.sim.engines.rcsssmj.world.LeagueWorld`).
+Needs the optional ``rcsssmj`` package (``pip install robocup-gym[mj]``)."""
+
+from robocup_gym.sim.engines.rcsssmj.world import LeagueWorld, PDCommand
+
+__all__ = ["LeagueWorld", "PDCommand"]

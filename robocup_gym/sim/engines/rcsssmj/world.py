@@ -1,0 +1,252 @@
+"""RCSSServerMJ's world, in-process and exact: ``rcsssmj``'s own soccer simulation, driven
+cycle by cycle as its server drives it.
+
+``rcssservermj`` (``python -m rcsssmj``) runs one loop per 20 ms cycle (four 5 ms MuJoCo steps):
+it makes every agent's perceptions of the current state, takes each agent's joint commands (in
+sync mode it waits for them: the answer to the perceptions of the cycle before), sends the new
+perceptions, and steps the simulation with those commands. :meth:`LeagueWorld.cycle` is one
+such pass, with the same simulation classes, the same model files and the same order, so an agent
+sees the same perception bytes from it as from the server (``tests/sim/test_league_world.py``
+checks this against a real ``rcssservermj`` process; ``benchmarks/rcssservermj_match.py``
+prints the differences). Driving ``rcsssmj``'s own classes was chosen over a re-written step on
+the same model: exact by construction, and nothing to drift when ``rcsssmj`` changes.
+
+A joint command is ``(name, q, dq, kp, kd, tau)`` with ``q`` in degrees, ``dq`` in degrees per
+second, ``kp``/``kd`` the PD gains and ``tau`` a feed-forward torque in N·m, as on the wire: the
+simulation applies ``kp (q - q_now) + kd (dq - dq_now) + tau`` clamped to the actuator's torque
+range, and keeps a joint's last command until a new one comes.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.robot.league import RcsssmjUnavailableError, league_robot
+
+__all__ = ["CYCLE_S", "LeagueWorld", "PDCommand"]
+
+CYCLE_S = 0.02
+"""One agent cycle, s (four 5 ms MuJoCo steps)."""
+
+
+@dataclass(frozen=True)
+class PDCommand:
+    """One joint's command, in the wire's units."""
+
+    q_deg: float
+    """Target angle, degrees."""
+    dq_deg_s: float = 0.0
+    """Target velocity, degrees per second."""
+    kp: float = 0.0
+    """Proportional gain, N·m per rad."""
+    kd: float = 0.0
+    """Derivative gain, N·m·s per rad."""
+    tau: float = 0.0
+    """Feed-forward torque, N·m."""
+
+    def __post_init__(self) -> None:
+        for f in ("q_deg", "dq_deg_s", "kp", "kd", "tau"):
+            v = getattr(self, f)
+            if not math.isfinite(v):
+                raise ValueError(f"joint command {f} must be finite, got {v}")
+
+
+@dataclass(frozen=True)
+class _Player:
+    model: str
+    team: str
+    number: int
+
+    # rcsssmj's agent parameter protocol (PAgentParameter)
+    @property
+    def model_name(self) -> str:
+        return self.model
+
+    @property
+    def team_name(self) -> str:
+        return self.team
+
+    @property
+    def player_no(self) -> int:
+        return self.number
+
+
+class LeagueWorld:
+    """RCSSServerMJ's soccer world with the given players, stepped in-process.
+
+    Args:
+        players: ``(robot model, team name, player number)`` per player, e.g.
+            ``[("T1", "A", 1)]``; they join in this order (the first team named is the left one),
+            as agents whose ``init`` reached the server in that order.
+        idle_cycles: Cycles the server ran before the players joined (≥ 1: ``rcsssmj``'s audio
+            engine needs one step before a player can join; a real server runs many while the
+            agents connect, and the number shows in the first perception's time: match it to
+            compare, see :meth:`idle_cycles_before`).
+
+    Raises:
+        RcsssmjUnavailableError: ``rcsssmj`` is not installed.
+        ValueError: an unknown robot, or a player the rules refuse (number, team size).
+    """
+
+    def __init__(self, players: Sequence[tuple[str, str, int]], *, idle_cycles: int = 1) -> None:
+        try:
+            from rcsssmj.games.soccer.game_phase import GamePhase
+            from rcsssmj.games.soccer.sim.soccer_referee import SoccerReferee
+            from rcsssmj.games.soccer.sim.soccer_sim import SoccerSimulation
+            from rcsssmj.games.soccer.soccer_fields import create_soccer_field
+            from rcsssmj.games.soccer.soccer_rules import SoccerRuleBooks, create_soccer_rule_book
+            from rcsssmj.server.perception_encoder import DefaultPerceptionEncoder
+            from rcsssmj.sim.actions import MotorAction
+        except ImportError as exc:
+            raise RcsssmjUnavailableError(
+                f"the league's simulator needs the rcsssmj package ({exc}); install it with: "
+                "pip install 'robocup-gym[mj]'"
+            ) from exc
+        self._motor_action = MotorAction
+        self._encoder = DefaultPerceptionEncoder()
+        self.robots = [league_robot(str(model)) for model, _, _ in players]
+        # as rcssservermj's command line builds it with its defaults
+        rules = create_soccer_rule_book(SoccerRuleBooks.SSIM.value)
+        field = create_soccer_field(rules.default_field_version.value)
+        self.sim = SoccerSimulation(
+            field=field,
+            rules=rules,
+            referee=SoccerReferee(),
+            initial_game_phase=GamePhase.from_value(0),
+            initial_play_time=None,
+        )
+        if not self.sim.init():
+            raise RuntimeError("rcsssmj could not create the soccer world")
+        if int(idle_cycles) < 1:
+            raise ValueError(f"idle_cycles must be >= 1, got {idle_cycles}")
+        for _ in range(int(idle_cycles)):
+            self.sim.generate_perceptions()
+            self.sim.step([])
+        params = [_Player(str(m), str(t), int(n)) for m, t, n in players]
+        self.agents = self.sim.add_players(params)
+        # rcsssmj recompiles the model when players join, and the new actuators' controls are
+        # left as MuJoCo's recompile leaves them: not always zero (rcssservermj itself then
+        # sometimes warns "Nan, Inf or huge value in CTRL"). Here they start at zero, as they
+        # are on the server whenever its join is reproducible at all.
+        import mujoco
+
+        self.sim.mj_data.ctrl[:] = 0.0
+        mujoco.mj_forward(self.sim.mj_model, self.sim.mj_data)
+        bad = [p for p, a in zip(params, self.agents, strict=True) if a is None]
+        if bad:
+            raise ValueError(
+                f"rcsssmj refused these players (number, team size or team count): {bad}"
+            )
+        self._effectors = [self._effector_names(a) for a in self.agents]
+        self._pending: list[list] = [[] for _ in self.agents]
+        """Each player's commands for the next step (the answer to the last perceptions)."""
+
+    @staticmethod
+    def _effector_names(agent: Any) -> tuple[str, ...]:
+        prefix = agent.agent_id.prefix
+        out = []
+        for act in agent.spec.actuators:
+            name = act.name
+            if name.endswith("_tau"):
+                out.append(name[len(prefix) : -len("_tau")])
+        return tuple(out)
+
+    @staticmethod
+    def idle_cycles_before(first_perception: bytes) -> int:
+        """How many cycles a server ran before the perception ``first_perception`` (a player's
+        first, from the server): pass it as ``idle_cycles`` to start from the same state."""
+        match = re.search(rb"\(time \(now ([-+0-9.eE]+)\)\)", first_perception)
+        if match is None:
+            raise ValueError("the perception has no (time (now ...))")
+        # the time is n cycles, printed truncated to 2 decimals (n * 0.02 may print 0.01 lower)
+        return max(1, math.ceil(float(match.group(1)) / CYCLE_S - 1e-6))
+
+    @classmethod
+    def joining_as(
+        cls, players: Sequence[tuple[str, str, int]], first_perceptions: Sequence[bytes]
+    ) -> LeagueWorld:
+        """A world in the state a server was in when it sent ``first_perceptions`` (each
+        player's first message, players in joining order), after its first :meth:`cycle`: the
+        server's idle cycles are read off the perception's time and confirmed by comparing the
+        perceptions (the printed time is truncated, so its neighbours are tried too).
+
+        Raises:
+            ValueError: no number of idle cycles near the printed time reproduces them.
+        """
+        n = cls.idle_cycles_before(first_perceptions[0])
+        for idle in (n, n + 1, n - 1, n + 2, n - 2):
+            if idle < 1:
+                continue
+            world = cls(players, idle_cycles=idle)
+            if world.cycle() == list(first_perceptions):
+                return world
+        raise ValueError(f"no start near {n} idle cycles reproduces the server's first perceptions")
+
+    # ------------------------------------------------------------------ commands
+    def effector_names(self, index: int) -> tuple[str, ...]:
+        """Names player ``index``'s joint commands use (``he1``, ``lae1``, …), model order."""
+        return self._effectors[index]
+
+    def command(self, index: int, commands: Mapping[str, PDCommand]) -> None:
+        """Player ``index``'s joint commands for the next :meth:`cycle` (they act in that
+        cycle's step; joints not named keep their last command).
+
+        Raises:
+            KeyError: an unknown joint (naming player ``index``'s).
+        """
+        names = self._effectors[index]
+        prefix = self.agents[index].agent_id.prefix
+        actions = []
+        for name, c in commands.items():
+            if name not in names:
+                raise KeyError(f"unknown joint {name!r}; joints: {', '.join(names)}")
+            actions.append(
+                self._motor_action(
+                    prefix + name,
+                    math.radians(c.q_deg),
+                    math.radians(c.dq_deg_s),
+                    float(c.kp),
+                    float(c.kd),
+                    float(c.tau),
+                )
+            )
+        self._pending[index] = actions
+
+    # ------------------------------------------------------------------ stepping
+    def cycle(self) -> list[bytes]:
+        """One pass of the server's loop: every player's perceptions of the current state (the
+        message bytes the server would send), then one 20 ms step with the commands given since
+        the last pass. Returns the perception messages, one per player."""
+        sim = self.sim
+        sim.generate_perceptions()
+        out = [bytes(self._encoder.encode(a.perceptions) or b"(syn)") for a in self.agents]
+        for a, actions in zip(self.agents, self._pending, strict=True):
+            a.set_actions(actions)
+        self._pending = [[] for _ in self.agents]
+        sim.step([])
+        return out
+
+    # ------------------------------------------------------------------ readings
+    @property
+    def time(self) -> float:
+        """Simulation time, s."""
+        return float(self.sim.sim_time)
+
+    def joint_angles(self, index: int) -> np.ndarray:
+        """Player ``index``'s joint angles, rad, model order."""
+        return np.array([float(j.qpos[0]) for j in self.agents[index]._joints])
+
+    def torso_pose(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Player ``index``'s torso position (m) and orientation quaternion (w, x, y, z)."""
+        body = self.sim.mj_data.body(self.agents[index].root_body_name)
+        return body.xpos.copy(), body.xquat.copy()
+
+    def ball_position(self) -> np.ndarray:
+        """Ball centre, m."""
+        return self.sim.mj_data.body("ball").xpos.copy()
