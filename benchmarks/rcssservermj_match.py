@@ -16,7 +16,9 @@ Prints one JSON object last: ``identical_perceptions`` (of ``cycles``),
 ``max_joint_deg_diff``, ``max_torso_m_diff``, ``max_ball_m_diff`` (from the perceptions' values:
 0 means equal to the wire's precision, which is the server's only output), and the speed:
 ``server_cycles_per_s`` (the real server with this client), ``inprocess_cycles_per_s``
-(:meth:`LeagueWorld.cycle`, same commands) and their ratio ``speedup``.
+(:meth:`LeagueWorld.cycle`, same commands) and their ratio ``speedup``; the same without making
+perceptions (``inprocess_no_perception_cycles_per_s``, ``speedup_no_perception``, and
+``no_perception_same_state``: whether the state ends bit-equal).
 """
 
 from __future__ import annotations
@@ -107,6 +109,17 @@ def run(cycles: int = 500, robot: str = "T1", seed: int = 0) -> dict:
         world.command(0, cmds)
         pairs[k + 1] = (pairs[k + 1][0], world.cycle()[0])
     inprocess_s = time.perf_counter() - t0
+    # the same commands again, without making perceptions (a learner that reads the state)
+    lean = LeagueWorld.joining_as([(robot, "A", 1)], [first])
+    t0 = time.perf_counter()
+    for cmds in sequence:
+        lean.command(0, cmds)
+        lean.cycle(perceive=False)
+    lean_s = time.perf_counter() - t0
+    same_state = bool(
+        np.array_equal(lean.joint_angles(0), world.joint_angles(0))
+        and np.array_equal(lean.ball_position(), world.ball_position())
+    )
     for k, (theirs, ours) in enumerate(pairs):
         if theirs == ours:
             identical += 1
@@ -135,6 +148,9 @@ def run(cycles: int = 500, robot: str = "T1", seed: int = 0) -> dict:
         "server_cycles_per_s": round(cycles / server_s, 1),
         "inprocess_cycles_per_s": round(cycles / inprocess_s, 1),
         "speedup": round(server_s / inprocess_s, 2),
+        "inprocess_no_perception_cycles_per_s": round(cycles / lean_s, 1),
+        "speedup_no_perception": round(server_s / lean_s, 2),
+        "no_perception_same_state": same_state,
     }
 
 
