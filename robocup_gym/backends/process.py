@@ -373,7 +373,22 @@ def _stop_child(proc: subprocess.Popen, folder: str | None, grace_s: float) -> N
             shutil.rmtree(folder, ignore_errors=True)
 
 
-class ServerProcess:
+class ChildProcess:
+    """What a server child process says of itself: its ``proc`` (``None`` before it started
+    and after it was stopped), pid and whether it runs."""
+
+    proc: subprocess.Popen | None = None
+
+    @property
+    def pid(self) -> int | None:
+        return None if self.proc is None else self.proc.pid
+
+    @property
+    def running(self) -> bool:
+        return self.proc is not None and self.proc.poll() is None
+
+
+class ServerProcess(ChildProcess):
     """One rcssserver3d child process with a private, generated configuration.
 
     Args:
@@ -441,14 +456,6 @@ class ServerProcess:
     def log_path(self) -> Path:
         """The server's stdout and stderr."""
         return self.home / "rcssserver3d.log"
-
-    @property
-    def pid(self) -> int | None:
-        return None if self.proc is None else self.proc.pid
-
-    @property
-    def running(self) -> bool:
-        return self.proc is not None and self.proc.poll() is None
 
     # -------------------------------------------------------------- start / stop
     def start(self) -> tuple[int, int]:

@@ -25,13 +25,13 @@ import time
 from collections.abc import Mapping
 
 from robocup_gym.backends.base import BackendError
-from robocup_gym.backends.process import _death_signal_preexec, free_ports
+from robocup_gym.backends.process import ChildProcess, _death_signal_preexec, free_ports
 from robocup_gym.protocol.framing import FrameDecoder, encode_frame, recv_frame
 
 __all__ = ["LeagueAgentLink", "RcssServerMJProcess", "format_pd_commands"]
 
 
-class RcssServerMJProcess:
+class RcssServerMJProcess(ChildProcess):
     """One ``rcssservermj`` child process (see the module docstring).
 
     Args:
@@ -96,14 +96,6 @@ class RcssServerMJProcess:
             )
         finally:
             log.close()
-
-    @property
-    def pid(self) -> int | None:
-        return None if self.proc is None else self.proc.pid
-
-    @property
-    def running(self) -> bool:
-        return self.proc is not None and self.proc.poll() is None
 
     def log_tail(self, chars: int = 2000) -> str:
         """The end of the server's output."""
