@@ -102,13 +102,11 @@ class LeagueWorld:
             from rcsssmj.games.soccer.soccer_fields import create_soccer_field
             from rcsssmj.games.soccer.soccer_rules import SoccerRuleBooks, create_soccer_rule_book
             from rcsssmj.server.perception_encoder import DefaultPerceptionEncoder
-            from rcsssmj.sim.actions import MotorAction
         except ImportError as exc:
             raise RcsssmjUnavailableError(
                 f"the league's simulator needs the rcsssmj package ({exc}); install it with: "
                 "pip install 'robocup-gym[mj]'"
             ) from exc
-        self._motor_action = MotorAction
         self._encoder = DefaultPerceptionEncoder()
         self.robots = [league_robot(str(model)) for model, _, _ in players]
         # as rcssservermj's command line builds it with its defaults
@@ -144,8 +142,21 @@ class LeagueWorld:
                 f"rcsssmj refused these players (number, team size or team count): {bad}"
             )
         self._effectors = [self._effector_names(a) for a in self.agents]
+        model = self.sim.mj_model
+        self._slots = [
+            {
+                name: tuple(
+                    model.actuator(a.agent_id.prefix + name + kind).id
+                    for kind in ("_pos", "_vel", "_tau")
+                )
+                for name in names
+            }
+            for a, names in zip(self.agents, self._effectors, strict=True)
+        ]
+        """Per player, joint command name → its (position, velocity, torque) actuator ids."""
         self._pending: list[list] = [[] for _ in self.agents]
-        """Each player's commands for the next step (the answer to the last perceptions)."""
+        """Each player's commands for the next step (the answer to the last perceptions): per
+        joint ``(pos id, vel id, tau id, q rad, dq rad/s, kp, kd, tau)``."""
 
     @staticmethod
     def _effector_names(agent: Any) -> tuple[str, ...]:
@@ -200,23 +211,18 @@ class LeagueWorld:
         Raises:
             KeyError: an unknown joint (naming player ``index``'s).
         """
-        names = self._effectors[index]
-        prefix = self.agents[index].agent_id.prefix
-        actions = []
+        slots = self._slots[index]
+        pending = []
         for name, c in commands.items():
-            if name not in names:
+            ids = slots.get(name)
+            if ids is None:
+                names = self._effectors[index]
                 raise KeyError(f"unknown joint {name!r}; joints: {', '.join(names)}")
-            actions.append(
-                self._motor_action(
-                    prefix + name,
-                    math.radians(c.q_deg),
-                    math.radians(c.dq_deg_s),
-                    float(c.kp),
-                    float(c.kd),
-                    float(c.tau),
-                )
+            # the values rcsssmj's action parser makes of the wire text (math.radians)
+            pending.append(
+                (*ids, math.radians(c.q_deg), math.radians(c.dq_deg_s), c.kp, c.kd, c.tau)
             )
-        self._pending[index] = actions
+        self._pending[index] = pending
 
     # ------------------------------------------------------------------ stepping
     def cycle(self, perceive: bool = True) -> list[bytes]:
@@ -230,8 +236,19 @@ class LeagueWorld:
         if perceive:
             sim.generate_perceptions()
             out = [bytes(self._encoder.encode(a.perceptions) or b"(syn)") for a in self.agents]
-        for a, actions in zip(self.agents, self._pending, strict=True):
-            a.set_actions(actions)
+        # rcsssmj's motor action, written directly (the same assignments as its
+        # ``ctrl_motor``, which only writes, so doing them before the step changes nothing)
+        model, data = sim.mj_model, sim.mj_data
+        gain, bias, ctrl = model.actuator_gainprm, model.actuator_biasprm, data.ctrl
+        for pending in self._pending:
+            for pos, vel, tau_id, q, dq, kp, kd, tau in pending:
+                ctrl[tau_id] = tau
+                ctrl[pos] = q
+                ctrl[vel] = dq
+                gain[pos, 0] = kp
+                bias[pos, 1] = -kp
+                gain[vel, 0] = kd
+                bias[vel, 2] = -kd
         self._pending = [[] for _ in self.agents]
         sim.step([])
         return out
