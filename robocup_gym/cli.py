@@ -87,7 +87,9 @@ if typer is not None:
         pretty_exceptions_enable=False,
     )
     experiments_app = typer.Typer(
-        help="Reproduce the paper's experiments.", no_args_is_help=True, add_completion=False
+        help="Reproduce the paper's experiments; learning curves of the locomotion tasks.",
+        no_args_is_help=True,
+        add_completion=False,
     )
     app.add_typer(experiments_app, name="experiments")
 
@@ -305,6 +307,13 @@ if typer is not None:
         table.add_row("episode return", fmt(summary["return_mean"]), fmt(summary["return_std"]))
         table.add_row("fall rate", fmt(summary["fall_rate"]), "")
         table.add_row("episode length (steps)", fmt(summary["length_mean"]), "")
+        for key, label in (  # the locomotion tasks' own measures, where the task has them
+            ("success_rate", "success rate"),
+            ("forward_speed_mps_mean", "forward speed (m/s)"),
+            ("forward_error_mps_mean", "forward tracking error (m/s)"),
+        ):
+            if summary.get(key) is not None:
+                table.add_row(label, fmt(summary[key]), "")
         console.print(table)
         if summary.get("video"):
             console.print(f"video: {summary['video']}")
@@ -466,6 +475,46 @@ if typer is not None:
                 only=only,
                 seeds=seeds,
                 timesteps=timesteps,
+                engine=engine,
+                console=_console(),
+            )
+        except (ValueError, FileNotFoundError) as exc:
+            _fail(str(exc))
+        print(json.dumps(summary), flush=True)
+
+    @experiments_app.command("locomotion")
+    def experiments_locomotion(
+        scale: Annotated[
+            str, typer.Option(help="quick (100k steps per run) or full (5M).")
+        ] = "quick",
+        out: Annotated[Path, typer.Option(help="Output folder.")] = Path("runs/locomotion"),
+        task: Annotated[
+            list[str] | None,
+            typer.Option(help="Run only these tasks: walk, get-up (repeatable)."),
+        ] = None,
+        seeds: Annotated[int, typer.Option(help="Seeds per task.")] = 1,
+        timesteps: Annotated[
+            int | None, typer.Option(help="Override the steps per run of the scale.")
+        ] = None,
+        evaluations: Annotated[
+            int, typer.Option(help="Deterministic evaluations per run (the curve's points).")
+        ] = 8,
+        engine: Annotated[
+            str, typer.Option(help="Physics engine: ode (the default) or mujoco.")
+        ] = "ode",
+    ) -> None:
+        """Learning curves of the locomotion tasks as CSV + PNG, in the paper figures' style
+        (Walk: mean forward speed; GetUp: success rate; both with return and wall-clock)."""
+        from robocup_gym.train.experiments import run_locomotion
+
+        try:
+            summary = run_locomotion(
+                scale,
+                out,
+                tasks=task,
+                seeds=seeds,
+                timesteps=timesteps,
+                evaluations=evaluations,
                 engine=engine,
                 console=_console(),
             )

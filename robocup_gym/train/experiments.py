@@ -1,4 +1,5 @@
-"""The paper's three experiments, reproduced on the embedded simulator.
+"""The paper's three experiments, reproduced on the embedded simulator, and the same kind of
+figures for the locomotion tasks (:func:`run_locomotion`: Walk and GetUp learning curves).
 
 1. ``algos``: PPO vs SAC on VelocityKick, each with fewer and more parallel workers;
 2. ``tasks``: SimpleKick vs VelocityKick (PPO);
@@ -387,6 +388,172 @@ def run_paper(
                 result[label] = round(float(np.mean(vals)), 3) if vals else None
         summary["figures"][fig] = {"csv": str(csv_path), "png": str(png_path), "final": result}
         console.print(f"[green]figure {fig}[/green]: {png_path} ({json.dumps(result)})")
+    summary["wall_s"] = round(time.perf_counter() - t0, 1)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary
+
+
+# ---------------------------------------------------------------------------------- locomotion
+LOCOMOTION_TASKS = {
+    "walk": ("forward_speed_mps_mean", "mean forward speed (m/s)", "Walk (PPO)"),
+    "get-up": ("success_rate", "success rate", "GetUp (PPO)"),
+}
+"""Task → (the evaluation metric of its curve, its axis label, the figure's title)."""
+LOCOMOTION_SCALES = {"quick": 100_000, "full": 5_000_000}
+"""Steps per run of each scale."""
+LOCOMOTION_COLUMNS = (
+    "task",
+    "seed",
+    "steps",
+    "wall_s",
+    "metric",
+    "value",
+    "forward_error_mps",
+    "return_mean",
+    "fall_rate",
+)
+
+
+def _wall_at(run_dir: Path, steps: float) -> float:
+    """Wall-clock seconds of a run when it reached ``steps`` (from its ``progress.csv``)."""
+    curve = _read_curve(run_dir)
+    xs = np.array([r["steps"] for r in curve], float)
+    ys = np.array([r["wall_s"] for r in curve], float)
+    return float(np.interp(steps, xs, ys)) if len(xs) else float("nan")
+
+
+def _locomotion_rows(task: str, runs: list[Path]) -> list[dict[str, Any]]:
+    """One row per periodic evaluation of each run (deterministic episodes)."""
+    metric = LOCOMOTION_TASKS[task][0]
+    rows = []
+    for run_dir in runs:
+        cfg = load_run(run_dir).config
+        path = run_dir / "evaluations.jsonl"
+        evals = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        for e in evals:
+            rows.append(
+                {
+                    "task": task,
+                    "seed": cfg.seed,
+                    "steps": int(e["steps"]),
+                    "wall_s": round(_wall_at(run_dir, e["steps"]), 1),
+                    "metric": metric,
+                    "value": e.get(metric),
+                    "forward_error_mps": e.get("forward_error_mps_mean"),
+                    "return_mean": e.get("return_mean"),
+                    "fall_rate": e.get("fall_rate"),
+                }
+            )
+    return rows
+
+
+def _plot_locomotion(rows: list[dict[str, Any]], path: Path, ylabel: str, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    for seed in sorted({r["seed"] for r in rows}):
+        mine = sorted((r for r in rows if r["seed"] == seed), key=lambda r: r["steps"])
+        steps = [r["steps"] for r in mine]
+        for ax, key in zip(axes, ("value", "return_mean"), strict=True):
+            vals = [np.nan if r[key] is None else r[key] for r in mine]
+            ax.plot(steps, vals, "o-", label=f"seed {seed}")
+    axes[0].set_ylabel(ylabel)
+    axes[1].set_ylabel("mean episode return")
+    for ax in axes:
+        ax.set_xlabel("environment steps")
+        ax.grid(alpha=0.3)
+        ax.legend()
+    fig.suptitle(title + " — deterministic evaluations during training")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def run_locomotion(
+    scale: str = "quick",
+    out: str | Path = "runs/locomotion",
+    *,
+    tasks: list[str] | None = None,
+    seeds: int = 1,
+    timesteps: int | None = None,
+    evaluations: int = 8,
+    eval_episodes: int = 5,
+    engine: str = DEFAULT_ENGINE,
+    n_envs: int | None = None,
+    algo_kwargs: dict[str, Any] | None = None,
+    console=None,
+) -> dict[str, Any]:
+    """Train (or reuse) PPO on the locomotion tasks and write each task's learning curve as a
+    CSV (one row per periodic evaluation: steps, wall-clock, the task's metric — Walk: mean
+    forward speed, GetUp: success rate —, return, fall rate) and a PNG, in the paper figures'
+    style. ``n_envs`` and ``algo_kwargs`` override the training defaults (PPO's settings).
+    Returns a summary with the last evaluation of each run.
+
+    Raises:
+        ValueError: an unknown scale, task or engine.
+    """
+    from rich.console import Console
+
+    console = console or Console()
+    if scale not in LOCOMOTION_SCALES:
+        raise ValueError(f"unknown scale {scale!r}; choose one of {', '.join(LOCOMOTION_SCALES)}")
+    chosen = tasks or list(LOCOMOTION_TASKS)
+    bad = sorted(set(chosen) - set(LOCOMOTION_TASKS))
+    if bad:
+        raise ValueError(f"unknown task(s) {bad}; choose from {', '.join(LOCOMOTION_TASKS)}")
+    if engine not in ENGINES:
+        raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")
+    if int(seeds) < 1 or int(evaluations) < 1:
+        raise ValueError("seeds and evaluations must be >= 1")
+    steps = int(timesteps or LOCOMOTION_SCALES[scale])
+    out = Path(out)
+    root = out / "runs"
+    root.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    summary: dict[str, Any] = {"scale": scale, "out": str(out), "timesteps": steps, "tasks": {}}
+    console.print(f"[bold]locomotion experiments[/bold] ({scale}): {chosen} → {out}")
+    for task in chosen:
+        specs = []
+        for seed in range(int(seeds)):
+            cfg = TrainConfig(
+                task=task,
+                algo="ppo",
+                seed=seed,
+                timesteps=steps,
+                backend=engine,
+                eval_freq=max(steps // evaluations, 1),
+                eval_episodes=eval_episodes,
+                checkpoint_freq=max(steps // evaluations, 1),
+                **({} if n_envs is None else {"n_envs": int(n_envs)}),
+            )
+            if algo_kwargs:
+                cfg = cfg.merged(algo_kwargs={**cfg.algo_kwargs, **algo_kwargs})
+            specs.append(RunSpec(f"{task}-ppo-s{seed}-t{steps}", cfg))
+        dirs = [_run(spec, root, console) for spec in specs]
+        rows = _locomotion_rows(task, dirs)
+        csv_path, png_path = out / f"fig_{task}.csv", out / f"fig_{task}.png"
+        with csv_path.open("w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=LOCOMOTION_COLUMNS)
+            w.writeheader()
+            w.writerows(rows)
+        _, ylabel, title = LOCOMOTION_TASKS[task]
+        _plot_locomotion(rows, png_path, ylabel, title)
+        last = [
+            max((r for r in rows if r["seed"] == s), key=lambda r: r["steps"])
+            for s in range(int(seeds))
+            if any(r["seed"] == s for r in rows)
+        ]
+        summary["tasks"][task] = {
+            "csv": str(csv_path),
+            "png": str(png_path),
+            "last": [
+                {k: r[k] for k in ("seed", "steps", "wall_s", "metric", "value")} for r in last
+            ],
+        }
+        console.print(f"[green]{task}[/green]: {png_path}")
     summary["wall_s"] = round(time.perf_counter() - t0, 1)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary

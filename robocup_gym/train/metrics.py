@@ -84,6 +84,13 @@ def episode_record(info: Mapping[str, Any], ep_return: float, ep_length: int) ->
     diverged = _first(info, ("diverged",))
     if diverged is not None:
         rec["diverged"] = 1.0 if diverged else 0.0
+    success = _first(info, ("success",))  # GetUp
+    if success is not None:
+        rec["success"] = 1.0 if success else 0.0
+    for key in ("forward_speed_mps", "forward_error_mps"):  # Walk
+        v = _first(info, (key,))
+        if v is not None:
+            rec[key] = float(v)
     return rec
 
 
@@ -116,4 +123,7 @@ def summarize(records: Iterable[Mapping[str, float]]) -> dict[str, float | int |
         "return_mean": ret_mean,
         "return_std": ret_std,
         "length_mean": len_mean,
+        "success_rate": stats("success")[0],
+        "forward_speed_mps_mean": stats("forward_speed_mps")[0],
+        "forward_error_mps_mean": stats("forward_error_mps")[0],
     }

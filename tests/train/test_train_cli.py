@@ -446,3 +446,86 @@ def test_init_from_carries_the_observation_statistics(tmp_path):
             return pickle.load(f).obs_rms.count
 
     assert count(tuned) > count(source) > 100
+
+
+def test_locomotion_experiments_write_learning_curves(tmp_path):
+    """``robocup-gym experiments locomotion``: per task a CSV of the periodic evaluations
+    (Walk: mean forward speed and tracking error; GetUp: success rate) and a PNG; finished runs
+    are reused; bad choices are one clear error."""
+    import csv
+
+    from rich.console import Console
+
+    from robocup_gym.train.experiments import run_locomotion
+
+    tiny = {"n_steps": 64, "batch_size": 64, "n_epochs": 1, "policy_kwargs": {"net_arch": [16]}}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        summary = run_locomotion(
+            "quick",
+            tmp_path,
+            timesteps=256,
+            evaluations=2,
+            eval_episodes=1,
+            n_envs=2,
+            algo_kwargs=tiny,
+            console=Console(quiet=True),
+        )
+    for task, metric in (("walk", "forward_speed_mps_mean"), ("get-up", "success_rate")):
+        assert (tmp_path / f"fig_{task}.png").stat().st_size > 1000
+        with (tmp_path / f"fig_{task}.csv").open() as f:
+            rows = list(csv.DictReader(f))
+        assert [int(r["steps"]) for r in rows] == [128, 256]
+        assert all(r["metric"] == metric and r["value"] != "" for r in rows)
+        assert all(float(r["wall_s"]) >= 0 for r in rows)
+        assert all((r["forward_error_mps"] != "") == (task == "walk") for r in rows)
+        assert summary["tasks"][task]["last"][0]["steps"] == 256
+        if task == "get-up":
+            assert all(0.0 <= float(r["value"]) <= 1.0 for r in rows)
+    again = run_locomotion(
+        "quick", tmp_path, tasks=["walk"], timesteps=256, evaluations=2, console=Console(quiet=True)
+    )
+    assert again["tasks"]["walk"]["last"][0]["steps"] == 256  # reused, not retrained
+    with pytest.raises(ValueError, match="unknown task"):
+        run_locomotion("quick", tmp_path, tasks=["swim"])
+    with pytest.raises(ValueError, match="unknown scale"):
+        run_locomotion("huge", tmp_path)
+
+
+def test_episode_metrics_carry_the_locomotion_measures():
+    """GetUp's ``success`` and Walk's forward speed and tracking error reach the summaries
+    (and so evaluations.jsonl and the curves); a kick episode has none of them."""
+    import numpy as np
+
+    from robocup_gym.train.metrics import episode_record, summarize
+
+    ups = [episode_record({"success": s, "fallen": False}, 1.0, 10) for s in (True, False, True)]
+    walks = [
+        episode_record({"forward_speed_mps": v, "forward_error_mps": e}, 0.0, 5)
+        for v, e in ((0.4, 0.1), (np.float64(0.6), 0.3))
+    ]
+    assert summarize(ups)["success_rate"] == pytest.approx(2 / 3)
+    w = summarize(walks)
+    assert w["forward_speed_mps_mean"] == pytest.approx(0.5)
+    assert w["forward_error_mps_mean"] == pytest.approx(0.2) and w["success_rate"] is None
+    kick = summarize([episode_record({"ball_dx": 1.0}, 1.0, 3)])
+    assert kick["success_rate"] is None and kick["forward_speed_mps_mean"] is None
+
+
+def test_walk_reports_its_forward_speed_and_tracking_error():
+    import gymnasium
+
+    import robocup_gym.envs  # noqa: F401
+
+    env = gymnasium.make("RobocupGym/Walk-v0")
+    try:
+        env.reset(seed=0, options={"velocity_command": (0.5, 0.0, 0.0)})
+        for _ in range(5):
+            _, _, terminated, truncated, info = env.step(env.action_space.sample() * 0.0)
+            if terminated or truncated:
+                break
+        speed, error = info["forward_speed_mps"], info["forward_error_mps"]
+        assert abs(speed) < 0.5  # standing still, barely moving
+        assert error == pytest.approx(abs(0.5 - speed), abs=0.2) and error > 0.2
+    finally:
+        env.close()

@@ -176,6 +176,7 @@ class Walk(BaseEnv):
     task_reset_options = frozenset({"velocity_command"})
 
     def __init__(self, config: WalkConfig | None = None, **kwargs: Any) -> None:
+        self._forward = [0.0, 0.0, 0]
         super().__init__(config, **kwargs)
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
@@ -197,6 +198,7 @@ class Walk(BaseEnv):
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
         self.reward_terms = {}
+        self._forward = [0.0, 0.0, 0]  # sum of forward speeds, of |forward error|, steps
         command = options.get("velocity_command")
         if command is None:
             self._draw_command()
@@ -251,11 +253,18 @@ class Walk(BaseEnv):
         )
         self._prev_action = np.array(action, dtype=float)
         self.reward_terms = terms
+        self._forward[0] += float(velocity[0])
+        self._forward[1] += abs(float(velocity[0] - self.velocity_command[0]))
+        self._forward[2] += 1
         return float(sum(terms.values()))
 
     def _info(self) -> dict[str, Any]:
         info = super()._info()
         info["velocity_command"] = self.velocity_command.copy()
+        total, error, n = self._forward
+        if n:  # this episode's mean forward speed and forward tracking error so far
+            info["forward_speed_mps"] = total / n
+            info["forward_error_mps"] = error / n
         if self.reward_terms:
             info["reward_terms"] = dict(self.reward_terms)
         return info
