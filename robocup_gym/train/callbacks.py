@@ -15,6 +15,20 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from robocup_gym.train.metrics import episode_record, summarize
 
+
+def task_measure(summary: dict[str, Any]) -> str:
+    """The task's own measure in a summary, for the training display: GetUp's success rate,
+    Walk's forward speed and tracking error, else (the kicks) the ball's x-displacement."""
+    if summary.get("success_rate") is not None:
+        return f"success {_fmt(summary['success_rate'])}"
+    if summary.get("forward_speed_mps_mean") is not None:
+        return (
+            f"forward {_fmt(summary['forward_speed_mps_mean'])} m/s "
+            f"(error {_fmt(summary.get('forward_error_mps_mean'))})"
+        )
+    return f"ball Δx {_fmt(summary.get('ball_dx_mean'))} m"
+
+
 CURVE_FIELDS = (
     "steps",
     "wall_s",
@@ -211,7 +225,7 @@ class RichProgressCallback(BaseCallback):
             f"elapsed {format_duration(self.elapsed_s())}",
             f"left ~{format_duration(left)}" if left is not None else "left ?",
             f"reward {_fmt(s['return_mean'])}",
-            f"ball Δx {_fmt(s['ball_dx_mean'])} m",
+            task_measure(s),
             f"episodes {self.stats.episodes:,}",
         ]
 
@@ -232,7 +246,7 @@ class RichProgressCallback(BaseCallback):
         """Show one periodic evaluation (called by :class:`PeriodicEvalCallback`)."""
         self.say(
             f"eval at {result['steps']:,} steps ({result.get('episodes', '?')} episodes, "
-            f"deterministic): ball Δx {_fmt(result.get('ball_dx_mean'))} m, fall rate "
+            f"deterministic): {task_measure(result)}, fall rate "
             f"{_fmt(result.get('fall_rate'))}, return {_fmt(result.get('return_mean'))}"
         )
 

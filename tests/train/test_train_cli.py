@@ -529,3 +529,13 @@ def test_walk_reports_its_forward_speed_and_tracking_error():
         assert error == pytest.approx(abs(0.5 - speed), abs=0.2) and error > 0.2
     finally:
         env.close()
+
+
+def test_the_training_display_shows_each_tasks_own_measure():
+    from robocup_gym.train.callbacks import task_measure
+
+    assert task_measure({"success_rate": 0.5, "ball_dx_mean": 0.1}) == "success 0.50"
+    assert task_measure({"forward_speed_mps_mean": 0.41, "forward_error_mps_mean": 0.1}) == (
+        "forward 0.41 m/s (error 0.10)"
+    )
+    assert task_measure({"ball_dx_mean": 2.24}) == "ball Δx 2.24 m"
