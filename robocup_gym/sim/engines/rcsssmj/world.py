@@ -25,6 +25,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import mujoco
 import numpy as np
 
 from robocup_gym.robot.league import RcsssmjUnavailableError, league_robot
@@ -95,6 +96,8 @@ class LeagueWorld:
     """
 
     def __init__(self, players: Sequence[tuple[str, str, int]], *, idle_cycles: int = 1) -> None:
+        if int(idle_cycles) < 1:
+            raise ValueError(f"idle_cycles must be >= 1, got {idle_cycles}")
         try:
             from rcsssmj.games.soccer.game_phase import GamePhase
             from rcsssmj.games.soccer.sim.soccer_referee import SoccerReferee
@@ -121,8 +124,6 @@ class LeagueWorld:
         )
         if not self.sim.init():
             raise RuntimeError("rcsssmj could not create the soccer world")
-        if int(idle_cycles) < 1:
-            raise ValueError(f"idle_cycles must be >= 1, got {idle_cycles}")
         for _ in range(int(idle_cycles)):
             self.sim.generate_perceptions()
             self.sim.step([])
@@ -132,8 +133,6 @@ class LeagueWorld:
         # left as MuJoCo's recompile leaves them: not always zero (rcssservermj itself then
         # sometimes warns "Nan, Inf or huge value in CTRL"). Here they start at zero, as they
         # are on the server whenever its join is reproducible at all.
-        import mujoco
-
         self.sim.mj_data.ctrl[:] = 0.0
         mujoco.mj_forward(self.sim.mj_model, self.sim.mj_data)
         bad = [p for p, a in zip(params, self.agents, strict=True) if a is None]
