@@ -77,6 +77,23 @@ class RobotPose:
     z: float | None = None
     quat: np.ndarray | None = None
 
+    def place(self, world: Any, index: int = 0) -> None:
+        """Put robot ``index`` of an in-process world (either engine) in this pose, instantly;
+        ``joint_angles_deg=None`` means all 0 here (a world's own ``None`` keeps the current
+        angles)."""
+        angles = self.joint_angles_deg
+        if angles is None:
+            angles = np.zeros(len(world.robots[index].model.joints))
+        world.place_robot(
+            index,
+            self.x,
+            self.y,
+            heading_deg=self.heading_deg,
+            z=self.z,
+            joint_angles_deg=angles,
+            quat=self.quat,
+        )
+
 
 class Backend(abc.ABC):
     """One simulated learning robot (plus the ball and the rest of the world it lives in).

@@ -57,8 +57,6 @@ class MujocoBackend(Backend):
             seed=seed,
         )
         self._model = self.world.robots[0].model
-        self._n_joints = len(self._model.joints)
-        self._zero = np.zeros(self._n_joints)
         self._diverged = False
         self._camera = FollowCamera()
 
@@ -83,18 +81,7 @@ class MujocoBackend(Backend):
             self._diverged = False
         # An episode depends only on its start state: place_robot forgets the solver warm start
         # and restores the robot's motor rows (relaxed at joint stops by the last cycle).
-        angles = pose.joint_angles_deg
-        if angles is None:
-            angles = self._zero
-        w.place_robot(
-            0,
-            pose.x,
-            pose.y,
-            heading_deg=pose.heading_deg,
-            z=pose.z,
-            joint_angles_deg=angles,
-            quat=pose.quat,
-        )
+        pose.place(w)
         w.place_ball(ball_pos, ball_vel)
         w.set_game(play_mode=play_mode, game_time=0.0)
         return w.perceive(0, vision=self.vision)

@@ -98,18 +98,7 @@ class OdeBackend(Backend):
         w = self.world
         if seed is not None:
             w.reseed(seed)
-        angles = pose.joint_angles_deg
-        if angles is None:  # all 0 (the world's own None keeps the current angles)
-            angles = np.zeros(len(w.robots[0].model.joints))
-        w.place_robot(
-            0,
-            pose.x,
-            pose.y,
-            heading_deg=pose.heading_deg,
-            z=pose.z,
-            joint_angles_deg=angles,
-            quat=pose.quat,
-        )
+        pose.place(w)
         w.place_ball(ball_pos, ball_vel)
         w.sense_contacts()  # the first perception shows the feet loaded, as the world's does
         w.set_game(play_mode=play_mode, game_time=0.0)

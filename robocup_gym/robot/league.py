@@ -12,6 +12,7 @@ the model's SI ranges (rad, N·m) and gives degrees where the wire uses them.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -100,8 +101,10 @@ class LeagueRobot:
         )
 
 
+@functools.cache
 def league_robot(name: str) -> LeagueRobot:
-    """The league robot ``name`` (``"T1"``, ``"K1"``, …) from the installed ``rcsssmj``.
+    """The league robot ``name`` (``"T1"``, ``"K1"``, …) from the installed ``rcsssmj`` (read
+    once per process: the data is immutable).
 
     Raises:
         RcsssmjUnavailableError: ``rcsssmj`` is not installed.

@@ -10,7 +10,7 @@ import numpy as np
 
 from robocup_gym.robot.nao import NaoModel
 
-__all__ = ["heading_to_quat", "joint_angles_array", "joint_index", "yaw_quat"]
+__all__ = ["heading_to_quat", "joint_angles_array", "joint_index", "placement_quat", "yaw_quat"]
 
 
 def yaw_quat(yaw_rad: float) -> np.ndarray:
@@ -22,6 +22,27 @@ def heading_to_quat(heading_deg: float) -> np.ndarray:
     """Torso orientation for a robot whose forward (+y of the torso) points at ``heading_deg``
     (0 = world +x, counter-clockwise positive)."""
     return yaw_quat(math.radians(heading_deg - 90.0))
+
+
+def placement_quat(
+    x: float, y: float, z: float | None, heading_deg: float, quat: object | None
+) -> np.ndarray:
+    """The unit torso orientation a ``place_robot`` asks for (``quat`` (w, x, y, z), else
+    upright facing ``heading_deg``), after checking that every number of the placement is
+    finite (``z`` may be ``None``): both engines' ``place_robot`` check here, before they change
+    anything.
+
+    Raises:
+        ValueError: naming the value that is not finite, or a quaternion that is not 4 finite
+            numbers (or is zero).
+    """
+    for name, v in (("x", x), ("y", y), ("z", z), ("heading_deg", heading_deg)):
+        if v is not None and not math.isfinite(v):
+            raise ValueError(f"robot placement {name} must be finite, got {v}")
+    q = np.asarray(quat, float) if quat is not None else heading_to_quat(heading_deg)
+    if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
+        raise ValueError(f"quat must be 4 finite numbers, got {quat!r}")
+    return q / np.linalg.norm(q)
 
 
 def joint_index(model: NaoModel, name: str) -> int:

@@ -46,7 +46,7 @@ from robocup_gym.sim.engines.mujoco.scene import (
 )
 from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
-from robocup_gym.sim.pose import heading_to_quat, joint_angles_array, joint_index
+from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import (
@@ -735,19 +735,14 @@ class World(Senses):
         All velocities and joint targets are zeroed.
         """
         r = self.robot(index)
+        q = placement_quat(x, y, z, heading_deg, quat)
         d = self.data
         if joint_angles_deg is not None:
             angles = joint_angles_array(r.model, joint_angles_deg)
             d.qpos[r.qpos_joints] = np.radians(angles)
-        q = np.asarray(quat, float) if quat is not None else heading_to_quat(heading_deg)
-        if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
-            raise ValueError(f"quat must be 4 finite numbers, got {quat!r}")
-        for name, v in (("x", x), ("y", y), ("z", z)):
-            if v is not None and not math.isfinite(v):
-                raise ValueError(f"robot placement {name} must be finite, got {v}")
         a = r.qpos_root
         d.qpos[a : a + 3] = (x, y, 1.0 if z is None else z)
-        d.qpos[a + 3 : a + 7] = q / np.linalg.norm(q)
+        d.qpos[a + 3 : a + 7] = q
         d.qvel[r.qvel_root : r.qvel_root + 6] = 0.0
         d.qvel[r.qvel_joints] = 0.0
         r.targets[:] = 0.0

@@ -46,7 +46,7 @@ from robocup_gym.sim.engines.ode import lib as ode
 from robocup_gym.sim.engines.ode.fast import SANE_SPEED, FastLoops
 from robocup_gym.sim.engines.ode.fast import load as load_fast
 from robocup_gym.sim.field import GOAL_BOXES, WALLS
-from robocup_gym.sim.pose import heading_to_quat, joint_angles_array, joint_index
+from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import AgentCommand, ForceResistance, GameState, GroundTruth
@@ -482,18 +482,13 @@ class OdeWorld(Senses):
         lib = self._lib
         r = self.robots[index]
         model = r.model
-        for name, v in (("x", x), ("y", y), ("z", z), ("heading_deg", heading_deg)):
-            if v is not None and not math.isfinite(v):
-                raise ValueError(f"robot placement {name} must be finite, got {v}")
-        q = np.asarray(quat, float) if quat is not None else heading_to_quat(heading_deg)
-        if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
-            raise ValueError(f"quat must be 4 finite numbers, got {quat!r}")
+        q = placement_quat(x, y, z, heading_deg, quat)
         angles = (
             self.joint_angles_deg(index)
             if joint_angles_deg is None
             else joint_angles_array(model, joint_angles_deg)
         )
-        rot, trans = self._forward_kinematics(model, np.radians(angles), q / np.linalg.norm(q))
+        rot, trans = self._forward_kinematics(model, np.radians(angles), q)
         centres = [rot[i] @ np.array(b.pos) + trans[i] for i, b in enumerate(model.bodies)]
         if z is None:
             shift = -phys.SURFACE_LAYER - min(

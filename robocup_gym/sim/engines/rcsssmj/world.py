@@ -23,7 +23,6 @@ import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import mujoco
 import numpy as np
@@ -140,7 +139,7 @@ class LeagueWorld:
             raise ValueError(
                 f"rcsssmj refused these players (number, team size or team count): {bad}"
             )
-        self._effectors = [self._effector_names(a) for a in self.agents]
+        self._effectors = [r.effector_names for r in self.robots]
         model = self.sim.mj_model
         self._slots = [
             {
@@ -156,16 +155,6 @@ class LeagueWorld:
         self._pending: list[list] = [[] for _ in self.agents]
         """Each player's commands for the next step (the answer to the last perceptions): per
         joint ``(pos id, vel id, tau id, q rad, dq rad/s, kp, kd, tau)``."""
-
-    @staticmethod
-    def _effector_names(agent: Any) -> tuple[str, ...]:
-        prefix = agent.agent_id.prefix
-        out = []
-        for act in agent.spec.actuators:
-            name = act.name
-            if name.endswith("_tau"):
-                out.append(name[len(prefix) : -len("_tau")])
-        return tuple(out)
 
     @staticmethod
     def idle_cycles_before(first_perception: bytes) -> int:
