@@ -37,6 +37,20 @@ The same for SimSpark's physics on ODE (the default engine), where libode is ins
 * ``ode_22_robots_cycles_per_s``: 22 robots of mixed types flailing on the full field with the
   ball (a game's physics; 50 cycles/s is real time), one core.
 
+The league's current simulator (RCSSServerMJ), where the optional ``rcsssmj`` is installed, the
+real server and the in-process world on the same command sequence in the same run
+(``benchmarks/rcssservermj_match.py``):
+
+* ``rcssservermj_cycles_per_s``: a real ``rcssservermj`` in sync mode with one T1 agent sending
+  PD commands on all 23 joints each cycle;
+* ``t1_world_cycles_per_s``: the in-process world on the same commands, without making the
+  perceptions (what a learner that reads the state needs); ``t1_world_perceiving_cycles_per_s``
+  making every perception message too;
+* ``t1_world_vs_rcssservermj``: the ratio (issue 20 asks for 5×);
+* ``t1_mujoco_step_cycles_per_s``: MuJoCo's ``mj_step`` alone on the world's model (four 5 ms
+  steps per cycle), the bound of any in-process world on this model;
+* ``t1_env_steps_per_s``: ``VelocityKick(robot="T1")`` with random actions, every cycle counted.
+
 The MuJoCo keys above measure ``engine="mujoco"`` explicitly. Timings depend on the machine and
 its load; ``loadavg`` is recorded with them.
 """
@@ -86,6 +100,54 @@ EXTRA_MEASUREMENTS["serve_sync_cycles_per_s"] = _serve_sync_cycles_per_s("mujoco
 if ode_available():
     EXTRA_MEASUREMENTS["serve_ode_sync_cycles_per_s"] = _serve_sync_cycles_per_s("ode")
 # ----------------------------------------------------------------------------------------------
+
+
+def league_speeds(quick: bool) -> dict:
+    """The RCSSServerMJ keys of the module docstring (``{}`` without ``rcsssmj``)."""
+    try:
+        import rcsssmj  # noqa: F401
+    except ImportError:
+        return {"league_unavailable": "rcsssmj is not installed (pip install robocup-gym[mj])"}
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import rcssservermj_match
+
+    from robocup_gym.envs import VelocityKick
+    from robocup_gym.sim.engines.rcsssmj import LeagueWorld
+
+    cycles = 100 if quick else 1000
+    r = rcssservermj_match.run(cycles=cycles, robot="T1", seed=0)
+    world = LeagueWorld([("T1", "A", 1)])
+    model, data = world.sim.mj_model, world.sim.mj_data
+    t0 = time.perf_counter()
+    for _ in range(cycles):
+        mujoco.mj_step(model, data, 4)
+    bound = cycles / (time.perf_counter() - t0)
+    env = VelocityKick(robot="T1")
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    n, t0 = 0, time.perf_counter()
+    while n < cycles:
+        _, _, term, trunc, info = env.step(rng.uniform(-1, 1, env.action_space.shape))
+        n += info["cycles"]
+        if term or trunc:
+            env.reset()
+    env_rate = n / (time.perf_counter() - t0)
+    env.close()
+    out = {
+        "rcssservermj_cycles_per_s": r["server_cycles_per_s"],
+        "t1_world_cycles_per_s": r["inprocess_no_perception_cycles_per_s"],
+        "t1_world_perceiving_cycles_per_s": r["inprocess_cycles_per_s"],
+        "t1_world_vs_rcssservermj": r["speedup_no_perception"],
+        "t1_mujoco_step_cycles_per_s": round(bound, 1),
+        "t1_env_steps_per_s": round(env_rate, 1),
+    }
+    print(
+        f"T1     {out['t1_world_cycles_per_s']:9.0f} cycles/s in-process, "
+        f"{out['rcssservermj_cycles_per_s']:.0f} rcssservermj "
+        f"({out['t1_world_vs_rcssservermj']:.2f}×; MuJoCo alone {bound:.0f})",
+        file=sys.stderr,
+    )
+    return out
 
 
 def _place(world) -> None:
@@ -442,6 +504,7 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"env×2  {results['env_steps_per_s_2_workers']:9.0f} cycles/s", file=sys.stderr)
     for name, fn in EXTRA_MEASUREMENTS.items():
         results[name] = fn(quick)
+    results.update(league_speeds(quick))
     results["world_vs_raw"] = results["world_cycles_per_s"] / results["raw_cycles_per_s"]
     results["compiled_speedup"] = (
         results["world_cycles_per_s"] / results["world_numpy_cycles_per_s"]

@@ -19,6 +19,7 @@ Units (as on the rcssserver3d wire):
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -30,6 +31,7 @@ __all__ = [
     "GameState",
     "GroundTruth",
     "HeardMessage",
+    "PDCommand",
     "Perception",
     "SeenPlayer",
     "Vision",
@@ -136,6 +138,9 @@ class GroundTruth:
     """Torso linear velocity, m/s (``None`` where the backend cannot measure it)."""
     torso_ang_vel: np.ndarray | None = None
     """Torso angular velocity in the world frame, rad/s (``None`` where unknown)."""
+    feet_contact: dict[str, bool] | None = None
+    """Whether the left (``"lf"``) and right (``"rf"``) foot touch the ground, for robots
+    without foot pressure perceptors (the league's); ``None``: read the ``FRP`` perceptors."""
 
 
 @dataclass
@@ -157,6 +162,9 @@ class Perception:
     """Perceptor names of the joints, in the order of :attr:`joint_angles_deg`."""
     joint_angles_deg: np.ndarray
     """Hinge angles in degrees (``HJ``)."""
+    joint_velocities_deg_s: np.ndarray | None = None
+    """Joint velocities in deg/s where the simulator sends them (RCSSServerMJ's ``HJ … (vx …)``;
+    rcssserver3d sends none: ``None``)."""
     force_sensors: dict[str, ForceResistance] = field(default_factory=dict)
     """``FRP`` by name (``lf``, ``rf``, ``lf1``, ``rf1``); a missing name means no contact."""
     vision: Vision | None = None
@@ -179,16 +187,44 @@ class Perception:
             ) from None
 
 
+@dataclass(frozen=True)
+class PDCommand:
+    """One joint's command on RCSSServerMJ (the league's robots), in the wire's units:
+    ``(<name> q dq kp kd tau)``. The simulator applies ``kp (q − q_now) + kd (dq − dq_now) + tau``
+    (angles converted to rad), clamped to the actuator's torque range."""
+
+    q_deg: float
+    """Target angle, degrees."""
+    dq_deg_s: float = 0.0
+    """Target velocity, degrees per second."""
+    kp: float = 0.0
+    """Proportional gain, N·m per rad."""
+    kd: float = 0.0
+    """Derivative gain, N·m·s per rad."""
+    tau: float = 0.0
+    """Feed-forward torque, N·m."""
+
+    def __post_init__(self) -> None:
+        for f in ("q_deg", "dq_deg_s", "kp", "kd", "tau"):
+            v = getattr(self, f)
+            if not math.isfinite(v):
+                raise ValueError(f"joint command {f} must be finite, got {v}")
+
+
 @dataclass
 class AgentCommand:
     """What one agent sends in one cycle.
 
     ``joint_velocities`` maps effector names (``he1``, ``rle3``, …) to target angular velocities in
-    **rad/s**. As on rcssserver3d, targets are sticky: joints not named keep their previous target.
-    A full array in the robot's canonical effector order is also accepted.
+    **rad/s** (the Nao on rcssserver3d). As on rcssserver3d, targets are sticky: joints not named
+    keep their previous target. A full array in the robot's canonical effector order is also
+    accepted. ``joint_pd`` is the league robots' form (RCSSServerMJ): effector name →
+    :class:`PDCommand`, also sticky.
     """
 
     joint_velocities: Mapping[str, float] | np.ndarray = field(default_factory=dict)
+    joint_pd: Mapping[str, PDCommand] | None = None
+    """PD joint commands by effector name (league robots); ``None``: none this cycle."""
     beam: tuple[float, float, float] | None = None
     """``(x m, y m, rot deg)`` in the team frame; only honoured before kick-off and after goals."""
     say: str | None = None

@@ -7,7 +7,9 @@ Two of them are the in-process world on its two physics engines (:data:`ENGINES`
 SimSpark's own step on the Open Dynamics Engine, exact and the default (needs the system library
 ``libode``), and ``"mujoco"``, the fast approximation (matches slow motions and walking, not
 impacts: a kick learnt there does not kick on rcssserver3d). ``"rcssserver3d"`` drives a real
-server.
+server. ``"rcsssmj"`` is the league's current simulator (RCSSServerMJ) in-process, for its
+robots (``robot="T1"``, ``"K1"``; needs ``pip install robocup-gym[mj]``), and
+``"rcssservermj"`` drives a real one.
 
 Backends are looked up in a small registry of ``name -> "module:Class"`` entries and imported
 only when asked for. Adding a backend is one line here (or one call to :func:`register_backend`).
@@ -46,6 +48,8 @@ _REGISTRY: dict[str, str | Callable[..., Backend]] = {
     "mujoco": "robocup_gym.backends.mujoco_backend:MujocoBackend",
     "rcssserver3d": "robocup_gym.backends.rcssserver3d_backend:Rcssserver3dBackend",
     "ode": "robocup_gym.backends.ode_backend:OdeBackend",
+    "rcsssmj": "robocup_gym.backends.league_backend:LeagueBackend",
+    "rcssservermj": "robocup_gym.backends.rcssservermj_backend:RcssServerMJBackend",
 }
 """Implemented backends: name -> ``"module:Class"`` (imported lazily) or a factory."""
 

@@ -21,12 +21,13 @@ import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
-from collections.abc import Mapping
 
 from robocup_gym.backends.base import BackendError
 from robocup_gym.backends.process import ChildProcess, _death_signal_preexec, free_ports
 from robocup_gym.protocol.framing import FrameDecoder, encode_frame, recv_frame
+from robocup_gym.protocol.league import format_pd_commands
 
 __all__ = ["LeagueAgentLink", "RcssServerMJProcess", "format_pd_commands"]
 
@@ -50,6 +51,8 @@ class RcssServerMJProcess(ChildProcess):
         self.stop_grace_s = float(stop_grace_s)
         self.folder = tempfile.mkdtemp(prefix="robocup_gym_rcssservermj_")
         self.proc: subprocess.Popen | None = None
+        self._monitor: tuple[socket.socket, FrameDecoder] | None = None
+        self._taken: socket.socket | None = None
         self.agent_port = self.monitor_port = 0
         last = ""
         for _ in range(3):
@@ -65,18 +68,69 @@ class RcssServerMJProcess(ChildProcess):
         """Whether the server's simulation has stepped within ``timeout`` s: its first monitor
         message (sent after a step) says so. rcsssmj 0.2.1 crashes when a player joins before
         its first step, so a port that accepts is not enough (and a probe on the agent port
-        would leave an agent connection behind)."""
+        would leave an agent connection behind).
+
+        The monitor connection stays open (:meth:`take_monitor`; drained meanwhile): rcsssmj
+        0.2.1 closes a monitor's socket when the monitor hangs up, while its simulation thread
+        may be sending to it, and then stops with ``Bad file descriptor`` (about one start in
+        eight when the probe hung up at once)."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline and self.proc is not None:
             if self.proc.poll() is not None:
                 return False
             try:
-                with socket.create_connection(("127.0.0.1", self.monitor_port), timeout=1.0) as s:
-                    recv_frame(s, FrameDecoder(), max(0.5, deadline - time.monotonic()))
-                    return True
-            except (OSError, ConnectionError, TimeoutError):
+                s = socket.create_connection(("127.0.0.1", self.monitor_port), timeout=1.0)
+            except OSError:
                 time.sleep(0.05)
+                continue
+            decoder = FrameDecoder()
+            try:
+                recv_frame(s, decoder, max(0.5, deadline - time.monotonic()))
+            except (OSError, ConnectionError, TimeoutError):
+                s.close()
+                time.sleep(0.05)
+                continue
+            self._monitor = (s, decoder)
+            self._drain_stop = threading.Event()
+            self._drainer = threading.Thread(target=self._drain, daemon=True)
+            self._drainer.start()
+            return True
         return False
+
+    def _drain(self) -> None:
+        """Read and drop the monitor stream until :meth:`take_monitor` or :meth:`stop` (so the
+        server never blocks on a full socket)."""
+        s, decoder = self._monitor
+        s.settimeout(0.05)
+        while not self._drain_stop.is_set():
+            try:
+                data = s.recv(1 << 16)
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            if data == b"":
+                return
+            decoder.feed(data)  # whole frames are dropped, a partial one is kept
+
+    def take_monitor(self) -> tuple[socket.socket, FrameDecoder]:
+        """The open monitor connection (from the start-up check) and its frame decoder (which
+        holds any partly received message), for the caller to read and to send monitor
+        commands on; the caller must keep it open while the server runs (see
+        :meth:`_wait_until_stepping`): :meth:`stop` closes it.
+
+        Raises:
+            BackendError: it was taken already.
+        """
+        if self._monitor is None:
+            raise BackendError("the monitor connection was taken already")
+        self._drain_stop.set()
+        self._drainer.join()
+        s, decoder = self._monitor
+        self._monitor = None
+        self._taken = s
+        s.settimeout(None)
+        return s, decoder
 
     def _spawn(self) -> None:
         log = open(os.path.join(self.folder, "server.out"), "wb")  # noqa: SIM115
@@ -106,7 +160,8 @@ class RcssServerMJProcess(ChildProcess):
             return ""
 
     def stop(self) -> None:
-        """SIGINT, wait ``stop_grace_s``, SIGKILL if needed. Idempotent."""
+        """SIGINT, wait ``stop_grace_s``, SIGKILL if needed; then close the monitor
+        connection. Idempotent."""
         proc, self.proc = self.proc, None
         if proc is not None and proc.poll() is None:
             with contextlib.suppress(ProcessLookupError):
@@ -116,6 +171,14 @@ class RcssServerMJProcess(ChildProcess):
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait(5)
+        if self._monitor is not None:
+            self._drain_stop.set()
+            self._drainer.join()
+            self._monitor[0].close()
+            self._monitor = None
+        if self._taken is not None:
+            self._taken.close()
+            self._taken = None
 
     def close(self) -> None:
         """:meth:`stop` and remove the working folder."""
@@ -131,16 +194,6 @@ class RcssServerMJProcess(ChildProcess):
     def __del__(self) -> None:
         with contextlib.suppress(Exception):
             self.close()
-
-
-def format_pd_commands(commands: Mapping[str, object]) -> bytes:
-    """The wire text of joint commands ``name → PDCommand`` (``(name q dq kp kd tau)``, degrees
-    and degrees per second; numbers written exactly, as Python's ``repr``), then ``(syn)``."""
-    parts = [
-        f"({name} {c.q_deg!r} {c.dq_deg_s!r} {c.kp!r} {c.kd!r} {c.tau!r})"  # type: ignore[attr-defined]
-        for name, c in commands.items()
-    ]
-    return ("".join(parts) + "(syn)").encode()
 
 
 class LeagueAgentLink:

@@ -1,4 +1,5 @@
-"""From a policy action in [-1, 1] to joint velocity commands (rad/s), per action mode."""
+"""From a policy action in [-1, 1] to joint commands, per action mode: velocities (rad/s) for
+the Nao (:class:`ActionMapper`), PD commands for the league's robots (:class:`PDActionMapper`)."""
 
 from __future__ import annotations
 
@@ -6,8 +7,9 @@ import numpy as np
 
 from robocup_gym.envs.config import ActionMode
 from robocup_gym.robot.nao import NaoModel
+from robocup_gym.types import AgentCommand, PDCommand
 
-__all__ = ["ActionMapper"]
+__all__ = ["ActionMapper", "PDActionMapper"]
 
 
 class ActionMapper:
@@ -61,9 +63,114 @@ class ActionMapper:
         out[self.joints] = self.velocities(action, joint_angles_deg)
         return out
 
+    def agent_command(self, action: np.ndarray, joint_angles_deg: np.ndarray):
+        """The :class:`~robocup_gym.types.AgentCommand` for a clipped ``action``."""
+        return AgentCommand(self.command(action, joint_angles_deg))
+
     def labels(self) -> list[str]:
         """One label per action value."""
         names = [self.model.effector_names[i] for i in self.joints]
         if self.mode is ActionMode.TARGET_ANGLE_MAX_SPEED:
             return [f"{n}/{part}" for n in names for part in ("angle", "speed")]
+        return list(names)
+
+
+class PDActionMapper:
+    """Actions in [-1, 1] to the league robots' PD joint commands
+    (:class:`~robocup_gym.types.PDCommand`), per action mode; joints not controlled are held at
+    the episode's start angles with their default gains.
+
+    Default gains per joint: ``kp = τ_max / radians(saturation_deg)`` (the actuator's whole
+    torque at that angle error) and ``kd = kp × damping_s``.
+
+    Args:
+        model: The :class:`~robocup_gym.robot.league.LeagueRobot`.
+        joints: Indices (model order) of the controlled joints, in action order.
+        mode: ``TARGET_ANGLE``, ``TARGET_ANGLE_GAINS`` or ``TORQUE``.
+        saturation_deg: See above, degrees.
+        damping_s: See above, seconds.
+    """
+
+    def __init__(
+        self,
+        model,
+        joints: np.ndarray,
+        mode: ActionMode,
+        saturation_deg: float,
+        damping_s: float,
+    ) -> None:
+        self.model = model
+        self.joints = np.asarray(joints, dtype=int)
+        self.mode = ActionMode(mode)
+        if self.mode not in (
+            ActionMode.TARGET_ANGLE,
+            ActionMode.TARGET_ANGLE_GAINS,
+            ActionMode.TORQUE,
+        ):
+            raise ValueError(f"action mode {self.mode.value!r} is not a PD mode")
+        n = len(self.joints)
+        self.n_joints = n
+        self.size = 3 * n if self.mode is ActionMode.TARGET_ANGLE_GAINS else n
+        tmax = np.abs(model.torque_limits).max(axis=1)
+        self.kp = tmax / np.radians(saturation_deg)
+        """Default proportional gain per joint (model order), N·m/rad."""
+        self.kd = self.kp * float(damping_s)
+        """Default derivative gain per joint (model order), N·m·s/rad."""
+        self.tau_max = tmax
+        lo, hi = model.ranges_deg[self.joints].T.astype(float)
+        self.angle_mid = (lo + hi) / 2.0
+        self.angle_half = (hi - lo) / 2.0
+        self._names = model.effector_names
+        self._hold = np.zeros(len(model.joints))
+        self._others = np.setdiff1d(np.arange(len(model.joints)), self.joints)
+
+    def hold_at(self, angles_deg: np.ndarray) -> None:
+        """The angles (deg, model order) at which the joints not controlled are held."""
+        self._hold = np.array(angles_deg, dtype=float)
+
+    def targets_deg(self, action: np.ndarray) -> np.ndarray:
+        """Target angles (deg) of the target-angle modes for ``action``."""
+        a = action[0::3] if self.mode is ActionMode.TARGET_ANGLE_GAINS else action
+        return self.angle_mid + a * self.angle_half
+
+    def command(self, action: np.ndarray, joint_angles_deg: np.ndarray | None = None):
+        """The PD commands (effector name → :class:`PDCommand`) for a clipped ``action``, every
+        joint named (uncontrolled ones held)."""
+        names, j = self._names, self.joints
+        out = {
+            names[i]: PDCommand(float(self._hold[i]), 0.0, float(self.kp[i]), float(self.kd[i]))
+            for i in self._others
+        }
+        mode = self.mode
+        if mode is ActionMode.TORQUE:
+            tau = action * self.tau_max[j]
+            for k, i in enumerate(j):
+                out[names[i]] = PDCommand(0.0, 0.0, 0.0, 0.0, float(tau[k]))
+            return out
+        target = self.targets_deg(action)
+        if mode is ActionMode.TARGET_ANGLE:
+            kp, kd = self.kp[j], self.kd[j]
+        else:
+            kp = (action[1::3] + 1.0) * self.kp[j]
+            kd = (action[2::3] + 1.0) * self.kd[j]
+        for k, i in enumerate(j):
+            out[names[i]] = PDCommand(float(target[k]), 0.0, float(kp[k]), float(kd[k]))
+        return out
+
+    def hold(self, angles_deg: np.ndarray):
+        """Commands holding every joint at ``angles_deg`` (model order) with default gains."""
+        return {
+            n: PDCommand(float(a), 0.0, float(p), float(d))
+            for n, a, p, d in zip(self._names, angles_deg, self.kp, self.kd, strict=True)
+        }
+
+    def agent_command(self, action: np.ndarray, joint_angles_deg: np.ndarray):
+        """The :class:`~robocup_gym.types.AgentCommand` for a clipped ``action``."""
+        return AgentCommand(joint_pd=self.command(action, joint_angles_deg))
+
+    def labels(self) -> list[str]:
+        """One label per action value."""
+        names = [self._names[i] for i in self.joints]
+        if self.mode is ActionMode.TARGET_ANGLE_GAINS:
+            return [f"{n}/{part}" for n in names for part in ("angle", "kp", "kd")]
         return list(names)

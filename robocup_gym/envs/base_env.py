@@ -31,7 +31,7 @@ from robocup_gym.backends import (
     make_backend,
     resolve_backend,
 )
-from robocup_gym.envs.actions import ActionMapper
+from robocup_gym.envs.actions import ActionMapper, PDActionMapper
 from robocup_gym.envs.config import (
     ON_FIELD_X_M,
     ON_FIELD_Y_M,
@@ -42,6 +42,7 @@ from robocup_gym.envs.config import (
     check_joint_ranges,
     resolve_angles,
     resolve_joints,
+    robot_model,
 )
 from robocup_gym.envs.observations import (
     COMPONENTS,
@@ -49,7 +50,6 @@ from robocup_gym.envs.observations import (
     heading_frame,
     torso_axes,
 )
-from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.types import AgentCommand, GroundTruth, Perception
 
@@ -72,6 +72,11 @@ class EpisodeStart:
     """Ball velocity, m/s, world frame."""
     kick_target: np.ndarray
     """(distance m, angle deg) for the ``kick_target`` observation."""
+
+
+FALL_HEIGHT_FRACTION = 0.65
+"""A league robot has fallen below this fraction of its standing torso height (the Nao's
+default ``fall_height`` 0.25 m is 0.65 of its 0.384 m)."""
 
 
 def _fallen_from_accel(acc: np.ndarray) -> bool:
@@ -120,9 +125,44 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
     """Config type of this environment (tasks use a subclass with their reward options)."""
 
     @classmethod
-    def default_config(cls) -> EnvConfig:
-        """The configuration used when none is given."""
-        return cls.config_class()
+    def default_config(cls, robot: str = "nao") -> EnvConfig:
+        """The configuration used when none is given, for ``robot`` (``"nao"`` or a league
+        robot such as ``"T1"``: the task's defaults with :meth:`league_defaults` applied)."""
+        config = cls.config_class()
+        if robot == "nao":
+            return config
+        return config.replace(robot=robot, **cls.league_defaults(robot))
+
+    @classmethod
+    def league_defaults(cls, robot: str) -> dict[str, Any]:
+        """The options that differ on a league robot (RCSSServerMJ) from the task's Nao
+        defaults, derived from the robot's model (tasks extend this):
+
+        ==================  ===================================================================
+        option              on a league robot
+        ==================  ===================================================================
+        ``action_mode``     ``"target_angle"`` (PD targets with default gains)
+        ``observations``    the task's, without foot and toe pressure (the robots have no FRP)
+        ``fall_height``     0.65 × the robot's standing torso height (as 0.25 m is the Nao's)
+        ``ball_start_pos``  0.2 m + ball radius ahead of the right foot, resting on the ground
+        ``joint_start_deg`` ``None``: every joint at 0 (the models stand upright there)
+        ==================  ===================================================================
+        """
+        from robocup_gym.envs.config import league_robot_of
+
+        base = cls.config_class()
+        r = league_robot_of(robot)
+        x, y = base.robot_start_pos
+        fwd, left = r.right_foot_offset
+        return {
+            "action_mode": ActionMode.TARGET_ANGLE,
+            "observations": tuple(
+                o for o in base.observations if o not in ("foot_force", "toe_force")
+            ),
+            "fall_height": round(FALL_HEIGHT_FRACTION * r.standing_torso_height, 3),
+            "ball_start_pos": (x + fwd + 0.2 + r.ball_radius, y + left, r.ball_radius),
+            "joint_start_deg": None,
+        }
 
     # ================================================================== construction
     def __init__(
@@ -146,7 +186,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.render_mode = render_mode
         self.render_size = (int(render_size[0]), int(render_size[1]))
 
-        model = nao_model(config.robot_type)
+        model = robot_model(config)
+        self.league = config.robot != "nao"
+        """Whether the robot is one of the league's (RCSSServerMJ, PD joints)."""
         # ---- observation components (validated before a backend is started)
         unknown = [n for n in config.observations if n not in COMPONENTS]
         if unknown:
@@ -156,7 +198,12 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             )
         comps = [COMPONENTS[n] for n in config.observations]
         for c in comps:
-            if c.needs_toes and not model.robot_type.has_toes:
+            if self.league and c.name in ("foot_force", "toe_force"):
+                raise EnvConfigError(
+                    f"observation {c.name!r} reads the Nao's foot pressure perceptors (FRP); the "
+                    f"{config.robot} has none"
+                )
+            if c.needs_toes and not self.league and not model.robot_type.has_toes:
                 raise EnvConfigError(
                     f"observation {c.name!r} needs the toes of robot type 4, "
                     f"got robot_type={config.robot_type}"
@@ -193,18 +240,26 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             if engine is not None and engine != backend.name:
                 raise EnvConfigError(f"engine={engine!r} but the given backend is {backend.name!r}")
             self.backend = backend
+            given = getattr(backend, "robot", "nao")
+            if given != config.robot:
+                raise EnvConfigError(f"backend robot {given!r} != config robot {config.robot!r}")
             if backend.robot_type != config.robot_type:
                 raise EnvConfigError(
                     f"backend robot_type {backend.robot_type} != config robot_type "
                     f"{config.robot_type}"
                 )
         elif backend is None or isinstance(backend, str):
-            self.backend = make_backend(
-                resolve_backend(backend, engine),
-                robot_type=config.robot_type,
-                vision=needs_vision,
-                **dict(config.backend_options),
-            )
+            if self.league:
+                if engine is not None or backend not in (None, "rcsssmj", "rcssservermj"):
+                    raise EnvConfigError(
+                        f"the {config.robot} runs on the league's simulator (backend "
+                        f"'rcsssmj' in-process, or 'rcssservermj' for a real server), not on "
+                        f"{engine or backend!r}"
+                    )
+                name = backend or "rcsssmj"
+            else:
+                name = resolve_backend(backend, engine)
+            self.backend = make_backend(name, **self.backend_kwargs(needs_vision))
         else:
             raise EnvConfigError(
                 f"backend must be a name or a Backend, got {type(backend).__name__}"
@@ -219,7 +274,12 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             )
 
         # ---- actions
-        self._actions = ActionMapper(model, ctrl, config.action_mode, config.target_gain)
+        if self.league:
+            self._actions = PDActionMapper(
+                model, ctrl, config.action_mode, config.pd_saturation_deg, config.pd_damping_s
+            )
+        else:
+            self._actions = ActionMapper(model, ctrl, config.action_mode, config.target_gain)
         n_act = self._actions.size
         self.action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
         self.action_labels: list[str] = self._actions.labels()
@@ -310,10 +370,29 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.diverged_episodes = 0
         """Episodes ended early because the simulation diverged."""
 
+    def backend_kwargs(self, vision: bool = False) -> dict[str, Any]:
+        """The keyword arguments that make a backend for this environment's robot (with the
+        config's ``backend_options``)."""
+        c = self.config
+        robot = {"robot": c.robot} if c.robot != "nao" else {}
+        return {"robot_type": c.robot_type, "vision": vision, **robot, **dict(c.backend_options)}
+
     def _coerce_config(self, config: EnvConfig | None, overrides: Mapping[str, Any]) -> EnvConfig:
         cls = self.config_class
+        robot = overrides.get("robot", getattr(config, "robot", "nao"))
+        if robot != "nao" and isinstance(robot, str):
+            # the options left at their Nao defaults take the league robot's (given overrides
+            # and changed options win)
+            nao = cls()
+            given = config if isinstance(config, EnvConfig) else nao
+            league = {
+                k: v
+                for k, v in self.league_defaults(robot).items()
+                if k not in overrides and getattr(given, k, None) == getattr(nao, k)
+            }
+            overrides = {**league, **overrides}
         if config is None:
-            config = self.default_config()
+            config = cls()
         elif not isinstance(config, EnvConfig):
             raise EnvConfigError(
                 f"config must be an EnvConfig ({cls.__name__} for {type(self).__name__}), "
@@ -366,6 +445,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self._vision_ball[:] = 0.0
         self._q = np.asarray(p.joint_angles_deg, dtype=float)
         self._qdot = np.zeros_like(self._q)
+        if self.league:
+            self._actions.hold_at(self._q)
         self._set_perception(p)
         self._build_frame()
         k = int(self.config.frame_stack)
@@ -387,9 +468,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             a = a + self.np_random.normal(0.0, self._act_noise, a.shape)
         np.minimum(a, 1.0, out=a)  # clip to [-1, 1] (cheaper than np.clip on small arrays)
         np.maximum(a, -1.0, out=a)
-        command = self._actions.command(a, self._q)
+        command = self._actions.agent_command(a, self._q)
         try:
-            p = self.backend.step(AgentCommand(command))
+            p = self.backend.step(command)
         except BackendDivergedError as e:
             return self._diverged(e)
         self._last_action[:] = a
@@ -403,8 +484,13 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             self.has_completed = True
             n = int(self.config.wait_steps)
             if n > 0:
+                wait = (
+                    AgentCommand(joint_pd=self._actions.hold(self._q))
+                    if self.league
+                    else self._wait_command
+                )
                 try:
-                    p = self.backend.advance(n, self._wait_command)
+                    p = self.backend.advance(n, wait)
                 except BackendDivergedError as e:
                     return self._diverged(e, terminated=terminated)
                 self._set_perception(p, cycles=n, episode_over=True)
@@ -598,7 +684,10 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _set_perception(self, p: Perception, cycles: int = 1, episode_over: bool = False) -> None:
         q = np.asarray(p.joint_angles_deg, dtype=float)
-        self._qdot = np.radians(q - self._q) * (1.0 / (CYCLE_S * cycles))
+        if p.joint_velocities_deg_s is not None:  # sent by the simulator (RCSSServerMJ)
+            self._qdot = np.radians(p.joint_velocities_deg_s)
+        else:
+            self._qdot = np.radians(q - self._q) * (1.0 / (CYCLE_S * cycles))
         self._q = q
         self.perception = p
         gt = p.ground_truth

@@ -111,9 +111,18 @@ class ActionMode(str, enum.Enum):
     """One number per joint: the target joint velocity, scaled to ±the joint's max speed (rad/s).
     (Paper: ``ActionMode.VELOCITIES``.)"""
     TARGET_ANGLE = "target_angle"
-    """One number per joint: a target angle, scaled to the joint's range [min, max] (deg). The
-    velocity sent is ``clip(target_gain · (target − current), ±max speed)``.
+    """One number per joint: a target angle, scaled to the joint's range [min, max] (deg). On the
+    Nao the velocity sent is ``clip(target_gain · (target − current), ±max speed)``; on a league
+    robot it is the PD command's target, with the joint's default gains (see
+    ``pd_saturation_deg``).
     (Paper: ``ActionMode.DESIRED_ANGLES``, with gain 1/s.)"""
+    TARGET_ANGLE_GAINS = "target_angle_gains"
+    """League robots (PD joints) only. Three numbers per joint, interleaved ``[angle_0, kp_0,
+    kd_0, …]``: the target angle (scaled to the joint's range) and the PD gains, each scaled to
+    [0, 2 ×] the joint's default gain (see ``pd_saturation_deg`` and ``pd_damping_s``)."""
+    TORQUE = "torque"
+    """League robots (PD joints) only. One number per joint: the torque, scaled to ±the
+    actuator's limit (N·m), sent as the feed-forward torque with zero gains."""
     TARGET_ANGLE_MAX_SPEED = "target_angle_max_speed"
     """Two numbers per joint, interleaved ``[angle_0, speed_0, angle_1, speed_1, …]``: the target
     angle (scaled to the joint's range) and a speed limit (scaled to [0, max speed]); the velocity
@@ -155,6 +164,39 @@ def _enum_value(enum_cls: type[enum.Enum], value: Any, what: str) -> Any:
     except ValueError:
         valid = ", ".join(repr(m.value) for m in enum_cls)
         raise EnvConfigError(f"unknown {what} {value!r}; valid: {valid}") from None
+
+
+def robot_model(config: EnvConfig) -> Any:
+    """The robot a config describes: a :class:`~robocup_gym.robot.nao.NaoModel` of
+    ``robot_type``, or the :class:`~robocup_gym.robot.league.LeagueRobot` named ``robot``.
+
+    Raises:
+        EnvConfigError: an unknown robot name (listing the valid ones).
+        robocup_gym.robot.league.RcsssmjUnavailableError: a league robot without ``rcsssmj``.
+    """
+    if config.robot == "nao":
+        return nao_model(int(config.robot_type))
+    return league_robot_of(config.robot)
+
+
+def league_robot_of(name: Any) -> Any:
+    """The :class:`~robocup_gym.robot.league.LeagueRobot` called ``name``.
+
+    Raises:
+        EnvConfigError: an unknown robot name (listing the valid ones).
+        robocup_gym.robot.league.RcsssmjUnavailableError: ``rcsssmj`` is not installed.
+    """
+    if not isinstance(name, str):
+        raise EnvConfigError(f"robot must be a name, got {name!r}")
+    from robocup_gym.robot.league import league_robot, league_robot_names
+
+    names = league_robot_names()
+    if name not in names:
+        raise EnvConfigError(
+            f"unknown robot {name!r}; valid: 'nao' (rcssserver3d) or, from the installed "
+            f"rcsssmj: {', '.join(map(repr, names))}"
+        )
+    return league_robot(name)
 
 
 @dataclass
@@ -199,8 +241,14 @@ class EnvConfig:
     """Joints the policy drives (effector, perceptor or Nao names), in action order; ``None`` =
     every joint except the head (``he1``, ``he2``). Other joints get a 0 rad/s command."""
     action_mode: ActionMode | str = ActionMode.VELOCITY
-    """``"velocity"``, ``"target_angle"`` or ``"target_angle_max_speed"`` (see
-    :class:`ActionMode`)."""
+    """``"velocity"``, ``"target_angle"`` or ``"target_angle_max_speed"`` on the Nao;
+    ``"target_angle"`` (the default there), ``"target_angle_gains"`` or ``"torque"`` on a league
+    robot (see :class:`ActionMode`)."""
+    pd_saturation_deg: float = 20.0
+    """League robots: the default proportional gain of each joint makes its actuator's whole
+    torque at this angle error, ``kp = τ_max / θ_sat`` (N·m/rad)."""
+    pd_damping_s: float = 0.05
+    """League robots: the default derivative gain, ``kd = kp × pd_damping_s`` (N·m·s/rad)."""
     target_gain: float = 12.5
     """Proportional gain of the target-angle modes, 1/s: velocity = gain × angle error. 12.5 is
     critically damped with SimSpark's one-cycle dead time (the error halves every cycle);
@@ -212,6 +260,11 @@ class EnvConfig:
     # ---------------------------------------------------------------- episode
     robot_type: int = 0
     """Heterogeneous Nao type 0–4 (4 has toes: joints ``lle7``/``rle7``)."""
+    robot: str = "nao"
+    """``"nao"`` (rcssserver3d's robot, of ``robot_type``) or a robot of the league's current
+    simulator, RCSSServerMJ: ``"T1"``, ``"K1"`` (whatever the installed ``rcsssmj`` ships; needs
+    ``pip install robocup-gym[mj]``). A league robot runs on the ``"rcsssmj"`` backend, and the
+    task's options left at their Nao defaults take the robot's (:meth:`BaseEnv.default_config`)."""
     robot_start_pos: tuple[float, float] = (-1.0, 0.0)
     """Torso centre (x, y) at the start of an episode, m; the robot stands on the ground."""
     robot_start_heading_deg: float = 0.0
@@ -377,8 +430,28 @@ class EnvConfig:
             self.play_mode in PLAY_MODES,
             f"unknown play_mode {self.play_mode!r}; valid: {', '.join(PLAY_MODES)}",
         )
+        need(
+            _finite(self.pd_saturation_deg) and 0.0 < self.pd_saturation_deg <= 180.0,
+            f"pd_saturation_deg must be in (0, 180] deg, got {self.pd_saturation_deg!r}",
+        )
+        need(
+            _finite(self.pd_damping_s) and self.pd_damping_s >= 0.0,
+            f"pd_damping_s must be a number >= 0 (s), got {self.pd_damping_s!r}",
+        )
+        model = robot_model(self)
+        league = self.robot != "nao"
+        pd_modes = (ActionMode.TARGET_ANGLE, ActionMode.TARGET_ANGLE_GAINS, ActionMode.TORQUE)
+        if league and self.action_mode not in pd_modes:
+            raise EnvConfigError(
+                f"action_mode {self.action_mode.value!r} is for the Nao; the {self.robot} takes "
+                f"PD joint commands: {', '.join(repr(m.value) for m in pd_modes)}"
+            )
+        if not league and self.action_mode in pd_modes[1:]:
+            raise EnvConfigError(
+                f"action_mode {self.action_mode.value!r} is for the league's robots (PD joints); "
+                "the Nao's: 'velocity', 'target_angle', 'target_angle_max_speed'"
+            )
         if self.joint_start_deg is not None:
-            model = nao_model(int(self.robot_type))
             angles = resolve_angles(model, self.joint_start_deg, "joint_start_deg")
             check_joint_ranges(model, angles, "joint_start_deg")
         if self.normalise is Normalisation.NONE and self.obs_clip not in (None, math.inf):
@@ -438,7 +511,7 @@ def resolve_joints(model: NaoModel, names: Sequence[str], what: str) -> np.ndarr
     for n in names:
         if n not in idx:
             raise EnvConfigError(
-                f"unknown joint {n!r} in {what} for robot type {model.robot_type.index}; valid "
+                f"unknown joint {n!r} in {what} for {model.label}; valid "
                 f"effector names: {', '.join(model.effector_names)} (perceptor names like "
                 f"'rlj3' and Nao names like 'RHipPitch' work too)"
             )
@@ -460,8 +533,8 @@ def check_joint_ranges(model: NaoModel, angles_deg: np.ndarray, what: str) -> No
         i = int(bad[0])
         raise EnvConfigError(
             f"{what}: {model.effector_names[i]} ({model.perceptor_names[i]}) = "
-            f"{angles_deg[i]:g}° is outside its range [{lo[i]:g}, {hi[i]:g}]° for robot type "
-            f"{model.robot_type.index}"
+            f"{angles_deg[i]:g}° is outside its range [{lo[i]:g}, {hi[i]:g}]° for "
+            f"{model.label}"
         )
 
 
@@ -482,7 +555,7 @@ def resolve_angles(
     for n, v in angles.items():
         if n not in idx:
             raise EnvConfigError(
-                f"unknown joint {n!r} in {what} for robot type {model.robot_type.index}; valid "
+                f"unknown joint {n!r} in {what} for {model.label}; valid "
                 f"effector names: {', '.join(model.effector_names)}"
             )
         v = float(v)

@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 __all__ = ["LeagueRobot", "RcsssmjUnavailableError", "league_robot", "league_robot_names"]
 
@@ -58,6 +60,8 @@ class LeagueJoint:
     """Limits, rad."""
     force_range: tuple[float, float]
     """The actuator's torque limits, N·m: the PD torque is clamped to these."""
+    perceptor: str = ""
+    """The joint's name in the ``HJ`` perceptor (``q_llj4``), from its joint-position sensor."""
 
     @property
     def range_deg(self) -> tuple[float, float]:
@@ -77,6 +81,37 @@ class LeagueRobot:
     """Actuated joints, in the model's order (the order of the ``HJ`` perceptors)."""
     sensors: tuple[str, ...]
     """Names of the model's sensors (without the per-player prefix)."""
+    standing_torso_height: float = 0.0
+    """Torso centre height (m) with every joint at 0 and the lowest point on the ground."""
+    foot_bodies: tuple[str, str] = ("", "")
+    """The model's (left, right) foot bodies (the bodies named ``left_foot…``/``right_foot…``)."""
+    right_foot_offset: tuple[float, float] = (0.0, 0.0)
+    """Right foot body's (forward, left) offset from the torso, m, all joints at 0."""
+    ball_radius: float = 0.11
+    """Radius of the league's ball, m (from ``rcsssmj``'s soccer world model)."""
+    joint_index: dict[str, int] = field(default_factory=dict, compare=False)
+    """Joint index (model order) by effector (``lle4``), perceptor (``q_llj4``) or model
+    (``Left_Knee_Pitch``) name."""
+
+    def __post_init__(self) -> None:
+        for i, j in enumerate(self.joints):
+            for n in (j.effector, j.perceptor, j.name):
+                if n:
+                    self.joint_index.setdefault(n, i)
+
+    max_joint_speed_rad_s: float = 20.0
+    """The range joint velocities are normalised over in observations, rad/s (the models set
+    no speed limits; this is a scale, not a limit)."""
+
+    @functools.cached_property
+    def max_speeds(self) -> np.ndarray:
+        """Per joint :attr:`max_joint_speed_rad_s` (the observation's velocity scale)."""
+        return np.full(len(self.joints), self.max_joint_speed_rad_s)
+
+    @property
+    def label(self) -> str:
+        """How messages name the robot (``"T1"``)."""
+        return self.name
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -86,6 +121,21 @@ class LeagueRobot:
     def effector_names(self) -> tuple[str, ...]:
         """The joint command names (``he1``, …), model order."""
         return tuple(j.effector for j in self.joints)
+
+    @property
+    def perceptor_names(self) -> tuple[str, ...]:
+        """The ``HJ`` perceptor names (``q_hj1``, …), model order."""
+        return tuple(j.perceptor for j in self.joints)
+
+    @functools.cached_property
+    def ranges_deg(self) -> np.ndarray:
+        """Joint limits, degrees, shape ``(n, 2)``, model order."""
+        return np.array([j.range_deg for j in self.joints])
+
+    @functools.cached_property
+    def torque_limits(self) -> np.ndarray:
+        """The actuators' torque limits, N·m, shape ``(n, 2)``, model order."""
+        return np.array([j.force_range for j in self.joints])
 
     def joint(self, name: str) -> LeagueJoint:
         """The joint called ``name``.
@@ -123,6 +173,11 @@ def league_robot(name: str) -> LeagueRobot:
         actuator = model.actuator(k).name
         if actuator.endswith("_tau"):
             effector[int(model.actuator_trnid[k][0])] = actuator[: -len("_tau")]
+    perceptor = {  # joint id -> HJ name, from the joint's position sensor
+        int(model.sensor_objid[k]): model.sensor(k).name
+        for k in range(model.nsensor)
+        if int(model.sensor_type[k]) == int(mujoco.mjtSensor.mjSENS_JOINTPOS)
+    }
     joints = []
     for j in range(model.njnt):
         if int(model.jnt_type[j]) not in (
@@ -133,11 +188,55 @@ def league_robot(name: str) -> LeagueRobot:
         lo, hi = (float(v) for v in model.jnt_range[j])
         flo, fhi = (float(v) for v in model.jnt_actfrcrange[j])
         joint = model.joint(j).name
-        joints.append(LeagueJoint(joint, effector.get(j, joint), (lo, hi), (flo, fhi)))
+        joints.append(
+            LeagueJoint(joint, effector.get(j, joint), (lo, hi), (flo, fhi), perceptor.get(j, ""))
+        )
     sensors = tuple(model.sensor(k).name for k in range(model.nsensor))
+    height, feet, right = _standing_geometry(ModelSpecProvider().load_robot_spec(name))
     return LeagueRobot(
         name=name,
         model_file=_rcsssmj_resources() / "robots" / name / "robot.xml",
         joints=tuple(joints),
         sensors=sensors,
+        standing_torso_height=height,
+        foot_bodies=feet,
+        right_foot_offset=right,
+        ball_radius=_ball_radius(),
     )
+
+
+def _standing_geometry(spec) -> tuple[float, tuple[str, str], tuple[float, float]]:
+    """The robot standing with every joint at 0: torso height (m) with its lowest point on a
+    ground plane (MuJoCo's geometry distance), its foot bodies and the right foot's offset."""
+    import mujoco
+
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1], name="_ground")
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    plane = model.geom("_ground").id
+    fromto = np.zeros(6)
+    lowest = min(
+        mujoco.mj_geomDistance(model, data, g, plane, 10.0, fromto)
+        for g in range(model.ngeom)
+        if g != plane and (model.geom_contype[g] or model.geom_conaffinity[g])
+    )
+    torso = 1  # the root body, child of the world
+    names = [model.body(b).name for b in range(model.nbody)]
+    left = next((n for n in names if n.lower().startswith("left_foot")), "")
+    right = next((n for n in names if n.lower().startswith("right_foot")), "")
+    offset = (0.0, 0.0)
+    if right:
+        d = data.body(right).xpos - data.xpos[torso]
+        offset = (float(d[0]), float(d[1]))
+    return float(data.xpos[torso][2] - lowest), (left, right), offset
+
+
+@functools.cache
+def _ball_radius() -> float:
+    """The league ball's radius, m, from ``rcsssmj``'s soccer world model (geometry ``ball``)."""
+    from rcsssmj.resources.spec_provider import ModelSpecProvider
+
+    spec = ModelSpecProvider().load_environment_spec("soccer", "world")
+    model = spec.compile()
+    return float(model.geom("ball").size[0])

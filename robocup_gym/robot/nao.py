@@ -103,6 +103,11 @@ class NaoModel:
     joints: tuple[Joint, ...]
 
     @property
+    def label(self) -> str:
+        """How messages name the robot (``"robot type 0"``)."""
+        return f"robot type {self.robot_type.index}"
+
+    @property
     def total_mass(self) -> float:
         """Sum of all body masses, kg (4.6071 for every type)."""
         return sum(b.mass for b in self.bodies)

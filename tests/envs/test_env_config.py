@@ -85,7 +85,7 @@ def test_joint_names_in_any_naming(make_env):
         ({"controlled_joints": "rle3"}, r"sequence of joint names"),
         ({"controlled_joints": ()}, r"at least one joint"),
         ({"joint_start_deg": {"knee": 3.0}}, r"unknown joint 'knee' in joint_start_deg"),
-        ({"action_mode": "torque"}, r"unknown action mode 'torque'.*'velocity'"),
+        ({"action_mode": "jerk"}, r"unknown action mode 'jerk'.*'velocity'"),
         ({"normalise": "zscore"}, r"unknown normalisation 'zscore'"),
         ({"frame_stack": 0}, r"frame_stack must be an integer >= 1"),
         ({"max_episode_steps": 0}, r"max_episode_steps"),

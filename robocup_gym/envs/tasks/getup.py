@@ -74,8 +74,8 @@ class GetUpConfig(EnvConfig):
             raise EnvConfigError(
                 f"start_side must be 'front', 'back' or 'random', got {self.start_side!r}"
             )
-        if not (0.0 < self.success_height < 0.6):
-            raise EnvConfigError("success_height must be between 0 and 0.6 m")
+        if not (0.0 < self.success_height < 1.5):
+            raise EnvConfigError("success_height must be between 0 and 1.5 m")
         if not (0.0 < self.success_tilt_deg < 90.0):
             raise EnvConfigError("success_tilt_deg must be between 0 and 90 deg")
         if not (
@@ -111,11 +111,38 @@ class GetUp(BaseEnv):
     """
 
     config_class = GetUpConfig
+
+    @classmethod
+    def league_defaults(cls, robot: str) -> dict[str, Any]:
+        """:meth:`BaseEnv.league_defaults`, plus: ``success_height`` 0.73 × the robot's
+        standing torso height (as 0.28 m is of the Nao's 0.384 m), and the ball 2 m ahead of
+        the robot, out of the way (``rcsssmj`` 0.2.1 fails when the ball touches the K1's
+        unnamed body parts)."""
+        from robocup_gym.envs.config import league_robot_of
+
+        out = super().league_defaults(robot)
+        r = league_robot_of(robot)
+        x, y = cls.config_class().robot_start_pos
+        out["success_height"] = round(0.73 * r.standing_torso_height, 3)
+        out["ball_start_pos"] = (x + 2.0, y, r.ball_radius)
+        return out
+
     config: GetUpConfig
     task_reset_options = frozenset({"start_side"})
 
+    REAL_SERVERS = ("rcssserver3d", "rcssservermj")
+    """Backends that cannot start a robot lying down (their placement is upright only, or, on
+    rcssservermj, with every joint at 0)."""
+
     def __init__(self, config: GetUpConfig | None = None, **kwargs: Any) -> None:
         super().__init__(config, **kwargs)
+        if self.backend.name in self.REAL_SERVERS:
+            name = self.backend.name
+            self.close()
+            raise EnvConfigError(
+                f"GetUp starts the robot lying down, which the {name!r} backend cannot place; "
+                "train and evaluate it in-process (the default), or place the robot yourself"
+            )
         self._lying: dict[str, tuple[float, np.ndarray, np.ndarray]] = {}
         self.side = "front"
         self._up_steps = 0
@@ -142,11 +169,7 @@ class GetUp(BaseEnv):
             # in a world of its own where the environment made its backend, so that the
             # episodes' world has no history of the drop (episodes are then reproducible)
             if self._owns_backend:
-                world = make_backend(
-                    self.backend.name,
-                    robot_type=self.config.robot_type,
-                    **dict(self.config.backend_options),
-                )
+                world = make_backend(self.backend.name, **self.backend_kwargs())
             else:
                 world = self.backend
             try:
@@ -155,7 +178,12 @@ class GetUp(BaseEnv):
                     ball_pos=(x + 5.0, y + 5.0),
                     play_mode=self.config.play_mode,
                 )
-                p = world.advance(DROP_CYCLES, AgentCommand(np.zeros(n)))
+                hold = (  # the joints held at 0
+                    AgentCommand(joint_pd=self._actions.hold(np.zeros(n)))
+                    if self.league
+                    else AgentCommand(np.zeros(n))
+                )
+                p = world.advance(DROP_CYCLES, hold)
             finally:
                 if world is not self.backend:
                     world.close()

@@ -232,8 +232,14 @@ class Walk(BaseEnv):
         up_z = 1.0 - 2.0 * (x * x + y * y)
         touchdowns = []
         forces = self.perception.force_sensors
+        contact = gt.feet_contact  # robots without foot pressure perceptors (the league's)
         for foot in ("lf", "rf"):
-            if foot in forces and forces[foot].force[2] > 1.0:
+            down = (
+                contact[foot]
+                if contact is not None
+                else foot in forces and forces[foot].force[2] > 1.0
+            )
+            if down:
                 if self._air[foot] > 0.0:
                     touchdowns.append(self._air[foot])
                 self._air[foot] = 0.0

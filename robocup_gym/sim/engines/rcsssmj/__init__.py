@@ -2,6 +2,6 @@
 exactly as its server steps them (:class:`~robocup_gym.sim.engines.rcsssmj.world.LeagueWorld`).
 Needs the optional ``rcsssmj`` package (``pip install robocup-gym[mj]``)."""
 
-from robocup_gym.sim.engines.rcsssmj.world import LeagueWorld, PDCommand
+from robocup_gym.sim.engines.rcsssmj.world import LeagueSimulationError, LeagueWorld, PDCommand
 
-__all__ = ["LeagueWorld", "PDCommand"]
+__all__ = ["LeagueSimulationError", "LeagueWorld", "PDCommand"]

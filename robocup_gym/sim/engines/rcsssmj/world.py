@@ -28,33 +28,18 @@ import mujoco
 import numpy as np
 
 from robocup_gym.robot.league import RcsssmjUnavailableError, league_robot
+from robocup_gym.types import PDCommand
 
-__all__ = ["CYCLE_S", "LeagueWorld", "PDCommand"]
+__all__ = ["CYCLE_S", "LeagueSimulationError", "LeagueWorld", "PDCommand"]
+
+
+class LeagueSimulationError(RuntimeError):
+    """``rcsssmj``'s simulation failed in a step (the state is left as it was then: place the
+    robots and the ball again before going on)."""
+
 
 CYCLE_S = 0.02
 """One agent cycle, s (four 5 ms MuJoCo steps)."""
-
-
-@dataclass(frozen=True)
-class PDCommand:
-    """One joint's command, in the wire's units."""
-
-    q_deg: float
-    """Target angle, degrees."""
-    dq_deg_s: float = 0.0
-    """Target velocity, degrees per second."""
-    kp: float = 0.0
-    """Proportional gain, N·m per rad."""
-    kd: float = 0.0
-    """Derivative gain, N·m·s per rad."""
-    tau: float = 0.0
-    """Feed-forward torque, N·m."""
-
-    def __post_init__(self) -> None:
-        for f in ("q_deg", "dq_deg_s", "kp", "kd", "tau"):
-            v = getattr(self, f)
-            if not math.isfinite(v):
-                raise ValueError(f"joint command {f} must be finite, got {v}")
 
 
 @dataclass(frozen=True)
@@ -213,17 +198,16 @@ class LeagueWorld:
         self._pending[index] = pending
 
     # ------------------------------------------------------------------ stepping
-    def cycle(self, perceive: bool = True) -> list[bytes]:
-        """One pass of the server's loop: every player's perceptions of the current state (the
-        message bytes the server would send), then one 20 ms step with the commands given since
-        the last pass. Returns the perception messages, one per player (none with
-        ``perceive=False``: the perceptions only read the state, so skipping them changes
-        nothing else and saves most of a cycle's Python work)."""
+    def perceive(self) -> list[bytes]:
+        """Every player's perception of the current state: the message bytes the server would
+        send now, one per player, in joining order (reading the state changes nothing)."""
+        self.sim.generate_perceptions()
+        return [bytes(self._encoder.encode(a.perceptions) or b"(syn)") for a in self.agents]
+
+    def step(self) -> None:
+        """One 20 ms step (four 5 ms MuJoCo steps and the referee) with the commands given
+        since the last step."""
         sim = self.sim
-        out: list[bytes] = []
-        if perceive:
-            sim.generate_perceptions()
-            out = [bytes(self._encoder.encode(a.perceptions) or b"(syn)") for a in self.agents]
         # rcsssmj's motor action, written directly (the same assignments as its
         # ``ctrl_motor``, which only writes, so doing them before the step changes nothing)
         model, data = sim.mj_model, sim.mj_data
@@ -238,8 +222,83 @@ class LeagueWorld:
                 gain[vel, 0] = kd
                 bias[vel, 2] = -kd
         self._pending = [[] for _ in self.agents]
-        sim.step([])
+        try:
+            sim.step([])
+        except AttributeError as exc:
+            if "startswith" not in str(exc):
+                raise
+            # rcsssmj 0.2.1's ball-contact filter reads every touching geometry's name, and
+            # the K1's model leaves most of its geometries unnamed
+            raise LeagueSimulationError(
+                "rcsssmj failed in its ball-contact check: the ball touched a part of a robot "
+                "whose model geometry has no name (the K1's torso, head and arms in rcsssmj "
+                f"0.2.1; the real rcssservermj stops the same way): {exc}"
+            ) from exc
+
+    def cycle(self, perceive: bool = True) -> list[bytes]:
+        """One pass of the server's loop: every player's perceptions of the current state (the
+        message bytes the server would send), then one 20 ms step with the commands given since
+        the last pass. Returns the perception messages, one per player (none with
+        ``perceive=False``: the perceptions only read the state, so skipping them changes
+        nothing else and saves most of a cycle's Python work)."""
+        out = self.perceive() if perceive else []
+        self.step()
         return out
+
+    # ------------------------------------------------------------------ placing
+    def place_player(
+        self,
+        index: int,
+        pos: Sequence[float],
+        quat: Sequence[float] = (1.0, 0.0, 0.0, 0.0),
+        joint_angles_rad: Sequence[float] | None = None,
+    ) -> None:
+        """Put player ``index`` at torso position ``pos`` (m) with orientation ``quat``
+        (``(w, x, y, z)``, the model's axes), at rest, with joint angles ``joint_angles_rad``
+        (model order; ``None``: all 0), as the server's ``(agent … (move3d …))`` monitor command
+        does (same methods); its joint commands are cleared (no torque until the next
+        command)."""
+        agent = self.agents[index]
+        n = len(self.robots[index].joints)
+        angles = np.zeros(n) if joint_angles_rad is None else np.asarray(joint_angles_rad, float)
+        if angles.shape != (n,) or not np.isfinite(angles).all():
+            raise ValueError(f"joint_angles_rad must be {n} finite numbers (rad)")
+        agent.place_at(tuple(float(v) for v in pos), tuple(float(v) for v in quat))
+        agent.init_joints(pos=angles)
+        model, data = self.sim.mj_model, self.sim.mj_data
+        for pos_id, vel_id, tau_id in self._slots[index].values():
+            data.ctrl[[pos_id, vel_id, tau_id]] = 0.0
+            model.actuator_gainprm[pos_id, 0] = model.actuator_biasprm[pos_id, 1] = 0.0
+            model.actuator_gainprm[vel_id, 0] = model.actuator_biasprm[vel_id, 2] = 0.0
+        self._pending[index] = []
+        data.qacc_warmstart[:] = 0.0  # no memory of the last episode in the solver's start
+        mujoco.mj_forward(model, data)
+
+    def place_ball(self, pos: Sequence[float], vel: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        """Put the ball's centre at ``pos`` (m) with velocity ``vel`` (m/s), as the server's
+        ``(ball (pos …) (vel …))`` monitor command does."""
+        self.sim.request_place_ball(tuple(float(v) for v in pos), tuple(float(v) for v in vel))
+        mujoco.mj_forward(self.sim.mj_model, self.sim.mj_data)
+
+    def lowest_point_above_ground(self, index: int) -> float:
+        """How far (m) player ``index``'s lowest point is above the ground plane (negative:
+        below), by MuJoCo's own geometry distance between each of its collision geometries and
+        the field's plane."""
+        model, data = self.sim.mj_model, self.sim.mj_data
+        root = model.body(self.agents[index].root_body_name).id
+        planes = [
+            g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
+        ]
+        fromto = np.zeros(6)
+        best = math.inf
+        for g in range(model.ngeom):
+            if model.body_rootid[model.geom_bodyid[g]] != root or not (
+                model.geom_contype[g] or model.geom_conaffinity[g]
+            ):
+                continue
+            for p in planes:
+                best = min(best, mujoco.mj_geomDistance(model, data, g, p, 10.0, fromto))
+        return best
 
     # ------------------------------------------------------------------ readings
     @property
@@ -259,3 +318,15 @@ class LeagueWorld:
     def ball_position(self) -> np.ndarray:
         """Ball centre, m."""
         return self.sim.mj_data.body("ball").xpos.copy()
+
+    def ball_velocity(self) -> np.ndarray:
+        """Ball linear velocity, m/s, world frame."""
+        return np.array(self.sim.ball._qvel[0:3], dtype=float)
+
+    def torso_velocity(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """Player ``index``'s torso linear (m/s) and angular (rad/s) velocity, world frame."""
+        model, data = self.sim.mj_model, self.sim.mj_data
+        out = np.zeros(6)
+        body = model.body(self.agents[index].root_body_name).id
+        mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, body, out, 0)
+        return out[3:].copy(), out[:3].copy()

@@ -1,0 +1,238 @@
+"""RCSSServerMJ's world in-process as a backend: the league's robots (Booster T1, K1) for the
+environments, ``backend="rcsssmj"`` (chosen by ``robot="T1"``).
+
+It drives :class:`~robocup_gym.sim.engines.rcsssmj.LeagueWorld`, which steps ``rcsssmj``'s own
+simulation exactly as ``rcssservermj`` does, so every perception is the server's message (parsed
+by :func:`~robocup_gym.protocol.league.parse_league_perception`) and every command acts as it
+would there. Commands are :class:`~robocup_gym.types.PDCommand` per joint
+(:attr:`AgentCommand.joint_pd`). A command answers the last perception; as on the server, the
+world meanwhile steps once more with the commands it had, so a command acts from the step after
+(one cycle of dead time, as on rcssserver3d).
+
+Episode starts use what the server's monitor commands do (``(agent … (move3d …))`` places the
+torso, zeroes the joints and every velocity; ``(ball (pos …) (vel …))``), plus joint angles set
+directly; the robot is put with its lowest point on the ground (MuJoCo's own geometry distance),
+without joint torque, and the world runs one 20 ms step before the first perception, as the
+real-server backend's reset does (``"rcssservermj"``, which can only start from 0 angles).
+The play mode is the league referee's: its monitor protocol cannot set one, so the world stays in
+``BeforeKickOff``, where its rules leave the robot and the ball free (no clock, no fouls).
+
+Ground truth is the world's exact state, in the library's frames (the torso's orientation in
+SimSpark's torso axes, x right, y forward: see :mod:`robocup_gym.protocol.league`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.backends.base import Backend, BackendDivergedError, RobotPose
+from robocup_gym.protocol.league import parse_league_perception, to_simspark_torso_quat
+from robocup_gym.types import AgentCommand, GroundTruth, PDCommand, Perception
+
+__all__ = ["LeagueBackend", "league_pose"]
+
+_S = math.sqrt(0.5)
+
+
+def _model_quat(pose: RobotPose) -> tuple[float, float, float, float]:
+    """The torso orientation in the league model's axes (x forward, y left) for ``pose``."""
+    if pose.quat is not None:
+        # SimSpark torso axes -> model axes: q ⊗ rot_z(+90°)
+        w, x, y, z = (float(v) for v in pose.quat)
+        q = np.array([_S * (w - z), _S * (x - y), _S * (y + x), _S * (z + w)])
+        q /= np.linalg.norm(q)
+        return (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
+    h = math.radians(pose.heading_deg) / 2.0
+    return (math.cos(h), 0.0, 0.0, math.sin(h))
+
+
+def league_pose(robot: Any, angles: np.ndarray | Mapping[str, float] | None) -> np.ndarray:
+    """Joint angles in degrees, model order, from an array or a name → degrees mapping
+    (effector, perceptor or model names; others 0).
+
+    Raises:
+        ValueError: a wrong length or an unknown name (naming the robot's joints).
+    """
+    n = len(robot.joints)
+    if angles is None:
+        return np.zeros(n)
+    if isinstance(angles, Mapping):
+        out = np.zeros(n)
+        for name, v in angles.items():
+            i = robot.joint_index.get(name)
+            if i is None:
+                raise ValueError(
+                    f"{robot.name} has no joint {name!r}; its joints: "
+                    f"{', '.join(robot.effector_names)}"
+                )
+            out[i] = float(v)
+        return out
+    out = np.asarray(angles, dtype=float)
+    if out.shape != (n,):
+        raise ValueError(f"{robot.name} joint angles must have shape ({n},), got {out.shape}")
+    return out
+
+
+class LeagueBackend(Backend):
+    """One league robot and the ball in RCSSServerMJ's world, stepped in-process and exactly.
+
+    Args:
+        robot: The robot model (``"T1"``, ``"K1"``, … as the installed ``rcsssmj`` ships).
+        seed: Unused (the league's perceptions have no noise); accepted for the common interface.
+        vision: Unused: RCSSServerMJ sends ``See`` every second cycle regardless.
+        team: The team name the robot joins with.
+        robot_type: Must be 0 (the Nao's types do not apply); accepted for the common interface.
+
+    Raises:
+        robocup_gym.robot.league.RcsssmjUnavailableError: ``rcsssmj`` is not installed.
+        ValueError: an unknown robot (naming those there are).
+    """
+
+    name = "rcsssmj"
+
+    def __init__(
+        self,
+        *,
+        robot: str = "T1",
+        seed: int | None = None,
+        vision: bool = False,
+        team: str = "RobocupGym",
+        robot_type: int = 0,
+    ) -> None:
+        super().__init__(robot_type=robot_type, seed=seed, vision=vision)
+        from robocup_gym.robot.league import league_robot
+        from robocup_gym.sim.engines.rcsssmj import LeagueWorld
+
+        self.robot = str(robot)
+        self._model = league_robot(self.robot)
+        self.world = LeagueWorld([(self.robot, str(team), 1)])
+        self._perceptors = self._model.perceptor_names
+        model = self.world.sim.mj_model
+        prefix = self.world.agents[0].agent_id.prefix
+        self._feet = tuple(model.body(prefix + b).id if b else -1 for b in self._model.foot_bodies)
+
+    @property
+    def robot_model(self) -> Any:
+        """The :class:`~robocup_gym.robot.league.LeagueRobot`."""
+        return self._model
+
+    # ------------------------------------------------------------------ episode control
+    def reset_episode(
+        self,
+        pose: RobotPose,
+        ball_pos: Sequence[float],
+        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
+        *,
+        play_mode: str = "PlayOn",
+        seed: int | None = None,
+    ) -> Perception:
+        """Place the robot (joint angles included) and the ball, at rest, with no joint torque
+        until the first command, and run one such limp 20 ms step (as a reset on the real
+        server does); ``play_mode`` is not settable on RCSSServerMJ (see the module docstring)
+        and ``seed`` has nothing to seed."""
+        w = self.world
+        angles = np.radians(league_pose(self._model, pose.joint_angles_deg))
+        quat = _model_quat(pose)
+        if pose.z is None:
+            w.place_player(0, (pose.x, pose.y, 2.0), quat, angles)
+            z = 2.0 - w.lowest_point_above_ground(0)
+        else:
+            z = float(pose.z)
+        w.place_player(0, (pose.x, pose.y, z), quat, angles)
+        ball = [float(v) for v in ball_pos]
+        if len(ball) == 2:  # resting on the ground
+            ball.append(self._model.ball_radius)
+        w.place_ball(ball, ball_vel)
+        # one limp 20 ms step, as on the real server (whose placement shows in its perceptions
+        # only a step later): the episode starts from what the robot then perceives
+        self.advance(1)
+        return self._perceive()
+
+    def step(self, command: AgentCommand) -> Perception:
+        return self.advance(1, command)
+
+    def advance(self, cycles: int, command: AgentCommand | None = None) -> Perception:
+        """``cycles`` cycles, perceiving only after the last one. ``command`` answers the
+        current perception, and so acts from the step after the next one, exactly as on
+        ``rcssservermj``: the server steps on with the commands it already has while the agent
+        thinks (one cycle of dead time, as on rcssserver3d); commands are sticky."""
+        if cycles < 1:
+            raise ValueError(f"cycles must be >= 1, got {cycles}")
+        w = self.world
+        pd = None
+        if command is not None:
+            if len(command.joint_velocities):
+                raise ValueError(
+                    f"the {self.robot} takes PD joint commands (AgentCommand.joint_pd), not "
+                    "joint velocities"
+                )
+            pd = command.joint_pd
+        from robocup_gym.sim.engines.rcsssmj import LeagueSimulationError
+
+        try:
+            w.step()  # with the commands that answered the last perception
+            if pd:
+                try:
+                    w.command(0, pd)
+                except KeyError as e:
+                    raise ValueError(e.args[0]) from None
+            for _ in range(cycles - 1):
+                w.step()
+        except LeagueSimulationError as e:
+            raise BackendDivergedError(str(e)) from e
+        return self._perceive()
+
+    def _perceive(self) -> Perception:
+        w = self.world
+        p = parse_league_perception(w.perceive()[0], self._perceptors)
+        pos, quat = w.torso_pose(0)
+        vel, ang = w.torso_velocity(0)
+        ball = w.ball_position()
+        if not (np.isfinite(pos).all() and np.isfinite(ball).all() and np.isfinite(quat).all()):
+            raise BackendDivergedError(
+                f"the league world produced a NaN/inf state at t = {w.time:.2f} s"
+            )
+        p.ground_truth = GroundTruth(
+            ball_pos=ball,
+            ball_vel=w.ball_velocity(),
+            torso_pos=pos,
+            torso_quat=to_simspark_torso_quat(quat),
+            torso_vel=vel,
+            torso_ang_vel=ang,
+            feet_contact=self._feet_contact(),
+        )
+        return p
+
+    def _feet_contact(self) -> dict[str, bool]:
+        """Which feet touch the ground (a contact between a foot body and the world body)."""
+        model, data = self.world.sim.mj_model, self.world.sim.mj_data
+        left, right = self._feet
+        touching = {"lf": False, "rf": False}
+        body = model.geom_bodyid
+        for k in range(data.ncon):
+            c = data.contact[k]
+            b1, b2 = int(body[c.geom1]), int(body[c.geom2])
+            if b1 == 0 or b2 == 0:
+                other = b2 if b1 == 0 else b1
+                if other == left:
+                    touching["lf"] = True
+                elif other == right:
+                    touching["rf"] = True
+        return touching
+
+    # ------------------------------------------------------------------ misc
+    def hold_command(self, angles_deg: np.ndarray, kp: float, kd: float) -> dict[str, PDCommand]:
+        """PD commands holding every joint at ``angles_deg`` (model order)."""
+        return {
+            n: PDCommand(float(a), 0.0, kp, kd)
+            for n, a in zip(self._model.effector_names, angles_deg, strict=True)
+        }
+
+    def describe(self) -> dict[str, Any]:
+        d = super().describe()
+        d.update(robot=self.robot, engine="rcsssmj (RCSSServerMJ's own simulation, MuJoCo)")
+        return d

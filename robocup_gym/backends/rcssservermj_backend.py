@@ -1,0 +1,327 @@
+"""A real RCSSServerMJ (``rcssservermj``) behind the :class:`Backend` interface:
+``backend="rcssservermj"`` with a league robot (``robot="T1"``), so any task runs on the league's
+real server too.
+
+The backend starts its own server (:class:`~robocup_gym.backends.rcssservermj.RcssServerMJProcess`:
+sync mode, real time off, no viewer, OS-chosen ports, ended with its parent) or connects to a
+running one (``port=``/``monitor_port=``; it must run in sync mode). It joins as one agent and
+keeps a monitor connection, through which it places the robot and the ball
+(``(agent (unum …) (team …) (move3d x y z qw qx qy qz))``, ``(ball (pos …) (vel …))``) and
+reads the ball's position (the RSMP stream, every second cycle, 4 decimals).
+
+What differs from the in-process backend (``"rcsssmj"``), both stepping the same simulation:
+
+* **Start angles**: the server's placement sets every joint to 0, so episodes start there;
+  other start angles are refused (the league robots' task defaults are all 0).
+* **Ground truth** comes from what the server sends: the torso's pose from the agent's
+  ``pos``/``quat`` perceptors (3 decimals), its velocity by differences over one cycle, the
+  ball from the last monitor frame (at most one cycle old) and its velocity by differences
+  between frames. The in-process backend has the exact state.
+* **Reset timing**: a monitor command is applied after the physics of the first server step
+  after it arrives, and the perception after that still shows the sensors from before; the
+  reset places the robot 1 m higher first, then where asked, and returns the first perception
+  that shows it there: the state one limp 20 ms step after the placement, as the in-process
+  backend's reset (a few cycles in all).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import socket
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.backends.base import Backend, BackendError, RobotPose
+from robocup_gym.backends.league_backend import _model_quat, league_pose
+from robocup_gym.protocol.errors import ProtocolError
+from robocup_gym.protocol.framing import FrameDecoder, encode_frame
+from robocup_gym.protocol.league import (
+    LeagueMonitorReader,
+    format_pd_commands,
+    parse_league_perception,
+    to_simspark_torso_quat,
+)
+from robocup_gym.types import AgentCommand, GroundTruth, PDCommand, Perception
+
+__all__ = ["RcssServerMJBackend"]
+
+_CYCLE_S = 0.02
+_PLACE_TOLERANCE_M = 0.01
+"""How close the perceived torso and the monitor's ball must be to the requested placement for
+the reset to count as done, m (one 20 ms limp step moves them by millimetres)."""
+
+
+class RcssServerMJBackend(Backend):
+    """One league robot on a real ``rcssservermj`` (see the module docstring).
+
+    Args:
+        robot: The robot model (``"T1"``, ``"K1"``).
+        team: Team name the agent joins with.
+        port, monitor_port: A running server's agent and monitor ports (both or neither);
+            ``None``: start a private server.
+        host: The running server's host.
+        timeout: Seconds a message from the server may take.
+        reset_cycles: Most cycles a reset waits for the placement to show.
+        seed, vision, robot_type: Accepted for the common interface (the league's perceptions
+            have no noise and always include ``See``; ``robot_type`` must be 0).
+
+    Raises:
+        robocup_gym.robot.league.RcsssmjUnavailableError: no ``rcsssmj`` to start a server with.
+        BackendError: the server did not start or refused the agent.
+    """
+
+    name = "rcssservermj"
+
+    def __init__(
+        self,
+        *,
+        robot: str = "T1",
+        team: str = "RobocupGym",
+        port: int | None = None,
+        monitor_port: int | None = None,
+        host: str = "127.0.0.1",
+        timeout: float = 20.0,
+        reset_cycles: int = 10,
+        seed: int | None = None,
+        vision: bool = False,
+        robot_type: int = 0,
+    ) -> None:
+        super().__init__(robot_type=robot_type, seed=seed, vision=vision)
+        from robocup_gym.backends.rcssservermj import LeagueAgentLink, RcssServerMJProcess
+        from robocup_gym.robot.league import league_robot
+
+        if (port is None) != (monitor_port is None):
+            raise ValueError("give both port and monitor_port (a running server), or neither")
+        self.robot = str(robot)
+        self.team = str(team)
+        self._model = league_robot(self.robot)
+        self.timeout = float(timeout)
+        self.reset_cycles = int(reset_cycles)
+        self.server: RcssServerMJProcess | None = None
+        self.link = None
+        self._monitor: socket.socket | None = None
+        try:
+            if port is None:
+                self.server = RcssServerMJProcess()
+                port = self.server.agent_port
+                self._monitor, self._mdecoder = self.server.take_monitor()
+            else:
+                self._monitor = socket.create_connection(
+                    (host, int(monitor_port)), timeout=timeout
+                )
+                self._mdecoder = FrameDecoder()
+            self._monitor.setblocking(False)
+            self._reader = LeagueMonitorReader()
+            self._ball: tuple[float, np.ndarray] | None = None  # (time, position) of a frame
+            self._ball_vel = np.zeros(3)
+            self.link = LeagueAgentLink(int(port), self.robot, self.team, 1, timeout=timeout)
+            self._pending = self._recv()  # the perception the server waits an answer to
+        except BaseException:
+            self.close()
+            raise
+        self._last_pos: np.ndarray | None = None
+
+    @property
+    def robot_model(self) -> Any:
+        return self._model
+
+    # ------------------------------------------------------------------ wire
+    def _recv(self) -> bytes:
+        try:
+            return self.link.recv()
+        except (OSError, ConnectionError, TimeoutError) as e:
+            tail = self.server.log_tail(1500) if self.server is not None else ""
+            raise BackendError(
+                f"the rcssservermj connection failed ({e}); is the server running?"
+                + (f" Its output ends with:\n{tail}" if tail else "")
+            ) from e
+
+    def _send(self, commands: dict[str, PDCommand]) -> bytes:
+        """Answer the pending perception with ``commands``; return the next perception."""
+        try:
+            self.link.send(format_pd_commands(commands))
+        except OSError as e:
+            raise BackendError(f"the rcssservermj connection failed ({e})") from e
+        self._pending = self._recv()
+        return self._pending
+
+    def _monitor_command(self, text: str) -> None:
+        try:
+            self._monitor.setblocking(True)
+            self._monitor.sendall(encode_frame(text.encode()))
+        except OSError as e:
+            raise BackendError(f"the rcssservermj monitor connection failed ({e})") from e
+        finally:
+            self._monitor.setblocking(False)
+
+    def _read_monitor(self, until_time: float | None = None) -> None:
+        """Take every monitor message that has arrived; with ``until_time``, wait (up to the
+        timeout) for one at least that recent."""
+        deadline = time.monotonic() + self.timeout
+        while True:
+            try:
+                data = self._monitor.recv(1 << 16)
+            except BlockingIOError:
+                data = None
+            except OSError as e:
+                raise BackendError(f"the rcssservermj monitor connection failed ({e})") from e
+            if data == b"":
+                raise BackendError("rcssservermj closed the monitor connection")
+            if data:
+                for frame in self._mdecoder.feed(data):
+                    self._take_frame(frame)
+                continue
+            have = self._reader.time
+            if until_time is None or (have is not None and have >= until_time - 1e-6):
+                return
+            if time.monotonic() > deadline:
+                raise BackendError("no monitor message from rcssservermj in time")
+            time.sleep(0.0005)
+
+    def _take_frame(self, frame: bytes) -> None:
+        try:
+            self._reader.feed(frame)
+        except ProtocolError:
+            return  # a delta before the first full scene: wait for the next full one
+        ball = self._reader.ball_position()
+        t = self._reader.time
+        if ball is None or t is None:
+            return
+        if self._ball is not None and t > self._ball[0]:
+            self._ball_vel = (ball - self._ball[1]) / (t - self._ball[0])
+        self._ball = (t, ball)
+
+    # ------------------------------------------------------------------ episode control
+    def reset_episode(
+        self,
+        pose: RobotPose,
+        ball_pos: Sequence[float],
+        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
+        *,
+        play_mode: str = "PlayOn",
+        seed: int | None = None,
+    ) -> Perception:
+        """Place the robot (all joints at 0) and the ball through the monitor, at rest and with
+        no joint torque, and return the first perception that shows them placed (after one
+        limp 20 ms step, as the in-process backend's reset).
+
+        Raises:
+            ValueError: start angles other than 0, or ``z=None`` with a tilted ``quat``.
+            BackendError: the placement did not show within ``reset_cycles`` cycles.
+        """
+        angles = league_pose(self._model, pose.joint_angles_deg)
+        if np.abs(angles).max(initial=0.0) > 1e-9:
+            raise ValueError(
+                "rcssservermj's placement sets every joint to 0, so episodes on the real server "
+                "start there; other start angles need the in-process backend ('rcsssmj')"
+            )
+        quat = _model_quat(pose)
+        if pose.z is None:
+            if pose.quat is not None:
+                raise ValueError("give z for a tilted start (quat) on the real server")
+            z = self._model.standing_torso_height
+        else:
+            z = float(pose.z)
+        ball = [float(v) for v in ball_pos]
+        if len(ball) == 2:
+            ball.append(self._model.ball_radius)
+        bv = [float(v) for v in ball_vel]
+        if not all(math.isfinite(v) for v in (pose.x, pose.y, z, *quat, *ball, *bv)):
+            raise ValueError("the start pose, ball position and velocity must be finite")
+        head = f"(agent (unum 1) (team {self.team}) (move3d {pose.x!r} {pose.y!r} "
+        tail = " ".join(repr(float(q)) for q in quat) + "))"
+        # first somewhere else (1 m higher), so that the perception that first shows the real
+        # placement is the one made after exactly one limp step from it: the server applies a
+        # monitor command after a step's physics, and its next perception still shows the
+        # sensors from before the placement
+        self._place(f"{head}{z + 1.0!r} {tail}", np.array([pose.x, pose.y, z + 1.0]))
+        ball_cmd = f"(ball (pos {ball[0]!r} {ball[1]!r} {ball[2]!r}) "
+        ball_cmd += f"(vel {bv[0]!r} {bv[1]!r} {bv[2]!r}))"
+        msg = self._place(f"{head}{z!r} {tail}{ball_cmd}", np.array([pose.x, pose.y, z]))
+        return self._perceive(msg, fresh=True)
+
+    def _place(self, monitor_text: str, want: np.ndarray) -> bytes:
+        """Send a placement through the monitor; answer with limp joints until a perception
+        shows the torso within :data:`_PLACE_TOLERANCE_M` of ``want``; return it."""
+        limp = {n: PDCommand(0.0) for n in self._model.effector_names}
+        self._monitor_command(monitor_text)
+        for _ in range(self.reset_cycles):
+            msg = self._send(limp)
+            p = parse_league_perception(msg, self._model.perceptor_names)
+            if (
+                p.raw_torso_pos is not None
+                and np.abs(p.raw_torso_pos - want).max() < _PLACE_TOLERANCE_M
+            ):
+                return msg
+        raise BackendError(
+            f"rcssservermj did not show the placement within {self.reset_cycles} cycles"
+        )
+
+    def step(self, command: AgentCommand) -> Perception:
+        return self.advance(1, command)
+
+    def advance(self, cycles: int, command: AgentCommand | None = None) -> Perception:
+        if cycles < 1:
+            raise ValueError(f"cycles must be >= 1, got {cycles}")
+        commands: dict[str, PDCommand] = {}
+        if command is not None:
+            if len(command.joint_velocities):
+                raise ValueError(
+                    f"the {self.robot} takes PD joint commands (AgentCommand.joint_pd), not "
+                    "joint velocities"
+                )
+            commands = dict(command.joint_pd or {})
+            unknown = [n for n in commands if n not in self._model.joint_index]
+            if unknown:
+                raise ValueError(
+                    f"unknown joint(s) {', '.join(map(repr, unknown))}; joints: "
+                    f"{', '.join(self._model.effector_names)}"
+                )
+        msg = self._send(commands)
+        for _ in range(cycles - 1):
+            msg = self._send({})
+        return self._perceive(msg, fresh=False, cycles=cycles)
+
+    def _perceive(self, msg: bytes, *, fresh: bool, cycles: int = 1) -> Perception:
+        p = parse_league_perception(msg, self._model.perceptor_names)
+        self._read_monitor(until_time=p.time - _CYCLE_S)
+        pos = p.raw_torso_pos if p.raw_torso_pos is not None else np.full(3, np.nan)
+        vel = (
+            np.zeros(3)
+            if fresh or self._last_pos is None
+            else (pos - self._last_pos) / (_CYCLE_S * cycles)
+        )
+        self._last_pos = pos
+        quat = p.raw_torso_quat if p.raw_torso_quat is not None else np.array([1.0, 0, 0, 0])
+        ball = self._ball[1].copy() if self._ball is not None else np.full(3, np.nan)
+        p.ground_truth = GroundTruth(
+            ball_pos=ball,
+            ball_vel=np.zeros(3) if fresh else self._ball_vel.copy(),
+            torso_pos=pos,
+            torso_quat=to_simspark_torso_quat(quat),
+            torso_vel=vel,
+            torso_ang_vel=None,
+        )
+        return p
+
+    # ------------------------------------------------------------------ misc
+    def close(self) -> None:
+        if self.link is not None:
+            self.link.close()
+            self.link = None
+        if self.server is not None:
+            self.server.close()  # (closes the monitor connection after the server ended)
+            self.server = None
+        elif self._monitor is not None:
+            with contextlib.suppress(OSError):
+                self._monitor.close()
+        self._monitor = None
+
+    def describe(self) -> dict[str, Any]:
+        d = super().describe()
+        d.update(robot=self.robot, engine="a real rcssservermj (rcsssmj)")
+        return d
