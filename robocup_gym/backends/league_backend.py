@@ -2,9 +2,10 @@
 environments, ``backend="rcsssmj"`` (chosen by ``robot="T1"``).
 
 It drives :class:`~robocup_gym.sim.engines.rcsssmj.LeagueWorld`, which steps ``rcsssmj``'s own
-simulation exactly as ``rcssservermj`` does, so every perception is the server's message (parsed
-by :func:`~robocup_gym.protocol.league.parse_league_perception`) and every command acts as it
-would there. Commands are :class:`~robocup_gym.types.PDCommand` per joint
+simulation exactly as ``rcssservermj`` does, so every perception holds the numbers of the server's
+message (read from ``rcsssmj``'s perception objects: the same as parsing the message with
+:func:`~robocup_gym.protocol.league.parse_league_perception`, without the text) and every
+command acts as it would there. Commands are :class:`~robocup_gym.types.PDCommand` per joint
 (:attr:`AgentCommand.joint_pd`). A command answers the last perception; as on the server, the
 world meanwhile steps once more with the commands it had, so a command acts from the step after
 (one cycle of dead time, as on rcssserver3d).
@@ -30,10 +31,21 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.backends.base import Backend, BackendDivergedError, RobotPose
-from robocup_gym.protocol.league import parse_league_perception, to_simspark_torso_quat
-from robocup_gym.types import AgentCommand, GroundTruth, PDCommand, Perception
+from robocup_gym.protocol.league import (
+    LeaguePerception,
+    to_simspark_torso_quat,
+)
+from robocup_gym.types import (
+    AgentCommand,
+    GameState,
+    GroundTruth,
+    PDCommand,
+    Perception,
+    SeenPlayer,
+    Vision,
+)
 
-__all__ = ["LeagueBackend", "league_pose"]
+__all__ = ["LeagueBackend", "league_pose", "perception_from_objects"]
 
 _S = math.sqrt(0.5)
 
@@ -77,13 +89,87 @@ def league_pose(robot: Any, angles: np.ndarray | Mapping[str, float] | None) -> 
     return out
 
 
+def perception_from_objects(objects: Sequence[Any], joint_order: Sequence[str]) -> Perception:
+    """The :class:`Perception` that :func:`~robocup_gym.protocol.league.parse_league_perception`
+    makes of the message ``rcsssmj`` encodes from its perception objects ``objects`` (one
+    agent's ``perceptions`` after ``generate_perceptions``), made from the objects directly: the
+    values are the same numbers (the server truncates them before writing them out, and writes
+    them so that they read back exactly), without writing and parsing text
+    (``tests/envs/test_league_envs.py`` checks the two agree).
+
+    Raises:
+        ValueError: the objects lack a joint of ``joint_order``, or the gyro or accelerometer.
+    """
+    time = 0.0
+    game = GameState()
+    gyro = accel = pos = quat = None
+    joints: dict[str, tuple[float, float]] = {}
+    touch: dict[str, bool] = {}
+    vision = None
+    for o in objects:
+        kind = type(o).__name__
+        if kind == "TimePerception":
+            time = float(o.time)
+        elif kind == "GameStatePerception":
+            game.game_time = float(o.play_time)
+            game.play_mode = str(o.play_mode)
+            game.score_left, game.score_right = int(o.score_left), int(o.score_right)
+        elif kind == "GyroPerception":
+            gyro = (float(o.rx), float(o.ry), float(o.rz))
+        elif kind == "AccelerometerPerception":
+            accel = (float(o.ax), float(o.ay), float(o.az))
+        elif kind == "PositionPerception":
+            pos = np.array([o.x, o.y, o.z], dtype=float)
+        elif kind == "OrientationPerception":
+            quat = np.array([o.qw, o.qx, o.qy, o.qz], dtype=float)
+        elif kind == "JointStatePerception":
+            for n, ax, vx in zip(o.joint_names, o.joint_axs, o.joint_vxs, strict=False):
+                joints[str(n)] = (float(ax), float(vx))
+        elif kind == "TouchPerception":
+            touch[str(o.name)] = bool(int(o.active))
+        elif kind == "VisionPerception":
+            vision = Vision()
+            for d in o.obj_detections:
+                if hasattr(d, "body_detections"):
+                    player = SeenPlayer(team=str(d.team_name), unum=int(d.player_no))
+                    for b in d.body_detections:
+                        player.parts[str(b.name)] = np.array(
+                            [b.distance, b.azimuth, b.inclination], dtype=float
+                        )
+                    vision.players.append(player)
+                else:
+                    vision.objects[str(d.name)] = np.array(
+                        [d.distance, d.azimuth, d.inclination], dtype=float
+                    )
+    if gyro is None or accel is None:
+        raise ValueError("the perception objects have no gyro and accelerometer")
+    missing = [n for n in joint_order if n not in joints]
+    if missing:
+        raise ValueError(f"the perception objects have no joint state for {', '.join(missing)}")
+    values = np.array([joints[n] for n in joint_order], dtype=float).reshape(-1, 2)
+    return LeaguePerception(
+        time=time,
+        game=game,
+        gyro=np.array([-gyro[1], gyro[0], gyro[2]]),
+        accel=np.array([-accel[1], accel[0], accel[2]]),
+        joint_names=tuple(joint_order),
+        joint_angles_deg=values[:, 0].copy(),
+        joint_velocities_deg_s=values[:, 1].copy(),
+        vision=vision,
+        raw_torso_pos=pos,
+        raw_torso_quat=quat,
+        touch=touch,
+    )
+
+
 class LeagueBackend(Backend):
     """One league robot and the ball in RCSSServerMJ's world, stepped in-process and exactly.
 
     Args:
         robot: The robot model (``"T1"``, ``"K1"``, … as the installed ``rcsssmj`` ships).
         seed: Unused (the league's perceptions have no noise); accepted for the common interface.
-        vision: Unused: RCSSServerMJ sends ``See`` every second cycle regardless.
+        vision: Make the ``See`` perceptor (every second cycle, as the server); ``False`` skips
+            it, the most expensive perceptor, when no observation reads it.
         team: The team name the robot joins with.
         robot_type: Must be 0 (the Nao's types do not apply); accepted for the common interface.
 
@@ -171,15 +257,14 @@ class LeagueBackend(Backend):
                     "joint velocities"
                 )
             pd = command.joint_pd
+            if pd:
+                self._model.check_commands(pd)
         from robocup_gym.sim.engines.rcsssmj import LeagueSimulationError
 
         try:
             w.step()  # with the commands that answered the last perception
             if pd:
-                try:
-                    w.command(0, pd)
-                except KeyError as e:
-                    raise ValueError(e.args[0]) from None
+                w.command(0, pd)
             for _ in range(cycles - 1):
                 w.step()
         except LeagueSimulationError as e:
@@ -188,7 +273,8 @@ class LeagueBackend(Backend):
 
     def _perceive(self) -> Perception:
         w = self.world
-        p = parse_league_perception(w.perceive()[0], self._perceptors)
+        w.sim.generate_perceptions(gen_vision=None if self.vision else False)
+        p = perception_from_objects(w.agents[0].perceptions, self._perceptors)
         pos, quat = w.torso_pose(0)
         vel, ang = w.torso_velocity(0)
         ball = w.ball_position()

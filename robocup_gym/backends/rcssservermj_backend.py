@@ -110,9 +110,7 @@ class RcssServerMJBackend(Backend):
                 port = self.server.agent_port
                 self._monitor, self._mdecoder = self.server.take_monitor()
             else:
-                self._monitor = socket.create_connection(
-                    (host, int(monitor_port)), timeout=timeout
-                )
+                self._monitor = socket.create_connection((host, int(monitor_port)), timeout=timeout)
                 self._mdecoder = FrameDecoder()
             self._monitor.setblocking(False)
             self._reader = LeagueMonitorReader()
@@ -275,12 +273,7 @@ class RcssServerMJBackend(Backend):
                     "joint velocities"
                 )
             commands = dict(command.joint_pd or {})
-            unknown = [n for n in commands if n not in self._model.joint_index]
-            if unknown:
-                raise ValueError(
-                    f"unknown joint(s) {', '.join(map(repr, unknown))}; joints: "
-                    f"{', '.join(self._model.effector_names)}"
-                )
+            self._model.check_commands(commands)
         msg = self._send(commands)
         for _ in range(cycles - 1):
             msg = self._send({})

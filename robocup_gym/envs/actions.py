@@ -126,7 +126,9 @@ class PDActionMapper:
 
     def hold_at(self, angles_deg: np.ndarray) -> None:
         """The angles (deg, model order) at which the joints not controlled are held."""
-        self._hold = np.array(angles_deg, dtype=float)
+        lo, hi = self.model.ranges_deg.T
+        # (a perceived angle can lie a little beyond a limit: MuJoCo's limits are soft)
+        self._hold = np.clip(np.array(angles_deg, dtype=float), lo, hi)
 
     def targets_deg(self, action: np.ndarray) -> np.ndarray:
         """Target angles (deg) of the target-angle modes for ``action``."""
@@ -158,7 +160,10 @@ class PDActionMapper:
         return out
 
     def hold(self, angles_deg: np.ndarray):
-        """Commands holding every joint at ``angles_deg`` (model order) with default gains."""
+        """Commands holding every joint at ``angles_deg`` (model order, clipped to the joints'
+        ranges) with default gains."""
+        lo, hi = self.model.ranges_deg.T
+        angles_deg = np.clip(np.asarray(angles_deg, dtype=float), lo, hi)
         return {
             n: PDCommand(float(a), 0.0, float(p), float(d))
             for n, a, p, d in zip(self._names, angles_deg, self.kp, self.kd, strict=True)

@@ -145,7 +145,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         ``observations``    the task's, without foot and toe pressure (the robots have no FRP)
         ``fall_height``     0.65 × the robot's standing torso height (as 0.25 m is the Nao's)
         ``ball_start_pos``  0.2 m + ball radius ahead of the right foot, resting on the ground
-        ``joint_start_deg`` ``None``: every joint at 0 (the models stand upright there)
+        ``joint_start_deg`` every joint at 0 (the T1 and K1 stand upright there), or the
+                            nearest angle in range for a joint whose range excludes 0
         ==================  ===================================================================
         """
         from robocup_gym.envs.config import league_robot_of
@@ -161,7 +162,13 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             ),
             "fall_height": round(FALL_HEIGHT_FRACTION * r.standing_torso_height, 3),
             "ball_start_pos": (x + fwd + 0.2 + r.ball_radius, y + left, r.ball_radius),
-            "joint_start_deg": None,
+            # all 0, or the nearest angle in range for a joint whose range excludes 0
+            "joint_start_deg": {
+                n: float(np.clip(0.0, lo, hi))
+                for n, (lo, hi) in zip(r.effector_names, r.ranges_deg, strict=True)
+                if not lo <= 0.0 <= hi
+            }
+            or None,
         }
 
     # ================================================================== construction

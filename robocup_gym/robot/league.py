@@ -132,6 +132,39 @@ class LeagueRobot:
         """Joint limits, degrees, shape ``(n, 2)``, model order."""
         return np.array([j.range_deg for j in self.joints])
 
+    def check_commands(self, commands) -> None:
+        """Refuse PD commands (effector name → :class:`~robocup_gym.types.PDCommand`) that name
+        an unknown joint, aim outside the joint's range, use a negative gain or ask for more
+        feed-forward torque than the actuator has (the server would take them; a library user
+        gets told). NaN and inf are refused by ``PDCommand`` itself.
+
+        Raises:
+            ValueError: naming the joint, the value and the valid range.
+        """
+        index = self.joint_index
+        for name, c in commands.items():
+            i = index.get(name)
+            if i is None:
+                raise ValueError(
+                    f"unknown joint {name!r}; the {self.name}'s joints: "
+                    f"{', '.join(self.effector_names)}"
+                )
+            j = self.joints[i]
+            lo, hi = j.range_deg
+            if not lo - 1e-6 <= c.q_deg <= hi + 1e-6:
+                raise ValueError(
+                    f"target of {name} ({j.name}) is {c.q_deg:g}°, outside its range "
+                    f"[{lo:g}, {hi:g}]°"
+                )
+            if c.kp < 0 or c.kd < 0:
+                raise ValueError(f"gains of {name} must be >= 0, got kp={c.kp:g}, kd={c.kd:g}")
+            tlo, thi = j.force_range
+            if not tlo - 1e-9 <= c.tau <= thi + 1e-9:
+                raise ValueError(
+                    f"feed-forward torque of {name} is {c.tau:g} N·m, outside its actuator's "
+                    f"range [{tlo:g}, {thi:g}] N·m"
+                )
+
     @functools.cached_property
     def torque_limits(self) -> np.ndarray:
         """The actuators' torque limits, N·m, shape ``(n, 2)``, model order."""

@@ -91,7 +91,9 @@ class TrainConfig:
     seed: int = 0
     backend: str = DEFAULT_ENGINE
     """Simulator: ``ode`` (SimSpark's physics, exact, the default), ``mujoco`` (the fast
-    approximation; its kicks do not work on rcssserver3d) or ``rcssserver3d`` (a real server)."""
+    approximation; its kicks do not work on rcssserver3d) or ``rcssserver3d`` (a real server);
+    for a league robot (``env_kwargs`` ``robot: T1``) ``rcsssmj`` (its simulator in-process,
+    the default there) or ``rcssservermj`` (a real server)."""
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     """Keyword arguments for ``gymnasium.make`` (the task's config fields)."""
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
@@ -133,6 +135,10 @@ class TrainConfig:
         self.algo = self.algo.lower()
         if self.algo not in ALGOS:
             raise ValueError(f"unknown algorithm {self.algo!r}; choose one of {', '.join(ALGOS)}")
+        if self.env_kwargs.get("robot", "nao") != "nao" and self.backend == DEFAULT_ENGINE:
+            # a league robot (RCSSServerMJ) runs on the league's simulator, not on the Nao's
+            # default engine
+            self.backend = "rcsssmj"
         backends = available_backends()
         if self.backend not in backends:
             raise ValueError(

@@ -130,7 +130,9 @@ def validate_env_kwargs(env_id: str, env_kwargs: dict[str, Any] | None) -> None:
     if default_config is None:
         return
     options = {k: v for k, v in env_kwargs.items() if k not in _NOT_CONFIG}
-    default_config().replace(**options)
+    robot = options.get("robot", "nao")
+    base = default_config(robot) if robot != "nao" else default_config()
+    base.replace(**options)
 
 
 def validate_algo_kwargs(algo: str, algo_kwargs: dict[str, Any]) -> None:

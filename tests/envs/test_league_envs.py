@@ -87,6 +87,13 @@ def test_bad_league_options_are_clear_errors():
         backend.step(AgentCommand(joint_pd={"knee": PDCommand(0.0)}))
     with pytest.raises(ValueError, match="kp must be finite"):
         PDCommand(0.0, 0.0, math.inf)
+    with pytest.raises(ValueError, match=r"target of lle4 \(Left_Knee_Pitch\) is -10°, outside"):
+        backend.step(AgentCommand(joint_pd={"lle4": PDCommand(-10.0, 0.0, 20.0, 1.0)}))
+    with pytest.raises(ValueError, match="gains of he1 must be >= 0"):
+        backend.step(AgentCommand(joint_pd={"he1": PDCommand(0.0, 0.0, -1.0, 1.0)}))
+    with pytest.raises(ValueError, match=r"torque of lle4 is 100 N·m, outside .* \[-60, 60\]"):
+        backend.step(AgentCommand(joint_pd={"lle4": PDCommand(10.0, 0.0, 0.0, 0.0, 100.0)}))
+    backend.step(AgentCommand(joint_pd={"lle4": PDCommand(10.0, 0.0, 20.0, 1.0)}))
     backend.close()
 
 
@@ -184,3 +191,40 @@ def test_the_k1_ball_contact_failure_of_rcsssmj_is_a_clear_truncation():
     assert p.ground_truth.torso_pos[2] > 0.4
     b.step(AgentCommand())
     b.close()
+
+
+def test_perceptions_made_from_objects_equal_the_parsed_messages():
+    """The in-process backend reads rcsssmj's perception objects instead of writing and parsing
+    the message: over 200 cycles (vision every second one) every value is the parsed one."""
+    from robocup_gym.backends.league_backend import perception_from_objects
+    from robocup_gym.protocol.league import parse_league_perception
+    from robocup_gym.sim.engines.rcsssmj import LeagueWorld
+
+    world = LeagueWorld([("T1", "A", 1)])
+    names = league_robot("T1").perceptor_names
+    rng = np.random.default_rng(0)
+    seen = 0
+    for _ in range(200):
+        world.command(
+            0,
+            {
+                n: PDCommand(float(rng.uniform(-20, 20)), 0.0, 20.0, 1.0)
+                for n in world.effector_names(0)
+            },
+        )
+        message = world.perceive()[0]
+        a = parse_league_perception(message, names)
+        b = perception_from_objects(world.agents[0].perceptions, names)
+        for field in ("joint_angles_deg", "joint_velocities_deg_s", "gyro", "accel"):
+            np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+        np.testing.assert_array_equal(a.raw_torso_pos, b.raw_torso_pos)
+        np.testing.assert_array_equal(a.raw_torso_quat, b.raw_torso_quat)
+        assert (a.time, a.game) == (b.time, b.game)
+        assert (a.vision is None) == (b.vision is None)
+        if a.vision is not None:
+            seen += 1
+            assert a.vision.objects.keys() == b.vision.objects.keys()
+            for k in a.vision.objects:
+                np.testing.assert_array_equal(a.vision.objects[k], b.vision.objects[k])
+        world.step()
+    assert seen == 100

@@ -31,6 +31,15 @@ def test_the_league_robots_come_from_rcsssmjs_model_files():
     knee = t1.joint("Left_Knee_Pitch")
     assert knee.range_deg[0] == pytest.approx(0.0) and 100 < knee.range_deg[1] < 180
     assert all(j.force_range[0] < 0 < j.force_range[1] for j in t1.joints)
+    # what the environments read: HJ names from the joints' position sensors, the joint index
+    # by every name, the standing geometry from MuJoCo's own distance to a ground plane
+    assert t1.perceptor_names[:2] == ("q_hj1", "q_hj2") and len(set(t1.perceptor_names)) == 23
+    assert t1.joint_index["lle4"] == t1.joint_index["q_llj4"] == t1.joint_index["Left_Knee_Pitch"]
+    assert t1.ranges_deg.shape == (23, 2) and t1.torque_limits.shape == (23, 2)
+    assert 0.6 < t1.standing_torso_height < 0.75 and 0.45 < k1.standing_torso_height < 0.6
+    assert t1.foot_bodies == ("left_foot_link", "right_foot_link")
+    assert t1.right_foot_offset[1] < -0.05 < 0.05 < -k1.right_foot_offset[1] + 0.1
+    assert t1.ball_radius == pytest.approx(0.11)
     with pytest.raises(ValueError, match=r"unknown league robot 'Nao'.*T1"):
         league_robot("Nao")
     with pytest.raises(KeyError, match="no joint 'elbow'"):

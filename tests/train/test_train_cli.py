@@ -539,3 +539,25 @@ def test_the_training_display_shows_each_tasks_own_measure():
         "forward 0.41 m/s (error 0.10)"
     )
     assert task_measure({"ball_dx_mean": 2.24}) == "ball Δx 2.24 m"
+
+
+def test_train_and_eval_a_league_robot(tmp_path):
+    """``--env robot=T1`` trains on the league's simulator in-process (backend rcsssmj, chosen
+    for the robot), and the run evaluates there and on a real rcssservermj."""
+    pytest.importorskip("rcsssmj", reason="the optional rcsssmj package is not installed")
+    from robocup_gym.train.config import TrainConfig
+
+    args = "train velocity-kick --env robot=T1 --n-envs 2 --timesteps 256 --seed 1"
+    args += " --eval-freq 0 --checkpoint-freq 0"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        invoke([*args.split(), "--out", tmp_path, *TINY_PPO])
+    (run,) = list(tmp_path.iterdir())
+    cfg = TrainConfig.load(run / "config.yaml")
+    assert cfg.backend == "rcsssmj" and cfg.env_kwargs["robot"] == "T1"
+    result = last_json(invoke(["eval", run, "--episodes", "2"]).output)
+    assert result["episodes"] == 2
+    real = last_json(invoke(["eval", run, "--episodes", "1", "--backend", "rcssservermj"]).output)
+    assert real["episodes"] == 1
+    with pytest.raises(AssertionError, match="'rcsssmj' in-process"):
+        invoke(["eval", run, "--episodes", "1", "--engine", "mujoco"])
