@@ -273,8 +273,30 @@ class LeagueBackend(Backend):
 
     def _perceive(self) -> Perception:
         w = self.world
-        w.sim.generate_perceptions(gen_vision=None if self.vision else False)
-        p = perception_from_objects(w.agents[0].perceptions, self._perceptors)
+        if self.vision:
+            w.sim.generate_perceptions()
+            p = perception_from_objects(w.agents[0].perceptions, self._perceptors)
+        else:  # the same numbers, straight from the sensor arrays
+            r = w.readings(0)
+            g = r["game"]
+            gyro, accel = r["gyro"], r["accel"]
+            p = LeaguePerception(
+                time=r["time"],
+                game=GameState(
+                    play_mode=str(g.play_mode),
+                    game_time=float(g.play_time),
+                    score_left=int(g.score_left),
+                    score_right=int(g.score_right),
+                ),
+                gyro=np.array([-gyro[1], gyro[0], gyro[2]]),
+                accel=np.array([-accel[1], accel[0], accel[2]]),
+                joint_names=self._perceptors,
+                joint_angles_deg=r["q_deg"],
+                joint_velocities_deg_s=r["dq_deg_s"],
+                raw_torso_pos=r["pos"],
+                raw_torso_quat=r["quat"],
+                touch={},
+            )
         pos, quat = w.torso_pose(0)
         vel, ang = w.torso_velocity(0)
         ball = w.ball_position()

@@ -194,8 +194,9 @@ def test_the_k1_ball_contact_failure_of_rcsssmj_is_a_clear_truncation():
 
 
 def test_perceptions_made_from_objects_equal_the_parsed_messages():
-    """The in-process backend reads rcsssmj's perception objects instead of writing and parsing
-    the message: over 200 cycles (vision every second one) every value is the parsed one."""
+    """The in-process backend reads rcsssmj's perception objects (with vision) or the sensor
+    arrays (without) instead of writing and parsing the message: over 200 cycles (vision every
+    second one) every value is the parsed one."""
     from robocup_gym.backends.league_backend import perception_from_objects
     from robocup_gym.protocol.league import parse_league_perception
     from robocup_gym.sim.engines.rcsssmj import LeagueWorld
@@ -215,6 +216,14 @@ def test_perceptions_made_from_objects_equal_the_parsed_messages():
         message = world.perceive()[0]
         a = parse_league_perception(message, names)
         b = perception_from_objects(world.agents[0].perceptions, names)
+        r = world.readings(0)  # the vectorised reading the backend uses without vision
+        np.testing.assert_array_equal(r["q_deg"], a.joint_angles_deg)
+        np.testing.assert_array_equal(r["dq_deg_s"], a.joint_velocities_deg_s)
+        np.testing.assert_array_equal([-r["gyro"][1], r["gyro"][0], r["gyro"][2]], a.gyro)
+        np.testing.assert_array_equal([-r["accel"][1], r["accel"][0], r["accel"][2]], a.accel)
+        np.testing.assert_array_equal(r["pos"], a.raw_torso_pos)
+        np.testing.assert_array_equal(r["quat"], a.raw_torso_quat)
+        assert r["time"] == a.time and r["game"].play_mode == a.game.play_mode
         for field in ("joint_angles_deg", "joint_velocities_deg_s", "gyro", "accel"):
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
         np.testing.assert_array_equal(a.raw_torso_pos, b.raw_torso_pos)
