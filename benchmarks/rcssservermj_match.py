@@ -86,7 +86,7 @@ def run(cycles: int = 500, robot: str = "T1", seed: int = 0) -> dict:
     world = None
     for attempt in range(1, 6):  # noqa: B007 (reported below)
         with (
-            RcssServerMJProcess() as server,
+            RcssServerMJProcess(monitor=False) as server,  # no monitor work: its best speed
             LeagueAgentLink(server.agent_port, robot, "A", 1) as a,
         ):
             first = a.recv()

@@ -45,7 +45,7 @@ from robocup_gym.types import (
     Vision,
 )
 
-__all__ = ["LeagueBackend", "league_pose", "perception_from_objects"]
+__all__ = ["LeagueBackend", "league_pose", "pd_commands", "perception_from_objects"]
 
 _S = math.sqrt(0.5)
 
@@ -87,6 +87,25 @@ def league_pose(robot: Any, angles: np.ndarray | Mapping[str, float] | None) -> 
     if out.shape != (n,):
         raise ValueError(f"{robot.name} joint angles must have shape ({n},), got {out.shape}")
     return out
+
+
+def pd_commands(robot: Any, command: AgentCommand | None) -> dict[str, PDCommand]:
+    """The checked PD commands of ``command`` for the league robot ``robot`` (``{}`` for none).
+
+    Raises:
+        ValueError: joint velocities (the Nao's form), or a command
+            :meth:`~robocup_gym.robot.league.LeagueRobot.check_commands` refuses.
+    """
+    if command is None:
+        return {}
+    if len(command.joint_velocities):
+        raise ValueError(
+            f"the {robot.name} takes PD joint commands (AgentCommand.joint_pd), not joint "
+            "velocities"
+        )
+    commands = dict(command.joint_pd or {})
+    robot.check_commands(commands)
+    return commands
 
 
 def perception_from_objects(objects: Sequence[Any], joint_order: Sequence[str]) -> Perception:
@@ -249,16 +268,7 @@ class LeagueBackend(Backend):
         if cycles < 1:
             raise ValueError(f"cycles must be >= 1, got {cycles}")
         w = self.world
-        pd = None
-        if command is not None:
-            if len(command.joint_velocities):
-                raise ValueError(
-                    f"the {self.robot} takes PD joint commands (AgentCommand.joint_pd), not "
-                    "joint velocities"
-                )
-            pd = command.joint_pd
-            if pd:
-                self._model.check_commands(pd)
+        pd = pd_commands(self._model, command)
         from robocup_gym.sim.engines.rcsssmj import LeagueSimulationError
 
         try:

@@ -32,19 +32,30 @@ from robocup_gym.protocol.league import format_pd_commands
 __all__ = ["LeagueAgentLink", "RcssServerMJProcess", "format_pd_commands"]
 
 
+LOOP_GRACE_S = 0.2
+"""Seconds between the server's "simulation update loop" log line and a player's join, when no
+monitor connection confirms the first step (its loop steps within milliseconds)."""
+
+
 class RcssServerMJProcess(ChildProcess):
     """One ``rcssservermj`` child process (see the module docstring).
 
     Args:
         startup_timeout: Seconds to wait for the agent port to accept.
         stop_grace_s: Seconds between SIGINT and SIGKILL in :meth:`stop`.
+        monitor: Keep a monitor connection (:meth:`take_monitor`), which also tells that the
+            simulation has stepped. ``False``: none (the server then does no monitor work, the
+            fastest it runs: for speed measurements); readiness is then the server's log line
+            that its loop runs, plus :data:`LOOP_GRACE_S`.
 
     Raises:
         robocup_gym.robot.league.RcsssmjUnavailableError: ``rcsssmj`` is not installed.
         BackendError: the server did not start (with the end of its output).
     """
 
-    def __init__(self, *, startup_timeout: float = 30.0, stop_grace_s: float = 5.0) -> None:
+    def __init__(
+        self, *, startup_timeout: float = 30.0, stop_grace_s: float = 5.0, monitor: bool = True
+    ) -> None:
         from robocup_gym.robot.league import league_robot_names
 
         league_robot_names()  # raises the clear error without rcsssmj
@@ -58,7 +69,12 @@ class RcssServerMJProcess(ChildProcess):
         for _ in range(3):
             self.agent_port, self.monitor_port = free_ports(2)
             self._spawn()
-            if self._wait_until_stepping(startup_timeout):
+            ready = (
+                self._wait_until_stepping(startup_timeout)
+                if monitor
+                else self._wait_for_loop(startup_timeout)
+            )
+            if ready:
                 return
             last = self.log_tail()
             self.stop()
@@ -95,6 +111,20 @@ class RcssServerMJProcess(ChildProcess):
             self._drainer = threading.Thread(target=self._drain, daemon=True)
             self._drainer.start()
             return True
+        return False
+
+    def _wait_for_loop(self, timeout: float) -> bool:
+        """Whether, within ``timeout`` s, the server has logged that its simulation loop runs
+        (its first step follows at once; :data:`LOOP_GRACE_S` later a player can join)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and self.proc is not None:
+            if self.proc.poll() is not None:
+                return False
+            if "simulation update loop" in self.log_tail(4000):
+                # (logged after "Listening for agent connections": the port is open)
+                time.sleep(LOOP_GRACE_S)
+                return True
+            time.sleep(0.02)
         return False
 
     def _drain(self) -> None:

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.backends.base import Backend, BackendError, RobotPose
-from robocup_gym.backends.league_backend import _model_quat, league_pose
+from robocup_gym.backends.league_backend import _model_quat, league_pose, pd_commands
 from robocup_gym.protocol.errors import ProtocolError
 from robocup_gym.protocol.framing import FrameDecoder, encode_frame
 from robocup_gym.protocol.league import (
@@ -158,7 +158,11 @@ class RcssServerMJBackend(Backend):
 
     def _read_monitor(self, until_time: float | None = None) -> None:
         """Take every monitor message that has arrived; with ``until_time``, wait (up to the
-        timeout) for one at least that recent."""
+        timeout) for one at least that recent. The server sends a frame after every second
+        step, before its next perceptions, so the newest frame is at most one cycle older than
+        the perception just received (callers ask for 1.5 cycles: both times are printed with
+        2 decimals); a stricter wait could only end when the server steps again, which it does
+        after the agent's answer."""
         deadline = time.monotonic() + self.timeout
         while True:
             try:
@@ -265,15 +269,7 @@ class RcssServerMJBackend(Backend):
     def advance(self, cycles: int, command: AgentCommand | None = None) -> Perception:
         if cycles < 1:
             raise ValueError(f"cycles must be >= 1, got {cycles}")
-        commands: dict[str, PDCommand] = {}
-        if command is not None:
-            if len(command.joint_velocities):
-                raise ValueError(
-                    f"the {self.robot} takes PD joint commands (AgentCommand.joint_pd), not "
-                    "joint velocities"
-                )
-            commands = dict(command.joint_pd or {})
-            self._model.check_commands(commands)
+        commands = pd_commands(self._model, command)
         msg = self._send(commands)
         for _ in range(cycles - 1):
             msg = self._send({})
@@ -281,7 +277,7 @@ class RcssServerMJBackend(Backend):
 
     def _perceive(self, msg: bytes, *, fresh: bool, cycles: int = 1) -> Perception:
         p = parse_league_perception(msg, self._model.perceptor_names)
-        self._read_monitor(until_time=p.time - _CYCLE_S)
+        self._read_monitor(until_time=p.time - 1.5 * _CYCLE_S)
         pos = p.raw_torso_pos if p.raw_torso_pos is not None else np.full(3, np.nan)
         vel = (
             np.zeros(3)

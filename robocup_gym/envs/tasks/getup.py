@@ -18,7 +18,7 @@ import numpy as np
 from robocup_gym.backends import make_backend
 from robocup_gym.backends.base import RobotPose
 from robocup_gym.envs.base_env import BaseEnv
-from robocup_gym.envs.config import EnvConfig, EnvConfigError
+from robocup_gym.envs.config import BALL_REST_Z, EnvConfig, EnvConfigError
 from robocup_gym.types import AgentCommand
 
 __all__ = ["GETUP_OBSERVATIONS", "GetUp", "GetUpConfig"]
@@ -45,6 +45,8 @@ class GetUpConfig(EnvConfig):
     """:class:`EnvConfig` plus GetUp's start and reward options."""
 
     observations: tuple[str, ...] = GETUP_OBSERVATIONS
+    ball_start_pos: tuple[float, float, float] = (1.0, 0.0, BALL_REST_Z)
+    """2 m ahead of the robot, out of its way (at the kicks' default spot it lay on the ball)."""
     max_episode_steps: int = 150
     """3 s to get up (the reference team's get-up takes 55–66 cycles)."""
     terminate_on_fall: bool = False
