@@ -33,6 +33,7 @@ import numpy as np
 from robocup_gym.backends.base import Backend, BackendDivergedError, RobotPose
 from robocup_gym.protocol.league import (
     LeaguePerception,
+    from_simspark_torso_quat,
     to_simspark_torso_quat,
 )
 from robocup_gym.types import (
@@ -47,15 +48,12 @@ from robocup_gym.types import (
 
 __all__ = ["LeagueBackend", "league_pose", "pd_commands", "perception_from_objects"]
 
-_S = math.sqrt(0.5)
 
 
 def _model_quat(pose: RobotPose) -> tuple[float, float, float, float]:
     """The torso orientation in the league model's axes (x forward, y left) for ``pose``."""
     if pose.quat is not None:
-        # SimSpark torso axes -> model axes: q ⊗ rot_z(+90°)
-        w, x, y, z = (float(v) for v in pose.quat)
-        q = np.array([_S * (w - z), _S * (x - y), _S * (y + x), _S * (z + w)])
+        q = from_simspark_torso_quat(pose.quat)
         q /= np.linalg.norm(q)
         return (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
     h = math.radians(pose.heading_deg) / 2.0

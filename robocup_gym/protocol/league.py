@@ -32,6 +32,7 @@ __all__ = [
     "LeagueMonitorReader",
     "LeaguePerception",
     "format_pd_commands",
+    "from_simspark_torso_quat",
     "parse_league_perception",
     "to_simspark_torso_quat",
 ]
@@ -44,7 +45,15 @@ def to_simspark_torso_quat(q: Sequence[float]) -> np.ndarray:
     orientation of SimSpark's torso axes (x right, y forward, z up): ``q ⊗ rot_z(−90°)``."""
     w, x, y, z = (float(v) for v in q)
     # Hamilton product with (s, 0, 0, -s)
-    return np.array([_S * (w + z), _S * (x + y), _S * (y - x), _S * (z - w)])
+    return np.array([_S * (w + z), _S * (x - y), _S * (x + y), _S * (z - w)])
+
+
+def from_simspark_torso_quat(q: Sequence[float]) -> np.ndarray:
+    """The inverse of :func:`to_simspark_torso_quat`: SimSpark's torso axes to a league
+    model's, ``q ⊗ rot_z(+90°)``."""
+    w, x, y, z = (float(v) for v in q)
+    # Hamilton product with (s, 0, 0, s)
+    return np.array([_S * (w - z), _S * (x + y), _S * (y - x), _S * (z + w)])
 
 
 @dataclass

@@ -14,6 +14,7 @@ from robocup_gym.protocol.errors import ProtocolError
 from robocup_gym.protocol.league import (
     LeagueMonitorReader,
     format_pd_commands,
+    from_simspark_torso_quat,
     parse_league_perception,
     to_simspark_torso_quat,
 )
@@ -82,6 +83,27 @@ def test_orientations_turn_into_simspark_torso_axes():
     c, s = heading_frame(to_simspark_torso_quat((math.cos(h), 0.0, 0.0, math.sin(h))))
     assert (c, s) == pytest.approx((0.0, 1.0))
     assert np.linalg.norm(q) == pytest.approx(1.0)
+    # pitched forward 30° (about the model's +y, its left): SimSpark's forward axis dips 30°,
+    # its up axis leans forward
+    p = math.radians(30) / 2
+    f = torso_axes(to_simspark_torso_quat((math.cos(p), 0.0, math.sin(p), 0.0)))
+    np.testing.assert_allclose(
+        f, [math.cos(2 * p), 0, -math.sin(2 * p), math.sin(2 * p), 0, math.cos(2 * p)], atol=1e-12
+    )
+    # rolled 20° to the right (about the model's +x, its forward): SimSpark's x (right) dips
+    r = math.radians(20) / 2
+    qs = to_simspark_torso_quat((math.cos(r), math.sin(r), 0.0, 0.0))
+    w, x, y, z = qs
+    right_z = 2 * (x * z - w * y)  # world z of the torso's x axis
+    assert right_z == pytest.approx(-math.sin(2 * r))
+    # and back
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        g = rng.normal(size=4)
+        g /= np.linalg.norm(g)
+        np.testing.assert_allclose(
+            from_simspark_torso_quat(to_simspark_torso_quat(g)), g, atol=1e-12
+        )
 
 
 def test_pd_commands_are_written_exactly():

@@ -2,9 +2,9 @@
 
 The lying poses are made the way a robot comes to lie: by dropping it in the world. At the
 first reset for each side the environment lets the robot fall from a tilted pose onto its front
-(or back) with its joints held still and records where it comes to rest (torso position and
-orientation, joint angles); every episode then starts from that pose, placed instantly. So no
-part starts inside the ground, on either engine.
+(or back) with its joints held still (a league robot: from flat, limp) and records where it
+comes to rest (torso position and orientation, joint angles); every episode then starts from
+that pose, placed instantly. So no part starts inside the ground, on any engine.
 """
 
 from __future__ import annotations
@@ -159,10 +159,13 @@ class GetUp(BaseEnv):
         """``(torso z m, torso quat, joint angles deg)`` of the robot at rest on ``side``,
         made once by dropping it in this environment's world."""
         if side not in self._lying:
-            # tilted 80° forward (front) or backward (back), joints at 0 and held: upright
-            # facing +x (the torso's forward axis is its +y: turned -90° about z), then pitched
-            # about the world's y axis (+: the top goes forward, +x)
-            tilt = math.radians(80.0) * (1.0 if side == "front" else -1.0)
+            # tilted forward (front) or backward (back), joints at 0: upright facing +x (the
+            # torso's forward axis is its +y: turned -90° about z), then pitched about the
+            # world's y axis (+: the top goes forward, +x). The Nao by 80°, joints held; a
+            # league robot flat (90°, its lowest point on the ground) and limp: held stiff, the
+            # tall T1 and K1 come to rest propped on toes and hands, differently on different
+            # MuJoCo versions.
+            tilt = math.radians(90.0 if self.league else 80.0) * (1.0 if side == "front" else -1.0)
             yaw = _quat_about((0.0, 0.0, 1.0), -math.pi / 2)
             pitch = _quat_about((0.0, 1.0, 0.0), tilt)
             quat = _quat_mul(pitch, yaw)
@@ -180,11 +183,7 @@ class GetUp(BaseEnv):
                     ball_pos=(x + 5.0, y + 5.0),
                     play_mode=self.config.play_mode,
                 )
-                hold = (  # the joints held at 0
-                    AgentCommand(joint_pd=self._actions.hold(np.zeros(n)))
-                    if self.league
-                    else AgentCommand(np.zeros(n))
-                )
+                hold = AgentCommand() if self.league else AgentCommand(np.zeros(n))
                 p = world.advance(DROP_CYCLES, hold)
             finally:
                 if world is not self.backend:
