@@ -49,7 +49,6 @@ from robocup_gym.types import (
 __all__ = ["LeagueBackend", "league_pose", "pd_commands", "perception_from_objects"]
 
 
-
 def _model_quat(pose: RobotPose) -> tuple[float, float, float, float]:
     """The torso orientation in the league model's axes (x forward, y left) for ``pose``."""
     if pose.quat is not None:
