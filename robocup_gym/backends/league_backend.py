@@ -178,6 +178,16 @@ def perception_from_objects(objects: Sequence[Any], joint_order: Sequence[str]) 
     )
 
 
+class _SceneView:
+    """What :class:`~robocup_gym.sim.render.FollowCamera` reads of a world, for the league's."""
+
+    def __init__(self, world: Any) -> None:
+        self.model, self.data, self._world = world.sim.mj_model, world.sim.mj_data, world
+
+    def torso_position(self, index: int) -> np.ndarray:
+        return self._world.torso_pose(index)[0]
+
+
 class LeagueBackend(Backend):
     """One league robot and the ball in RCSSServerMJ's world, stepped in-process and exactly.
 
@@ -213,6 +223,7 @@ class LeagueBackend(Backend):
         self._model = league_robot(self.robot)
         self.world = LeagueWorld([(self.robot, str(team), 1)])
         self._perceptors = self._model.perceptor_names
+        self._camera = None
         model = self.world.sim.mj_model
         prefix = self.world.agents[0].agent_id.prefix
         self._feet = tuple(model.body(prefix + b).id if b else -1 for b in self._model.foot_bodies)
@@ -340,6 +351,20 @@ class LeagueBackend(Backend):
         return touching
 
     # ------------------------------------------------------------------ misc
+    def render(self, width: int = 480, height: int = 360) -> np.ndarray:
+        """RGB image of the scene from a camera that follows the robot, drawn by MuJoCo from
+        the league world's own model (needs an OpenGL context, e.g. ``MUJOCO_GL=egl``)."""
+        from robocup_gym.sim.render import FollowCamera
+
+        if self._camera is None:
+            self._camera = FollowCamera(distance=3.0)
+        return self._camera.render(_SceneView(self.world), width, height)
+
+    def close(self) -> None:
+        if self._camera is not None:
+            self._camera.close()
+            self._camera = None
+
     def hold_command(self, angles_deg: np.ndarray, kp: float, kd: float) -> dict[str, PDCommand]:
         """PD commands holding every joint at ``angles_deg`` (model order)."""
         return {

@@ -237,3 +237,25 @@ def test_perceptions_made_from_objects_equal_the_parsed_messages():
                 np.testing.assert_array_equal(a.vision.objects[k], b.vision.objects[k])
         world.step()
     assert seen == 100
+
+
+def test_a_league_robot_renders_where_opengl_is():
+    """``render()`` draws the league world from its own model (a child process, so that the
+    OpenGL backend can be chosen; skipped without OpenGL)."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "from robocup_gym.envs import VelocityKick\n"
+        "e = VelocityKick(robot='T1', render_mode='rgb_array'); e.reset(seed=0)\n"
+        "img = e.render(); e.close()\n"
+        "assert img.shape == (360, 480, 3) and img.std() > 10, (img.shape, img.std())\n"
+        "print('ok')\n"
+    )
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    probe = "import mujoco; mujoco.Renderer(mujoco.MjModel.from_xml_string('<mujoco/>'), 8, 8)"
+    if subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True).returncode:
+        pytest.skip("no OpenGL for MuJoCo's offscreen renderer here (set MUJOCO_GL=egl/osmesa)")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
