@@ -23,6 +23,7 @@ for, and pybind11)::
 
     python benchmarks/team_code.py --fcp /path/to/FCPCodebase --python /path/to/its/python
     python benchmarks/team_code.py ... --engines real      # a real rcssserver3d (RCSSSERVER3D)
+    python benchmarks/team_code.py ... --engines real,ode --fork   # the SPL fork, like for like
 
 ``--engines`` lists what to run on: ``ode`` and ``mujoco`` are ``robocup-gym serve`` in-process
 on that engine (ground truth read from its world every cycle), ``real`` a real rcssserver3d
@@ -158,11 +159,12 @@ def _median(values: list[float]) -> float | None:
 class _ServeTruth:
     """``robocup-gym serve`` in this process on one engine; ground truth from its world."""
 
-    def __init__(self, engine: str) -> None:
+    def __init__(self, engine: str, fork: bool = False) -> None:
         from robocup_gym.server import SimServer
 
+        like_fork = {"decimals": 3, "field_lines": False} if fork else {}
         self.server = SimServer(
-            0, 0, "127.0.0.1", sync=True, real_time=False, seed=0, engine=engine
+            0, 0, "127.0.0.1", sync=True, real_time=False, seed=0, engine=engine, **like_fork
         )
         self.truth: dict[float, tuple] = {}
         self.server.on_cycle = self._record
@@ -225,11 +227,93 @@ class _RealTruth:
         self.proc.stop()
 
 
+def strip_fork_gs(message: bytes) -> bytes:
+    """A percept of the SPL fork (SimSpark-SPL) as upstream rcssserver3d 0.7.3 writes it: its
+    ``GS`` without the fork's ``(k <side>)`` and ``(ti (…) (…))`` entries (the team codebase's
+    parser does not expect them and then never learns its side). Everything else is kept."""
+    start = message.find(b"(GS ")
+    if start < 0:
+        return message
+    depth, end = 0, start
+    for end in range(start, len(message)):  # the end of the GS expression
+        c = message[end]
+        depth += (c == 0x28) - (c == 0x29)
+        if depth == 0:
+            break
+    gs = message[start : end + 1]
+    out, i = bytearray(), 0
+    while i < len(gs):
+        if gs.startswith(b" (k ", i) or gs.startswith(b" (ti ", i):
+            d, j = 0, i + 1
+            while j < len(gs):  # skip the balanced entry
+                d += (gs[j] == 0x28) - (gs[j] == 0x29)
+                j += 1
+                if d == 0:
+                    break
+            i = j
+            continue
+        out.append(gs[i])
+        i += 1
+    return message[:start] + bytes(out) + message[end + 1 :]
+
+
+class _ForkRelay:
+    """Sits between the team's agent and the SPL fork's agent port and turns the fork's percepts
+    into upstream 0.7.3's (:func:`strip_fork_gs`); the agent's messages pass unchanged. One
+    agent connection, two forwarding threads; ``port`` is the OS-chosen port the agent uses."""
+
+    def __init__(self, server_port: int) -> None:
+        import socket
+        import threading
+
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.port = self._listener.getsockname()[1]
+        self._server_port = server_port
+        self._threads = [threading.Thread(target=self._run, daemon=True)]
+        self._threads[0].start()
+
+    def _run(self) -> None:
+        import socket
+        import threading
+
+        from robocup_gym.protocol.framing import FrameDecoder, encode_frame
+
+        agent, _ = self._listener.accept()
+        server = socket.create_connection(("127.0.0.1", self._server_port))
+        for s in (agent, server):
+            s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+        def up() -> None:  # agent -> server, unchanged
+            try:
+                while data := agent.recv(1 << 16):
+                    server.sendall(data)
+            except OSError:
+                pass
+            server.close()
+
+        threading.Thread(target=up, daemon=True).start()
+        decoder = FrameDecoder()
+        try:
+            while data := server.recv(1 << 16):
+                for frame in decoder.feed(data):
+                    agent.sendall(encode_frame(strip_fork_gs(bytes(frame))))
+        except OSError:
+            pass
+        agent.close()
+
+    def stop(self) -> None:
+        self._listener.close()
+
+
 def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
     """FC Portugal's agent of type ``robot_type`` on ``engine`` (``ode``/``mujoco``: serve in
     this process; ``real``: a real rcssserver3d)."""
-    host = _RealTruth() if engine == "real" else _ServeTruth(engine)
+    host = _RealTruth() if engine == "real" else _ServeTruth(engine, fork=args.fork)
     truth = host.truth
+    agent_port, relay = host.agent_port, None
+    if engine == "real" and args.fork:
+        relay = _ForkRelay(host.agent_port)
+        agent_port = relay.port
     cmd = [
         args.python,
         str(Path(__file__).resolve()),
@@ -237,7 +321,7 @@ def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
         "--fcp",
         str(Path(args.fcp).resolve()),
         "--port",
-        str(host.agent_port),
+        str(agent_port),
         "--mport",
         str(host.monitor_port),
         "--type",
@@ -252,6 +336,8 @@ def run_one(args: argparse.Namespace, engine: str, robot_type: int) -> dict:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
     finally:
         host.stop()
+        if relay is not None:
+            relay.stop()
     trials = []
     for line in proc.stdout.splitlines():
         if line.startswith("{"):
@@ -313,6 +399,13 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=3, help="trials per test and type")
     parser.add_argument("--tests", default="walk,kick,getup")
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per engine × type")
+    parser.add_argument(
+        "--fork",
+        action="store_true",
+        help="the real server is the SPL fork: compare like with like: the agent gets the fork's "
+        "percepts with GS as upstream 0.7.3 writes it (without the fork's (k …)(ti …)), and "
+        "serve runs as the fork (3 decimals, no field lines)",
+    )
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--port", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--mport", type=int, help=argparse.SUPPRESS)

@@ -162,6 +162,12 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
         help="unrestricted vision: 360 degree view cones (default: 120 degrees)",
     )
     p.add_argument(
+        "--field-lines",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="field lines in See, as rcssserver3d 0.7.3 (--no-field-lines: none, as the SPL fork)",
+    )
+    p.add_argument(
         "--rules",
         action=argparse.BooleanOptionalAction,
         default=True,
@@ -242,6 +248,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m robocup_gym.serve
             ground_truth=args.ground_truth,
             vision_noise=args.vision_noise,
             view_cone_deg=360.0 if args.full_vision else 120.0,
+            field_lines=args.field_lines,
             rules=args.rules,
             monitor_interval=args.monitor_interval,
             sync_timeout=args.sync_timeout,

@@ -101,6 +101,8 @@ class SimServer:
             needed by RobocupGym).
         vision_noise: vision noise, calibration offset and beam noise (rcssserver3d: on).
         view_cone_deg: vision opening (120; 360 = "full vision").
+        field_lines: field lines in ``See`` (``L``), as upstream rcssserver3d 0.7.3; the SPL
+            fork sends none (``False`` with ``decimals=3`` gives the fork's percepts).
         rules: automatic referee on (``False`` = play modes only by trainer command).
         monitor_interval: cycles per monitor frame (2 = 25 Hz as rcssserver3d; 1 = 50 Hz).
         sync_timeout: seconds a sync-mode cycle waits for a silent agent before closing its
@@ -127,6 +129,7 @@ class SimServer:
         ground_truth: bool = False,
         vision_noise: bool = True,
         view_cone_deg: float = 120.0,
+        field_lines: bool = True,
         rules: bool = True,
         monitor_interval: int = 2,
         sync_timeout: float | None = None,
@@ -170,7 +173,10 @@ class SimServer:
         self.monitor_interval = int(monitor_interval)
         self.sync_timeout = sync_timeout
         vision = VisionConfig(
-            noise=vision_noise, view_cone_deg=float(view_cone_deg), ground_truth=ground_truth
+            noise=vision_noise,
+            view_cone_deg=float(view_cone_deg),
+            ground_truth=ground_truth,
+            lines=bool(field_lines),
         )
         self.engine = engine
         self.world_host = WorldHost(vision, physics, seed, engine=engine)
@@ -944,7 +950,8 @@ def serve(
     """Run the server in the foreground until Ctrl-C, SIGTERM or ``(killsim)``.
 
     Prints where it listens. Extra keyword options are those of :class:`SimServer`
-    (``ground_truth``, ``vision_noise``, ``view_cone_deg``, ``rules``, ``monitor_interval``,
+    (``ground_truth``, ``vision_noise``, ``view_cone_deg``, ``field_lines``, ``rules``,
+    ``monitor_interval``,
     ``sync_timeout``, ``seed``).
 
     Raises:

@@ -263,3 +263,15 @@ def test_full_teams_of_eleven_in_sync_mode(make_server):
         p = parse_perception(msgs[-1])
         assert len(p.joint_names) in (22, 24)  # type 4 has toes
     assert unums == {"left": set(range(1, 12)), "right": set(range(1, 12))}
+
+
+@pytest.mark.parametrize("lines", [True, False])
+def test_field_lines_can_be_left_out_as_the_spl_fork_does(make_server, lines):
+    """Upstream rcssserver3d 0.7.3 sends field lines in See; the SPL fork sends none, and
+    ``field_lines=False`` (``--no-field-lines``) gives its percepts."""
+    server = make_server(field_lines=lines)
+    (msgs,) = run_agents(server, [("A", 1, 0)], 9, lambda i, k: "(beam -1 0 0)" if k == 0 else "")
+    seen = [parse_perception(m).vision for m in msgs]
+    seen = [v for v in seen if v is not None]
+    assert seen and all("F1R" in v.objects or "G1R" in v.objects for v in seen)
+    assert all((len(v.lines) > 0) == lines for v in seen), [len(v.lines) for v in seen]
