@@ -365,13 +365,6 @@ class LeagueBackend(Backend):
             self._camera.close()
             self._camera = None
 
-    def hold_command(self, angles_deg: np.ndarray, kp: float, kd: float) -> dict[str, PDCommand]:
-        """PD commands holding every joint at ``angles_deg`` (model order)."""
-        return {
-            n: PDCommand(float(a), 0.0, kp, kd)
-            for n, a in zip(self._model.effector_names, angles_deg, strict=True)
-        }
-
     def describe(self) -> dict[str, Any]:
         d = super().describe()
         d.update(robot=self.robot, engine="rcsssmj (RCSSServerMJ's own simulation, MuJoCo)")
