@@ -18,10 +18,14 @@ import robocup_gym.envs
 from robocup_gym.backends import BackendDivergedError, RobotPose, make_backend
 from robocup_gym.envs import EnvConfigError, GetUp, VelocityKick, Walk
 from robocup_gym.envs.observations import torso_axes
-from robocup_gym.robot.league import league_robot
+from robocup_gym.robot.league import (
+    league_robot,
+    league_robot_names,
+)
 from robocup_gym.types import AgentCommand, PDCommand
 
-ROBOTS = ("T1", "K1")
+ROBOTS = tuple(league_robot_names())
+"""Every robot the installed rcsssmj ships (0.2.1: K1, T1 and a MuJoCo ant)."""
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
@@ -32,8 +36,9 @@ def test_every_task_passes_check_env_on_every_league_robot(env_id, robot):
         check_env(env.unwrapped, skip_render_check=True)
         u = env.unwrapped
         assert u.backend.name == "rcsssmj" and u.robot_model.name == robot
-        n = len(league_robot(robot).joints)
-        assert env.action_space.shape == (n - 2,)  # every joint but the head's two
+        names = league_robot(robot).effector_names
+        # every joint but the head's (he1, he2)
+        assert env.action_space.shape == (sum(not n.startswith("he") for n in names),)
         obs, _ = env.reset(seed=3)
         assert np.isfinite(obs).all()
     finally:
