@@ -434,11 +434,17 @@ if typer is not None:
     # ------------------------------------------------------------------------------ tasks
     @app.command()
     def tasks() -> None:
-        """List the registered tasks."""
+        """List the registered tasks and the robots they run on."""
+        from robocup_gym.robot.league import RcsssmjUnavailableError, league_robot_names
         from robocup_gym.train.tasks import registered_tasks
 
         for name, env_id in registered_tasks().items():
             print(f"{name:20s} {env_id}")
+        try:
+            league = ", ".join(league_robot_names()) + " (--env robot=NAME)"
+        except RcsssmjUnavailableError:
+            league = "not installed (pip install 'robocup-gym[mj]')"
+        print(f"\nrobots: the Nao, types 0-4 (--env robot_type=N); the league's: {league}")
 
     # ------------------------------------------------------------------------------ experiments
     @experiments_app.command("paper")

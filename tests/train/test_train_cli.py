@@ -561,3 +561,15 @@ def test_train_and_eval_a_league_robot(tmp_path):
     assert real["episodes"] == 1
     with pytest.raises(AssertionError, match="'rcsssmj' in-process"):
         invoke(["eval", run, "--episodes", "1", "--engine", "mujoco"])
+
+
+def test_tasks_lists_the_tasks_and_the_robots():
+    out = invoke(["tasks"]).output
+    assert "velocity-kick" in out and "RobocupGym/GetUp-v0" in out
+    assert "robots: the Nao, types 0-4" in out
+    try:
+        import rcsssmj  # noqa: F401
+    except ImportError:
+        assert "pip install 'robocup-gym[mj]'" in out
+    else:
+        assert "T1" in out and "K1" in out and "--env robot=NAME" in out
