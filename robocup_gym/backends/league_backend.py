@@ -32,8 +32,8 @@ import numpy as np
 
 from robocup_gym.backends.base import Backend, BackendDivergedError, RobotPose
 from robocup_gym.protocol.league import (
-    LeaguePerception,
     from_simspark_torso_quat,
+    league_perception,
     to_simspark_torso_quat,
 )
 from robocup_gym.types import (
@@ -46,7 +46,13 @@ from robocup_gym.types import (
     Vision,
 )
 
-__all__ = ["LeagueBackend", "league_pose", "pd_commands", "perception_from_objects"]
+__all__ = [
+    "LeagueBackend",
+    "league_ball",
+    "league_pose",
+    "pd_commands",
+    "perception_from_objects",
+]
 
 
 def _model_quat(pose: RobotPose) -> tuple[float, float, float, float]:
@@ -127,9 +133,7 @@ def perception_from_objects(objects: Sequence[Any], joint_order: Sequence[str]) 
         if kind == "TimePerception":
             time = float(o.time)
         elif kind == "GameStatePerception":
-            game.game_time = float(o.play_time)
-            game.play_mode = str(o.play_mode)
-            game.score_left, game.score_right = int(o.score_left), int(o.score_right)
+            game = _game_state(o)
         elif kind == "GyroPerception":
             gyro = (float(o.rx), float(o.ry), float(o.rz))
         elif kind == "AccelerometerPerception":
@@ -163,19 +167,38 @@ def perception_from_objects(objects: Sequence[Any], joint_order: Sequence[str]) 
     if missing:
         raise ValueError(f"the perception objects have no joint state for {', '.join(missing)}")
     values = np.array([joints[n] for n in joint_order], dtype=float).reshape(-1, 2)
-    return LeaguePerception(
+    return league_perception(
         time=time,
         game=game,
-        gyro=np.array([-gyro[1], gyro[0], gyro[2]]),
-        accel=np.array([-accel[1], accel[0], accel[2]]),
-        joint_names=tuple(joint_order),
-        joint_angles_deg=values[:, 0].copy(),
-        joint_velocities_deg_s=values[:, 1].copy(),
+        gyro=gyro,
+        accel=accel,
+        joint_names=joint_order,
+        q_deg=values[:, 0].copy(),
+        dq_deg_s=values[:, 1].copy(),
+        pos=pos,
+        quat=quat,
         vision=vision,
-        raw_torso_pos=pos,
-        raw_torso_quat=quat,
         touch=touch,
     )
+
+
+def _game_state(gs: Any) -> GameState:
+    """``rcsssmj``'s ``GameStatePerception`` as a :class:`GameState`."""
+    return GameState(
+        play_mode=str(gs.play_mode),
+        game_time=float(gs.play_time),
+        score_left=int(gs.score_left),
+        score_right=int(gs.score_right),
+    )
+
+
+def league_ball(robot: Any, ball_pos: Sequence[float]) -> list[float]:
+    """The ball's centre (m) from ``(x, y, z)``, or ``(x, y)``: resting on the ground (the
+    league ball's radius up)."""
+    ball = [float(v) for v in ball_pos]
+    if len(ball) == 2:
+        ball.append(robot.ball_radius)
+    return ball
 
 
 class _SceneView:
@@ -256,10 +279,7 @@ class LeagueBackend(Backend):
         else:
             z = float(pose.z)
         w.place_player(0, (pose.x, pose.y, z), quat, angles)
-        ball = [float(v) for v in ball_pos]
-        if len(ball) == 2:  # resting on the ground
-            ball.append(self._model.ball_radius)
-        w.place_ball(ball, ball_vel)
+        w.place_ball(league_ball(self._model, ball_pos), ball_vel)
         # one limp 20 ms step, as on the real server (whose placement shows in its perceptions
         # only a step later): the episode starts from what the robot then perceives
         self.advance(1)
@@ -296,24 +316,16 @@ class LeagueBackend(Backend):
             p = perception_from_objects(w.agents[0].perceptions, self._perceptors)
         else:  # the same numbers, straight from the sensor arrays
             r = w.readings(0)
-            g = r["game"]
-            gyro, accel = r["gyro"], r["accel"]
-            p = LeaguePerception(
+            p = league_perception(
                 time=r["time"],
-                game=GameState(
-                    play_mode=str(g.play_mode),
-                    game_time=float(g.play_time),
-                    score_left=int(g.score_left),
-                    score_right=int(g.score_right),
-                ),
-                gyro=np.array([-gyro[1], gyro[0], gyro[2]]),
-                accel=np.array([-accel[1], accel[0], accel[2]]),
+                game=_game_state(r["game"]),
+                gyro=r["gyro"],
+                accel=r["accel"],
                 joint_names=self._perceptors,
-                joint_angles_deg=r["q_deg"],
-                joint_velocities_deg_s=r["dq_deg_s"],
-                raw_torso_pos=r["pos"],
-                raw_torso_quat=r["quat"],
-                touch={},
+                q_deg=r["q_deg"],
+                dq_deg_s=r["dq_deg_s"],
+                pos=r["pos"],
+                quat=r["quat"],
             )
         pos, quat = w.torso_pose(0)
         vel, ang = w.torso_velocity(0)

@@ -36,11 +36,12 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.backends.base import Backend, BackendError, RobotPose
-from robocup_gym.backends.league_backend import _model_quat, league_pose, pd_commands
+from robocup_gym.backends.league_backend import _model_quat, league_ball, league_pose, pd_commands
 from robocup_gym.protocol.errors import ProtocolError
 from robocup_gym.protocol.framing import FrameDecoder, encode_frame
 from robocup_gym.protocol.league import (
     LeagueMonitorReader,
+    LeaguePerception,
     format_pd_commands,
     parse_league_perception,
     to_simspark_torso_quat,
@@ -117,7 +118,7 @@ class RcssServerMJBackend(Backend):
             self._ball: tuple[float, np.ndarray] | None = None  # (time, position) of a frame
             self._ball_vel = np.zeros(3)
             self.link = LeagueAgentLink(int(port), self.robot, self.team, 1, timeout=timeout)
-            self._pending = self._recv()  # the perception the server waits an answer to
+            self._recv()  # the first perception, which the server waits an answer to
         except BaseException:
             self.close()
             raise
@@ -144,8 +145,7 @@ class RcssServerMJBackend(Backend):
             self.link.send(format_pd_commands(commands))
         except OSError as e:
             raise BackendError(f"the rcssservermj connection failed ({e})") from e
-        self._pending = self._recv()
-        return self._pending
+        return self._recv()
 
     def _monitor_command(self, text: str) -> None:
         try:
@@ -228,9 +228,7 @@ class RcssServerMJBackend(Backend):
             z = self._model.standing_torso_height
         else:
             z = float(pose.z)
-        ball = [float(v) for v in ball_pos]
-        if len(ball) == 2:
-            ball.append(self._model.ball_radius)
+        ball = league_ball(self._model, ball_pos)
         bv = [float(v) for v in ball_vel]
         if not all(math.isfinite(v) for v in (pose.x, pose.y, z, *quat, *ball, *bv)):
             raise ValueError("the start pose, ball position and velocity must be finite")
@@ -243,22 +241,21 @@ class RcssServerMJBackend(Backend):
         self._place(f"{head}{z + 1.0!r} {tail}", np.array([pose.x, pose.y, z + 1.0]))
         ball_cmd = f"(ball (pos {ball[0]!r} {ball[1]!r} {ball[2]!r}) "
         ball_cmd += f"(vel {bv[0]!r} {bv[1]!r} {bv[2]!r}))"
-        msg = self._place(f"{head}{z!r} {tail}{ball_cmd}", np.array([pose.x, pose.y, z]))
-        return self._perceive(msg, fresh=True)
+        p = self._place(f"{head}{z!r} {tail}{ball_cmd}", np.array([pose.x, pose.y, z]))
+        return self._with_ground_truth(p, fresh=True)
 
-    def _place(self, monitor_text: str, want: np.ndarray) -> bytes:
+    def _place(self, monitor_text: str, want: np.ndarray) -> LeaguePerception:
         """Send a placement through the monitor; answer with limp joints until a perception
-        shows the torso within :data:`_PLACE_TOLERANCE_M` of ``want``; return it."""
+        shows the torso within :data:`_PLACE_TOLERANCE_M` of ``want``; return it (parsed)."""
         limp = {n: PDCommand(0.0) for n in self._model.effector_names}
         self._monitor_command(monitor_text)
         for _ in range(self.reset_cycles):
-            msg = self._send(limp)
-            p = parse_league_perception(msg, self._model.perceptor_names)
+            p = self._parse(self._send(limp))
             if (
                 p.raw_torso_pos is not None
                 and np.abs(p.raw_torso_pos - want).max() < _PLACE_TOLERANCE_M
             ):
-                return msg
+                return p
         raise BackendError(
             f"rcssservermj did not show the placement within {self.reset_cycles} cycles"
         )
@@ -273,10 +270,16 @@ class RcssServerMJBackend(Backend):
         msg = self._send(commands)
         for _ in range(cycles - 1):
             msg = self._send({})
-        return self._perceive(msg, fresh=False, cycles=cycles)
+        return self._with_ground_truth(self._parse(msg), fresh=False, cycles=cycles)
 
-    def _perceive(self, msg: bytes, *, fresh: bool, cycles: int = 1) -> Perception:
-        p = parse_league_perception(msg, self._model.perceptor_names)
+    def _parse(self, msg: bytes) -> LeaguePerception:
+        return parse_league_perception(msg, self._model.perceptor_names)
+
+    def _with_ground_truth(
+        self, p: LeaguePerception, *, fresh: bool, cycles: int = 1
+    ) -> LeaguePerception:
+        """``p`` with its ground truth: the torso from its own perceptors, the ball from the
+        monitor (waiting for a frame of the same cycle or the one before)."""
         self._read_monitor(until_time=p.time - 1.5 * _CYCLE_S)
         pos = p.raw_torso_pos if p.raw_torso_pos is not None else np.full(3, np.nan)
         vel = (

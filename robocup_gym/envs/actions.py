@@ -67,6 +67,13 @@ class ActionMapper:
         """The :class:`~robocup_gym.types.AgentCommand` for a clipped ``action``."""
         return AgentCommand(self.command(action, joint_angles_deg))
 
+    def start_episode(self, joint_angles_deg: np.ndarray) -> None:
+        """Nothing to remember at an episode's start (see :class:`PDActionMapper`)."""
+
+    def stop_command(self, joint_angles_deg: np.ndarray) -> AgentCommand:
+        """The command of the wait cycles after an episode: every joint at 0 rad/s."""
+        return AgentCommand(np.zeros(len(self.model.joints)))
+
     def labels(self) -> list[str]:
         """One label per action value."""
         names = [self.model.effector_names[i] for i in self.joints]
@@ -121,14 +128,15 @@ class PDActionMapper:
         self.angle_mid = (lo + hi) / 2.0
         self.angle_half = (hi - lo) / 2.0
         self._names = model.effector_names
-        self._hold = np.zeros(len(model.joints))
+        self._lo, self._hi = model.ranges_deg.T.astype(float)
         self._others = np.setdiff1d(np.arange(len(model.joints)), self.joints)
+        self._held: dict[str, PDCommand] = {}
+        self.start_episode(np.zeros(len(model.joints)))
 
-    def hold_at(self, angles_deg: np.ndarray) -> None:
-        """The angles (deg, model order) at which the joints not controlled are held."""
-        lo, hi = self.model.ranges_deg.T
-        # (a perceived angle can lie a little beyond a limit: MuJoCo's limits are soft)
-        self._hold = np.clip(np.array(angles_deg, dtype=float), lo, hi)
+    def start_episode(self, joint_angles_deg: np.ndarray) -> None:
+        """Hold the joints not controlled at these angles (deg, model order) this episode."""
+        held = self.hold(joint_angles_deg)
+        self._held = {self._names[i]: held[self._names[i]] for i in self._others}
 
     def targets_deg(self, action: np.ndarray) -> np.ndarray:
         """Target angles (deg) of the target-angle modes for ``action``."""
@@ -139,10 +147,7 @@ class PDActionMapper:
         """The PD commands (effector name → :class:`PDCommand`) for a clipped ``action``, every
         joint named (uncontrolled ones held)."""
         names, j = self._names, self.joints
-        out = {
-            names[i]: PDCommand(float(self._hold[i]), 0.0, float(self.kp[i]), float(self.kd[i]))
-            for i in self._others
-        }
+        out = dict(self._held)
         mode = self.mode
         if mode is ActionMode.TORQUE:
             tau = action * self.tau_max[j]
@@ -161,9 +166,9 @@ class PDActionMapper:
 
     def hold(self, angles_deg: np.ndarray):
         """Commands holding every joint at ``angles_deg`` (model order, clipped to the joints'
-        ranges) with default gains."""
-        lo, hi = self.model.ranges_deg.T
-        angles_deg = np.clip(np.asarray(angles_deg, dtype=float), lo, hi)
+        ranges: a perceived angle can lie a little beyond a limit, MuJoCo's limits are soft)
+        with default gains."""
+        angles_deg = np.clip(np.asarray(angles_deg, dtype=float), self._lo, self._hi)
         return {
             n: PDCommand(float(a), 0.0, float(p), float(d))
             for n, a, p, d in zip(self._names, angles_deg, self.kp, self.kd, strict=True)
@@ -172,6 +177,10 @@ class PDActionMapper:
     def agent_command(self, action: np.ndarray, joint_angles_deg: np.ndarray):
         """The :class:`~robocup_gym.types.AgentCommand` for a clipped ``action``."""
         return AgentCommand(joint_pd=self.command(action, joint_angles_deg))
+
+    def stop_command(self, joint_angles_deg: np.ndarray) -> AgentCommand:
+        """The command of the wait cycles after an episode: every joint held where it is."""
+        return AgentCommand(joint_pd=self.hold(joint_angles_deg))
 
     def labels(self) -> list[str]:
         """One label per action value."""

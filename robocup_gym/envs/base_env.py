@@ -51,7 +51,7 @@ from robocup_gym.envs.observations import (
     torso_axes,
 )
 from robocup_gym.sim.physics import CYCLE_S
-from robocup_gym.types import AgentCommand, GroundTruth, Perception
+from robocup_gym.types import GroundTruth, Perception
 
 __all__ = ["BaseEnv", "EpisodeStart"]
 
@@ -290,7 +290,6 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         n_act = self._actions.size
         self.action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
         self.action_labels: list[str] = self._actions.labels()
-        self._zero_command = np.zeros(len(model.joints))
 
         # ---- observations
         ctx = ObservationContext(model, obs_joints, n_act, int(config.max_episode_steps))
@@ -355,7 +354,6 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         )
 
         # ---- per-episode state
-        self._wait_command = AgentCommand(self._zero_command)
         self._obs_noise = float(config.observation_noise_std)
         self._act_noise = float(config.action_noise_std)
         self._last_action = np.zeros(n_act)
@@ -452,8 +450,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self._vision_ball[:] = 0.0
         self._q = np.asarray(p.joint_angles_deg, dtype=float)
         self._qdot = np.zeros_like(self._q)
-        if self.league:
-            self._actions.hold_at(self._q)
+        self._actions.start_episode(self._q)
         self._set_perception(p)
         self._build_frame()
         k = int(self.config.frame_stack)
@@ -491,13 +488,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             self.has_completed = True
             n = int(self.config.wait_steps)
             if n > 0:
-                wait = (
-                    AgentCommand(joint_pd=self._actions.hold(self._q))
-                    if self.league
-                    else self._wait_command
-                )
                 try:
-                    p = self.backend.advance(n, wait)
+                    p = self.backend.advance(n, self._actions.stop_command(self._q))
                 except BackendDivergedError as e:
                     return self._diverged(e, terminated=terminated)
                 self._set_perception(p, cycles=n, episode_over=True)

@@ -33,6 +33,7 @@ __all__ = [
     "LeaguePerception",
     "format_pd_commands",
     "from_simspark_torso_quat",
+    "league_perception",
     "parse_league_perception",
     "to_simspark_torso_quat",
 ]
@@ -200,18 +201,51 @@ def parse_league_perception(
             raise ProtocolError(f"the perception has no HJ for {', '.join(missing)}")
         order = [index[n] for n in joint_names]
         ax, vx, names = ax[order], vx[order], tuple(joint_names)
-    return LeaguePerception(
+    return league_perception(
         time=now,
         game=game,
-        gyro=np.array([-gyro[1], gyro[0], gyro[2]]),
-        accel=np.array([-accel[1], accel[0], accel[2]]),
+        gyro=gyro,
+        accel=accel,
         joint_names=names,
-        joint_angles_deg=ax,
-        joint_velocities_deg_s=vx,
+        q_deg=ax,
+        dq_deg_s=vx,
+        pos=pos,
+        quat=quat,
+        vision=vision,
+        touch=touch,
+    )
+
+
+def league_perception(
+    *,
+    time: float,
+    game: GameState,
+    gyro: Sequence[float],
+    accel: Sequence[float],
+    joint_names: Sequence[str],
+    q_deg: np.ndarray,
+    dq_deg_s: np.ndarray,
+    pos: np.ndarray | None,
+    quat: np.ndarray | None,
+    vision: Vision | None = None,
+    touch: dict[str, bool] | None = None,
+) -> LeaguePerception:
+    """A :class:`LeaguePerception` of the values RCSSServerMJ sends (the gyro, deg/s, and the
+    accelerometer, m/s², in the model's axes: they are turned into SimSpark's torso axes here,
+    ``x_s = −y``, ``y_s = x``); the one place the parser and the in-process world's readings
+    make perceptions."""
+    return LeaguePerception(
+        time=time,
+        game=game,
+        gyro=np.array([-gyro[1], gyro[0], gyro[2]], dtype=float),
+        accel=np.array([-accel[1], accel[0], accel[2]], dtype=float),
+        joint_names=tuple(joint_names),
+        joint_angles_deg=q_deg,
+        joint_velocities_deg_s=dq_deg_s,
         vision=vision,
         raw_torso_pos=pos,
         raw_torso_quat=quat,
-        touch=touch,
+        touch={} if touch is None else touch,
     )
 
 

@@ -19,7 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["LeagueRobot", "RcsssmjUnavailableError", "league_robot", "league_robot_names"]
+__all__ = [
+    "LeagueRobot",
+    "RcsssmjUnavailableError",
+    "clearance",
+    "league_robot",
+    "league_robot_names",
+]
 
 
 class RcsssmjUnavailableError(ImportError):
@@ -238,6 +244,22 @@ def league_robot(name: str) -> LeagueRobot:
     )
 
 
+def clearance(model, data, geoms, planes) -> float:
+    """How far (m) the lowest of the collision geometries ``geoms`` is above the plane
+    geometries ``planes`` (negative: below), by MuJoCo's own geometry distance
+    (``mj_geomDistance``; geometries that collide with nothing are left out)."""
+    import mujoco
+
+    planes = list(planes)
+    fromto = np.zeros(6)
+    best = math.inf
+    for g in geoms:
+        if model.geom_contype[g] or model.geom_conaffinity[g]:
+            for p in planes:
+                best = min(best, mujoco.mj_geomDistance(model, data, g, p, 10.0, fromto))
+    return best
+
+
 def _standing_geometry(spec) -> tuple[float, tuple[str, str], tuple[float, float]]:
     """The robot standing with every joint at 0: torso height (m) with its lowest point on a
     ground plane (MuJoCo's geometry distance), its foot bodies and the right foot's offset."""
@@ -248,12 +270,7 @@ def _standing_geometry(spec) -> tuple[float, tuple[str, str], tuple[float, float
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     plane = model.geom("_ground").id
-    fromto = np.zeros(6)
-    lowest = min(
-        mujoco.mj_geomDistance(model, data, g, plane, 10.0, fromto)
-        for g in range(model.ngeom)
-        if g != plane and (model.geom_contype[g] or model.geom_conaffinity[g])
-    )
+    lowest = clearance(model, data, (g for g in range(model.ngeom) if g != plane), [plane])
     torso = 1  # the root body, child of the world
     names = [model.body(b).name for b in range(model.nbody)]
     left = next((n for n in names if n.lower().startswith("left_foot")), "")

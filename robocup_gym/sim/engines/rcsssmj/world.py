@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robocup_gym.robot.league import RcsssmjUnavailableError, league_robot
+from robocup_gym.robot.league import RcsssmjUnavailableError, clearance, league_robot
 from robocup_gym.types import PDCommand
 
 __all__ = ["CYCLE_S", "LeagueSimulationError", "LeagueWorld", "PDCommand"]
@@ -288,19 +288,13 @@ class LeagueWorld:
         the field's plane."""
         model, data = self.sim.mj_model, self.sim.mj_data
         root = model.body(self.agents[index].root_body_name).id
-        planes = [
-            g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
-        ]
-        fromto = np.zeros(6)
-        best = math.inf
-        for g in range(model.ngeom):
-            if model.body_rootid[model.geom_bodyid[g]] != root or not (
-                model.geom_contype[g] or model.geom_conaffinity[g]
-            ):
-                continue
-            for p in planes:
-                best = min(best, mujoco.mj_geomDistance(model, data, g, p, 10.0, fromto))
-        return best
+        plane = int(mujoco.mjtGeom.mjGEOM_PLANE)
+        return clearance(
+            model,
+            data,
+            (g for g in range(model.ngeom) if model.body_rootid[model.geom_bodyid[g]] == root),
+            (g for g in range(model.ngeom) if model.geom_type[g] == plane),
+        )
 
     # ------------------------------------------------------------------ readings
     def readings(self, index: int) -> dict:
