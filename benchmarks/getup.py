@@ -6,7 +6,11 @@ less than 30°, for 1 s (the task's definition); ``cycles_to_up`` counts the age
 the robot got up for good (the target: ≥ 90 % within 80 cycles; the reference team takes ~66
 from the front and ~55 from the back on rcssserver3d).
 
-``--policy zero`` runs a zero-action policy (a baseline that never gets up, and a smoke test).
+``zero`` runs a zero-action policy (a baseline that never gets up, and a smoke test);
+``pretrained:get-up`` the policy shipped with the package. The environment is deterministic: with
+one lying pose per side every episode of a side repeats the first. ``--lying-poses 8`` starts
+each episode from one of 8 drops per side (tilt and joints varied ±10°), which measures how
+well a policy copes with other ways of lying; ``--robot-type N`` another Nao type.
 Prints one line per side and, as the last line, one JSON object (``success_rate``,
 ``cycles_to_up_median``, per side the same).
 
@@ -44,7 +48,11 @@ def run(env, act, side: str, episodes: int, seed: int, within: int) -> dict:
 
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("policy", help="a GetUp run folder, or 'zero' (a zero-action baseline)")
+    parser.add_argument(
+        "policy",
+        help="a GetUp run folder, 'pretrained:get-up' (the shipped policy) or 'zero' (a "
+        "zero-action baseline)",
+    )
     parser.add_argument("--episodes", type=int, default=20)
     parser.add_argument("--seed", type=int, default=100_000)
     parser.add_argument("--within", type=int, default=80, help="cycles that count as success")
@@ -54,11 +62,26 @@ def main(argv: list[str] | None = None) -> dict:
         default=None,
         help="default: the run's own (ode for 'zero')",
     )
+    parser.add_argument(
+        "--lying-poses",
+        type=int,
+        default=None,
+        help="start from this many lying poses per side, drawn per episode (GetUpConfig."
+        "lying_poses; default: the run's own, 1 = the one drop pose)",
+    )
+    parser.add_argument(
+        "--robot-type", type=int, default=None, help="Nao type 0-4 (default: the run's own)"
+    )
     args = parser.parse_args(argv)
     from robocup_gym.train.evaluate import policy_and_env
 
-    env, act = policy_and_env(args.policy, "RobocupGym/GetUp-v0", args.engine)
-    out: dict = {"policy": args.policy, "within_cycles": args.within}
+    overrides = {}
+    if args.lying_poses is not None:
+        overrides["lying_poses"] = args.lying_poses
+    if args.robot_type is not None:
+        overrides["robot_type"] = args.robot_type
+    env, act = policy_and_env(args.policy, "RobocupGym/GetUp-v0", args.engine, overrides)
+    out: dict = {"policy": args.policy, "within_cycles": args.within, **overrides}
     try:
         for side in ("front", "back"):
             res = run(env, act, side, args.episodes, args.seed, args.within)

@@ -35,6 +35,23 @@ def _console():
     return Console(soft_wrap=True)
 
 
+def _click():
+    """``(exceptions, globals)`` of the click that typer runs on (typer >= 0.20 carries its
+    own copy)."""
+    try:
+        from typer._click import exceptions, globals
+    except ImportError:  # pragma: no cover - older typer with the click package
+        from click import exceptions, globals
+    return exceptions, globals
+
+
+def _usage_error(message: str) -> Exception:
+    """A usage error of the running command (exit status 2, one line naming its ``--help``),
+    as click's own."""
+    exceptions, globals_ = _click()
+    return exceptions.UsageError(message, ctx=globals_.get_current_context(silent=True))
+
+
 def _fail(message: str, code: int = 1):
     from rich.console import Console
 
@@ -180,6 +197,34 @@ if typer is not None:
                 file_okay=False,
             ),
         ] = None,
+        assist_force: Annotated[
+            float | None,
+            typer.Option(
+                "--assist-force",
+                help="Push the robot's torso up while it trains, as a share of its weight "
+                "(e.g. 0.8 for get-up), fading to 0 over --assist-steps; evaluations never push.",
+            ),
+        ] = None,
+        assist_steps: Annotated[
+            int | None,
+            typer.Option("--assist-steps", help="Training steps over which --assist-force fades."),
+        ] = None,
+        assist_schedule: Annotated[
+            str | None,
+            typer.Option(
+                "--assist-schedule",
+                help="linear (over --assist-steps) or success (down with each success of the "
+                "task, e.g. get-up).",
+            ),
+        ] = None,
+        assist_max_tilt: Annotated[
+            float | None,
+            typer.Option(
+                "--assist-max-tilt",
+                help="Push only while the torso is inclined less than this, deg (default 180: "
+                "always; 60: the robot sits up by itself first).",
+            ),
+        ] = None,
         progress: Annotated[bool, typer.Option(help="Show the progress bar.")] = True,
     ) -> None:
         """Train a policy with Stable-Baselines3 (defaults: the paper's PPO setup).
@@ -193,10 +238,18 @@ if typer is not None:
         console = _console()
         try:
             if resume is not None:
-                if task is not None or config is not None or init_from is not None:
+                if (
+                    task is not None
+                    or config is not None
+                    or init_from is not None
+                    or assist_force is not None
+                    or assist_steps is not None
+                    or assist_max_tilt is not None
+                    or assist_schedule is not None
+                ):
                     _fail(
                         "--resume continues a run with its own config; "
-                        "give no TASK/--config/--init-from"
+                        "give no TASK/--config/--init-from/--assist-*"
                     )
                 result = run_training(
                     resume=resume, extra_timesteps=timesteps, console=console, progress=progress
@@ -222,6 +275,10 @@ if typer is not None:
                     env_kwargs=env_kw,
                     algo_kwargs=algo_kw,
                     init_from=None if init_from is None else str(init_from),
+                    assist_force=assist_force,
+                    assist_steps=assist_steps,
+                    assist_max_tilt_deg=assist_max_tilt,
+                    assist_schedule=assist_schedule,
                 )
                 result = run_training(cfg, out=out, console=console, progress=progress)
         except (ValueError, FileNotFoundError, RuntimeError, OSError) as exc:
@@ -232,7 +289,18 @@ if typer is not None:
     # ------------------------------------------------------------------------------ eval
     @app.command("eval")
     def eval_(
-        run: Annotated[Path, typer.Argument(help="Run folder.", exists=True, file_okay=False)],
+        run: Annotated[
+            Path | None,
+            typer.Argument(help="Run folder (or --pretrained).", exists=True, file_okay=False),
+        ] = None,
+        pretrained: Annotated[
+            str | None,
+            typer.Option(
+                "--pretrained",
+                help="Evaluate a policy shipped with the package instead of a run (e.g. get-up; "
+                "`robocup-gym tasks` lists them).",
+            ),
+        ] = None,
         episodes: Annotated[int, typer.Option(help="Episodes to run (>= 1).")] = 10,
         video: Annotated[
             Path | None,
@@ -261,13 +329,26 @@ if typer is not None:
             ),
         ] = None,
     ) -> None:
-        """Evaluate a run deterministically; the last line of output is one JSON object."""
+        """Evaluate a run (or a shipped policy) deterministically; the last line of output is one
+        JSON object."""
         from rich.table import Table
 
         from robocup_gym.train.evaluate import check_renderer, ensure_gl_backend, evaluate_run
 
         _single_thread_torch()
         console = _console()
+        if run is None and pretrained is None:
+            raise _usage_error("Missing argument 'run' (a run folder, or --pretrained NAME)")
+        if run is not None and pretrained is not None:
+            _fail("give a run folder or --pretrained NAME, not both")
+        if pretrained is not None:
+            if video is not None or checkpoint is not None or not deterministic:
+                _fail(
+                    "--pretrained evaluates the shipped ONNX policy: no --video/--checkpoint/"
+                    "--no-deterministic"
+                )
+            _eval_pretrained(console, pretrained, episodes, seed, _backend(backend, engine))
+            return
         try:
             if video is not None:
                 ensure_gl_backend()
@@ -321,6 +402,32 @@ if typer is not None:
             console.print(f"written: {summary['written']}")
         print(json.dumps(summary), flush=True)
 
+    def _eval_pretrained(console, name: str, episodes: int, seed: int, backend) -> None:
+        from robocup_gym.train.pretrained import evaluate_pretrained
+
+        try:
+            with console.status(f"evaluating the shipped policy {name} ({episodes} episodes)…"):
+                summary = evaluate_pretrained(name, episodes=episodes, seed=seed, backend=backend)
+        except (ValueError, FileNotFoundError, RuntimeError) as exc:
+            _fail(str(exc))
+        keys = (
+            ("return_mean", "episode return"),
+            ("fall_rate", "fall rate"),
+            ("length_mean", "episode length (steps)"),
+            ("success_rate", "success rate"),
+            ("forward_speed_mps_mean", "forward speed (m/s)"),
+            ("forward_error_mps_mean", "forward tracking error (m/s)"),
+            ("ball_dx_mean", "ball x-displacement (m)"),
+        )
+        console.print(
+            f"[bold]{summary['pretrained']}[/bold] ({summary['env_id']}) · {summary['backend']}"
+            f" · {summary['episodes']} episodes"
+        )
+        for key, label in keys:
+            if summary.get(key) is not None:
+                console.print(f"  {label}: {summary[key]:.3f}")
+        print(json.dumps(summary), flush=True)
+
     # ------------------------------------------------------------------------------ export
     @app.command()
     def export(
@@ -364,7 +471,16 @@ if typer is not None:
     # ------------------------------------------------------------------------------ agent
     @app.command()
     def agent(
-        onnx: Annotated[Path, typer.Argument(help="Exported policy (.onnx).", exists=True)],
+        onnx: Annotated[
+            Path | None,
+            typer.Argument(help="Exported policy (.onnx), or --pretrained.", exists=True),
+        ] = None,
+        pretrained: Annotated[
+            str | None,
+            typer.Option(
+                "--pretrained", help="Run a policy shipped with the package (e.g. get-up)."
+            ),
+        ] = None,
         host: Annotated[str, typer.Option(help="Server address.")] = "127.0.0.1",
         port: Annotated[int, typer.Option(help="Agent port.")] = 3100,
         monitor_port: Annotated[
@@ -392,6 +508,17 @@ if typer is not None:
         from robocup_gym.train.agent import run_onnx_agent
 
         console = _console()
+        if onnx is None and pretrained is None:
+            raise _usage_error("Missing argument 'onnx' (an exported policy, or --pretrained)")
+        if onnx is not None and pretrained is not None:
+            _fail("give an exported policy (.onnx) or --pretrained NAME, not both")
+        if pretrained is not None:
+            from robocup_gym.train.pretrained import pretrained_path
+
+            try:
+                onnx = pretrained_path(pretrained)
+            except ValueError as exc:
+                _fail(str(exc))
 
         def report(rep) -> None:
             d = rep.ball_displacement
@@ -445,6 +572,10 @@ if typer is not None:
         except RcsssmjUnavailableError:
             league = "not installed (pip install 'robocup-gym[mj]')"
         print(f"\nrobots: the Nao, types 0-4 (--env robot_type=N); the league's: {league}")
+        from robocup_gym.train.pretrained import pretrained_names
+
+        shipped = ", ".join(pretrained_names()) or "none yet"
+        print(f"pretrained policies (eval/agent --pretrained NAME): {shipped}")
 
     # ------------------------------------------------------------------------------ experiments
     @experiments_app.command("paper")
@@ -533,10 +664,7 @@ def main(argv: list[str] | None = None) -> None:
     """Entry point of the ``robocup-gym`` script. Usage errors (an unknown command or option, a
     value of the wrong type, a missing argument) are one line on stderr, exit status 2."""
     _require_typer()
-    try:  # typer >= 0.20 carries its own copy of click
-        from typer._click import exceptions as cx
-    except ImportError:  # pragma: no cover - older typer with the click package
-        import click.exceptions as cx
+    cx = _click()[0]
 
     try:
         code = app(args=argv, standalone_mode=False)

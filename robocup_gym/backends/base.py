@@ -173,6 +173,20 @@ class Backend(abc.ABC):
             p = self.step(AgentCommand())
         return p
 
+    def set_torso_force(self, force: Sequence[float]) -> None:
+        """Push the learning robot's torso with ``force`` (N, world frame) in every cycle until
+        it is changed; ``(0, 0, 0)`` ends it. A training aid of the in-process engines
+        (``TrainConfig.assist_force``); no server has such a force.
+
+        Raises:
+            BackendNotAvailableError: this backend cannot push a robot.
+        """
+        raise BackendNotAvailableError(
+            f"the {self.name!r} backend cannot push the robot (an assist force exists only in "
+            "the in-process engines 'ode', 'mujoco' and 'rcsssmj'); train with assist_force=0 "
+            "here"
+        )
+
     # ------------------------------------------------------------------ misc
     def render(self, width: int = 480, height: int = 360) -> np.ndarray:
         """An RGB image ``(height, width, 3)`` of the scene, if the backend can draw one."""

@@ -363,6 +363,9 @@ class LeagueBackend(Backend):
         return touching
 
     # ------------------------------------------------------------------ misc
+    def set_torso_force(self, force: Sequence[float]) -> None:
+        self.world.set_torso_force(0, force)
+
     def render(self, width: int = 480, height: int = 360) -> np.ndarray:
         """RGB image of the scene from a camera that follows the robot, drawn by MuJoCo from
         the league world's own model (needs an OpenGL context, e.g. ``MUJOCO_GL=egl``)."""

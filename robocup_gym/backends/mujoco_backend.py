@@ -108,6 +108,9 @@ class MujocoBackend(Backend):
             raise BackendDivergedError(str(e)) from e
         return w.perceive(0, vision=None if self.vision else False)
 
+    def set_torso_force(self, force: Sequence[float]) -> None:
+        self.world.set_torso_force(0, force)
+
     # ------------------------------------------------------------------ misc
     def scene_world(self):
         """The MuJoCo world itself (what videos draw)."""

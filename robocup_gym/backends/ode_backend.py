@@ -131,6 +131,9 @@ class OdeBackend(Backend):
             )
         return p
 
+    def set_torso_force(self, force: Sequence[float]) -> None:
+        self.world.set_torso_force(0, force)
+
     # ------------------------------------------------------------------ misc
     def scene_world(self):
         """A MuJoCo world posed like this one, for drawing (videos, :meth:`render`)."""

@@ -21,9 +21,20 @@ class ActionMapper:
         joints: Canonical indices of the controlled joints, in action order.
         mode: The action mode.
         gain: Proportional gain (1/s) of the target-angle modes.
+        mirror: One action value per left/right pair of controlled joints: the right joint does
+            the mirror image of the left one (:attr:`NaoModel.mirror_pairs`), so the robot moves
+            symmetrically and the action has fewer values (``velocity`` and ``target_angle``
+            modes).
     """
 
-    def __init__(self, model: NaoModel, joints: np.ndarray, mode: ActionMode, gain: float):
+    def __init__(
+        self,
+        model: NaoModel,
+        joints: np.ndarray,
+        mode: ActionMode,
+        gain: float,
+        mirror: bool = False,
+    ):
         self.model = model
         self.joints = np.asarray(joints, dtype=int)
         self.mode = ActionMode(mode)
@@ -31,21 +42,51 @@ class ActionMapper:
         n = len(self.joints)
         self.n_joints = n
         self.size = 2 * n if self.mode is ActionMode.TARGET_ANGLE_MAX_SPEED else n
+        self._free: np.ndarray | None = None
+        if mirror:
+            if self.mode is ActionMode.TARGET_ANGLE_MAX_SPEED:
+                raise ValueError(
+                    "mirrored actions work with the 'velocity' and 'target_angle' action modes"
+                )
+            where = {int(j): k for k, j in enumerate(self.joints)}
+            pairs = [
+                (where[i], where[r], sign)
+                for i, r, sign in model.mirror_pairs
+                if i in where and r in where
+            ]
+            derived = {r for _, r, _ in pairs}
+            self._free = np.array([k for k in range(n) if k not in derived], dtype=int)
+            self._mirror_right = np.array([r for _, r, _ in pairs], dtype=int)
+            self._mirror_left = np.array([left for left, _, _ in pairs], dtype=int)
+            self._mirror_sign = np.array([sign for _, _, sign in pairs])
+            self.size = len(self._free)
+            self._full = np.zeros(n)
         self.max_speed = model.max_speeds[self.joints].astype(float)
         lo, hi = model.ranges_deg[self.joints].T.astype(float)
         self.angle_mid = (lo + hi) / 2.0
         self.angle_half = (hi - lo) / 2.0
         self._command = np.zeros(len(model.joints))
 
+    def expand(self, action: np.ndarray) -> np.ndarray:
+        """The action over every controlled joint (with mirrored actions: the right joints'
+        values made from their left partners'; otherwise ``action`` itself)."""
+        if self._free is None:
+            return action
+        full = self._full.copy()
+        full[self._free] = action
+        full[self._mirror_right] = self._mirror_sign * full[self._mirror_left]
+        return full
+
     def targets_deg(self, action: np.ndarray) -> np.ndarray:
         """Target angles (deg) of the target-angle modes for ``action``."""
-        a = action[0::2] if self.mode is ActionMode.TARGET_ANGLE_MAX_SPEED else action
+        a = action[0::2] if self.mode is ActionMode.TARGET_ANGLE_MAX_SPEED else self.expand(action)
         return self.angle_mid + a * self.angle_half
 
     def velocities(self, action: np.ndarray, joint_angles_deg: np.ndarray) -> np.ndarray:
         """Velocities (rad/s) of the controlled joints for a clipped ``action`` given the current
         angles (deg, canonical order)."""
         mode = self.mode
+        action = self.expand(action)
         if mode is ActionMode.VELOCITY:
             return action * self.max_speed
         if mode is ActionMode.TARGET_ANGLE:
@@ -77,6 +118,10 @@ class ActionMapper:
     def labels(self) -> list[str]:
         """One label per action value."""
         names = [self.model.effector_names[i] for i in self.joints]
+        if self._free is not None:
+            for left, right in zip(self._mirror_left, self._mirror_right, strict=True):
+                names[left] = f"{names[left]}+{names[right]}"
+            return [names[k] for k in self._free]
         if self.mode is ActionMode.TARGET_ANGLE_MAX_SPEED:
             return [f"{n}/{part}" for n in names for part in ("angle", "speed")]
         return list(names)

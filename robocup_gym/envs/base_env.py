@@ -286,7 +286,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                 model, ctrl, config.action_mode, config.pd_saturation_deg, config.pd_damping_s
             )
         else:
-            self._actions = ActionMapper(model, ctrl, config.action_mode, config.target_gain)
+            self._actions = ActionMapper(
+                model, ctrl, config.action_mode, config.target_gain, bool(config.mirror_actions)
+            )
         n_act = self._actions.size
         self.action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
         self.action_labels: list[str] = self._actions.labels()

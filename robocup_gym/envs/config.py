@@ -253,6 +253,12 @@ class EnvConfig:
     """Proportional gain of the target-angle modes, 1/s: velocity = gain × angle error. 12.5 is
     critically damped with SimSpark's one-cycle dead time (the error halves every cycle);
     the paper used 1.0."""
+    mirror_actions: bool = False
+    """One action value per left/right pair of controlled joints (the Nao: 12 values instead of
+    22): the right joint does the mirror image of the left one across the sagittal plane, the
+    sign taken from the joints' axes, so the robot moves symmetrically. For symmetric skills
+    (getting up) it halves what the policy has to explore. ``velocity`` and ``target_angle``
+    modes, the Nao only."""
     action_noise_std: float = 0.0
     """σ of Gaussian noise added to the action (in [-1, 1] units, before scaling; the noisy
     action is clipped to [-1, 1])."""
@@ -450,6 +456,13 @@ class EnvConfig:
             raise EnvConfigError(
                 f"action_mode {self.action_mode.value!r} is for the league's robots (PD joints); "
                 "the Nao's: 'velocity', 'target_angle', 'target_angle_max_speed'"
+            )
+        if self.mirror_actions and (
+            league or self.action_mode is ActionMode.TARGET_ANGLE_MAX_SPEED
+        ):
+            raise EnvConfigError(
+                "mirror_actions works on the Nao with action_mode 'velocity' or 'target_angle', "
+                f"not on robot {self.robot!r} with {self.action_mode.value!r}"
             )
         if self.joint_start_deg is not None:
             angles = resolve_angles(model, self.joint_start_deg, "joint_start_deg")

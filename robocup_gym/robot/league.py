@@ -95,6 +95,8 @@ class LeagueRobot:
     """Right foot body's (forward, left) offset from the torso, m, all joints at 0."""
     ball_radius: float = 0.11
     """Radius of the league's ball, m (from ``rcsssmj``'s soccer world model)."""
+    total_mass: float = 0.0
+    """Sum of the model's body masses, kg."""
     joint_index: dict[str, int] = field(default_factory=dict, compare=False)
     """Joint index (model order) by effector (``lle4``), perceptor (``q_llj4``) or model
     (``Left_Knee_Pitch``) name."""
@@ -241,6 +243,7 @@ def league_robot(name: str) -> LeagueRobot:
         foot_bodies=feet,
         right_foot_offset=right,
         ball_radius=_ball_radius(),
+        total_mass=float(model.body_mass.sum()),
     )
 
 

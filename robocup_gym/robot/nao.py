@@ -128,6 +128,34 @@ class NaoModel:
         return np.array([j.max_speed for j in self.joints])
 
     @cached_property
+    def mirror_pairs(self) -> tuple[tuple[int, int, float], ...]:
+        """``(left index, right index, sign)`` for every left/right joint pair (``lae1``/
+        ``rae1``, …), canonical indices: the right joint's angle that mirrors the left one's
+        angle θ across the robot's sagittal plane (x ↦ −x, torso frame) is ``sign · θ``.
+
+        A rotation by θ about axis ``a`` reflected by ``M = diag(−1, 1, 1)`` is a rotation by
+        −θ about ``M a``; so ``sign = −a_right · M a_left`` (±1 for the Nao's joints), and the
+        right joint's range is the left one's times ``sign`` (checked)."""
+        index = {j.effector: i for i, j in enumerate(self.joints)}
+        out = []
+        for i, j in enumerate(self.joints):
+            if not j.effector.startswith("l"):
+                continue
+            k = index.get("r" + j.effector[1:])
+            if k is None:
+                continue
+            right = self.joints[k]
+            a_left = np.array(j.axis, dtype=float) * (-1.0, 1.0, 1.0)
+            sign = float(np.round(-np.dot(np.array(right.axis, dtype=float), a_left), 6))
+            if abs(abs(sign) - 1.0) > 1e-6:
+                raise ValueError(f"{j.effector}/{right.effector}: axes are not mirror images")
+            lo, hi = sorted((sign * j.min_deg, sign * j.max_deg))
+            if abs(lo - right.min_deg) > 1e-6 or abs(hi - right.max_deg) > 1e-6:
+                raise ValueError(f"{j.effector}/{right.effector}: ranges are not mirror images")
+            out.append((i, k, sign))
+        return tuple(out)
+
+    @cached_property
     def ranges_deg(self) -> np.ndarray:
         """Joint limits in canonical order, shape (n, 2), degrees."""
         return np.array([(j.min_deg, j.max_deg) for j in self.joints])

@@ -10,7 +10,10 @@ forces and the accelerometer sample are applied once per cycle, as in SimSpark (
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 CYCLE_S = 0.02
 """One agent cycle = one SimSpark physics step, s."""
@@ -60,6 +63,22 @@ BALL_BOUNCE_MIN_SPEED = 0.8
 
 MAX_IMPEDANCE = 0.9999
 """MuJoCo's largest constraint impedance (``mjMAXIMP``): the hardest row it allows."""
+
+
+def finite_force(force: Sequence[float]) -> tuple[float, float, float]:
+    """``force`` (N, world x, y, z) as three finite floats, for the worlds'
+    ``set_torso_force``.
+
+    Raises:
+        ValueError: it is not three finite numbers.
+    """
+    try:
+        f = np.asarray(force, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        f = np.zeros(0)
+    if f.shape != (3,) or not np.isfinite(f).all():
+        raise ValueError(f"a force is three finite numbers (N, world x, y, z), got {force!r}")
+    return (float(f[0]), float(f[1]), float(f[2]))
 
 
 def ode_impedance(cfm: float, inv_weight: float, h: float = CYCLE_S) -> float:

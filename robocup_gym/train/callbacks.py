@@ -113,6 +113,9 @@ class EpisodeStatsCallback(BaseCallback):
         for key in ("ball_dx_mean", "ball_distance_mean", "fall_rate"):
             if s[key] is not None:
                 self.logger.record(f"kick/{key}", s[key])
+        for key in ("success_rate", "assist_share_mean"):  # GetUp; a run with an assist
+            if s.get(key) is not None:
+                self.logger.record(f"train/{key}", s[key])
         if self.num_timesteps - self._last_row_steps >= self.curve_every:
             self.write_row()
 

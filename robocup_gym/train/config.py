@@ -123,6 +123,21 @@ class TrainConfig:
     the environment workers keep the other cores busy. With any other value, torch runs on one
     thread while the workers step and on ``torch_threads`` for the gradient steps (0 = one per core;
     measured on the 2-core machine: gradient steps ~20 % faster, a whole run within the noise)."""
+    assist_force: float = 0.0
+    """An upward push on the learning robot's torso while it trains, as a share of its weight
+    (0 = none, the default), falling linearly to 0 over :attr:`assist_steps`: HoST's
+    pulling-force curriculum, which lets a get-up policy meet standing before it can stand alone
+    (:class:`robocup_gym.envs.assist.TorsoAssist`). In-process engines only; evaluations never
+    have it."""
+    assist_steps: int = 0
+    """Training steps (all environments together) over which :attr:`assist_force` fades out."""
+    assist_schedule: str = "linear"
+    """How :attr:`assist_force` fades: ``linear`` over :attr:`assist_steps`, or ``success``: down
+    2 % with each successful episode of an environment and up 0.5 % with each failed one (tasks
+    that report ``info["success"]``, such as GetUp; :attr:`assist_steps` unused)."""
+    assist_max_tilt_deg: float = 180.0
+    """Push only while the torso is inclined less than this from the vertical (180: always);
+    e.g. 60 makes the robot sit or kneel up by itself before the push helps."""
     vec_env: str = "auto"
     """``auto`` (subprocesses when n_envs > 1), ``subproc`` or ``dummy``."""
     n_workers: int = 0
@@ -153,6 +168,35 @@ class TrainConfig:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
         if not self.checkpoint_every_s >= 0:  # also refuses NaN
             raise ValueError(f"checkpoint_every_s must be >= 0, got {self.checkpoint_every_s}")
+        if not (0.0 <= self.assist_force <= 2.0):  # also refuses NaN
+            raise ValueError(
+                f"assist_force is a share of the robot's weight, 0 to 2; got {self.assist_force}"
+            )
+        from robocup_gym.envs.assist import SCHEDULES
+
+        if self.assist_schedule not in SCHEDULES:
+            raise ValueError(
+                f"assist_schedule must be one of {', '.join(SCHEDULES)}, got "
+                f"{self.assist_schedule!r}"
+            )
+        if self.assist_force > 0.0:
+            if self.assist_schedule == "linear" and int(self.assist_steps) < 1:
+                raise ValueError(
+                    "assist_force needs assist_steps >= 1: the training steps over which the "
+                    "push fades out"
+                )
+            if self.backend not in ("ode", "mujoco", "rcsssmj"):
+                raise ValueError(
+                    f"assist_force pushes the robot in-process; the {self.backend!r} backend "
+                    "cannot (use the ode or mujoco engine, rcsssmj for a league robot, or "
+                    "assist_force 0)"
+                )
+            if not (0.0 < self.assist_max_tilt_deg <= 180.0):
+                raise ValueError(
+                    f"assist_max_tilt_deg must be within 0 and 180, got {self.assist_max_tilt_deg}"
+                )
+        elif int(self.assist_steps) < 0:
+            raise ValueError(f"assist_steps must be >= 0, got {self.assist_steps}")
         if self.vec_env not in ("auto", "subproc", "dummy"):
             raise ValueError(f"vec_env must be auto, subproc or dummy, got {self.vec_env!r}")
 

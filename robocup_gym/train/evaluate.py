@@ -57,23 +57,44 @@ def run_episodes(
     return records
 
 
-def policy_and_env(policy: str, env_id: str, engine: str | None = None):
+def policy_and_env(
+    policy: str,
+    env_id: str,
+    engine: str | None = None,
+    env_overrides: dict[str, Any] | None = None,
+):
     """``(env, act)`` for a benchmark: ``policy`` is a run folder (its task's environment with
     its options, on ``engine`` or the run's own simulator; ``act(obs)`` its deterministic
-    action, observation statistics applied) or ``"zero"`` (``env_id`` on ``engine``, default
-    the default engine, and an action of zeros: a baseline)."""
+    action, observation statistics applied), ``"pretrained:NAME"`` (a shipped policy, on its
+    own options) or ``"zero"`` (``env_id`` on ``engine``, default the default engine, and an
+    action of zeros: a baseline). ``env_overrides`` replace some of the environment's options
+    (a benchmark's harder starts, say)."""
     from robocup_gym.train.run import load_model, load_run
     from robocup_gym.train.tasks import make_env
 
+    extra = dict(env_overrides or {})
     if policy == "zero":
-        env = make_env(env_id, backend=engine or DEFAULT_ENGINE)
+        env = make_env(env_id, backend=engine or DEFAULT_ENGINE, env_kwargs=extra)
         zeros = np.zeros(env.action_space.shape)
         return env, lambda obs: zeros
+    if policy.startswith("pretrained:"):
+        from robocup_gym.train.pretrained import pretrained_policy
+
+        onnx = pretrained_policy(policy.split(":", 1)[1])
+        meta = onnx.metadata
+        env = make_env(
+            meta["env_id"],
+            backend=engine or meta.get("backend") or DEFAULT_ENGINE,
+            env_kwargs={**(meta.get("env_kwargs") or {}), **extra},
+        )
+        return env, onnx
     info = load_run(policy)
     model = load_model(info)
     normalize = info.obs_normalizer()
     cfg = info.config
-    env = make_env(cfg.env_id, backend=engine or cfg.backend, env_kwargs=cfg.env_kwargs)
+    env = make_env(
+        cfg.env_id, backend=engine or cfg.backend, env_kwargs={**cfg.env_kwargs, **extra}
+    )
 
     def act(obs):
         o = normalize(obs) if normalize is not None else obs

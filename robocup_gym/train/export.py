@@ -241,6 +241,7 @@ def export_onnx(
         },
         "obs_normalization_in_graph": obs_stats is not None,
         "verification": {"samples": len(obs), "max_abs_diff": max_diff, "atol": atol},
+        "training": _training_description(info),
         **_env_description(info),
     }
     model_proto = onnx.load(str(onnx_path))
@@ -251,6 +252,33 @@ def export_onnx(
     onnx.save(model_proto, str(onnx_path))
     onnx_path.with_suffix(".json").write_text(_compact_json(meta) + "\n")
     return meta
+
+
+def _training_description(info: RunInfo) -> dict[str, Any]:
+    """How the run was trained (enough to train it again with the CLI): seed, environments,
+    hyperparameters, the assist, and the wall-clock time of its learning curve."""
+    cfg = info.config
+    out: dict[str, Any] = {
+        "seed": cfg.seed,
+        "n_envs": cfg.n_envs,
+        "timesteps": cfg.timesteps,
+        "algo_kwargs": cfg.resolved_algo_kwargs(),
+    }
+    if cfg.assist_force > 0.0:
+        out["assist"] = {
+            "force_share": cfg.assist_force,
+            "steps": cfg.assist_steps,
+            "max_tilt_deg": cfg.assist_max_tilt_deg,
+            "schedule": cfg.assist_schedule,
+        }
+    curve = info.path / "progress.csv"
+    if curve.exists():
+        rows = curve.read_text().splitlines()
+        if len(rows) > 1:
+            head, last = rows[0].split(","), rows[-1].split(",")
+            if "wall_s" in head:
+                out["wall_s"] = float(last[head.index("wall_s")])
+    return out
 
 
 def _compact_json(data: Any) -> str:

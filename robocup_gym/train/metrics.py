@@ -87,6 +87,9 @@ def episode_record(info: Mapping[str, Any], ep_return: float, ep_length: int) ->
     success = _first(info, ("success",))  # GetUp
     if success is not None:
         rec["success"] = 1.0 if success else 0.0
+    assist = _first(info, ("assist_share",))  # a training run's TorsoAssist
+    if assist is not None:
+        rec["assist_share"] = float(assist)
     for key in ("forward_speed_mps", "forward_error_mps"):  # Walk
         v = _first(info, (key,))
         if v is not None:
@@ -126,4 +129,5 @@ def summarize(records: Iterable[Mapping[str, float]]) -> dict[str, float | int |
         "success_rate": stats("success")[0],
         "forward_speed_mps_mean": stats("forward_speed_mps")[0],
         "forward_error_mps_mean": stats("forward_error_mps")[0],
+        "assist_share_mean": stats("assist_share")[0],
     }

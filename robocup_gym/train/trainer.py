@@ -345,6 +345,15 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
             kind=cfg.vec_env,
             start_method=cfg.start_method,
             n_workers=cfg.n_workers,
+            assist={
+                "share": cfg.assist_force,
+                "decay_steps": cfg.assist_steps,
+                "start_step": _steps_done(start_from),
+                "max_tilt_deg": cfg.assist_max_tilt_deg,
+                "schedule": cfg.assist_schedule,
+            }
+            if cfg.assist_force > 0.0
+            else None,
         )
         try:
             if cfg.normalize_obs:
@@ -382,6 +391,18 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
                 venv.close()  # the environment workers go with the refused run
             raise
     return model, venv
+
+
+def _steps_done(model_zip: Path | None) -> int:
+    """The training steps a saved SB3 model has behind it (0 for none): its ``num_timesteps``,
+    read from the zip's ``data`` without loading the policy."""
+    if model_zip is None:
+        return 0
+    import json
+    import zipfile
+
+    with zipfile.ZipFile(model_zip) as z:
+        return int(json.loads(z.read("data")).get("num_timesteps", 0))
 
 
 def _n_ckpt(path: Path) -> int:

@@ -29,15 +29,25 @@ class _EnvFactory:
     """Picklable constructor of one seeded environment (for subprocess workers)."""
 
     def __init__(
-        self, env_id: str, backend: str, env_kwargs: dict[str, Any], seed: int | None
+        self,
+        env_id: str,
+        backend: str,
+        env_kwargs: dict[str, Any],
+        seed: int | None,
+        assist: dict[str, Any] | None = None,
     ) -> None:
         self.env_id = env_id
         self.backend = backend
         self.env_kwargs = dict(env_kwargs)
         self.seed = seed
+        self.assist = assist
 
     def __call__(self) -> gym.Env:
         env = make_env(self.env_id, backend=self.backend, env_kwargs=self.env_kwargs)
+        if self.assist is not None:
+            from robocup_gym.envs.assist import TorsoAssist
+
+            env = TorsoAssist(env, **self.assist)
         if self.seed is not None:
             env.reset(seed=self.seed)
             env.action_space.seed(self.seed)
@@ -51,10 +61,19 @@ def env_factories(
     backend: str = DEFAULT_ENGINE,
     env_kwargs: dict[str, Any] | None = None,
     seed: int | None = 0,
+    assist: dict[str, Any] | None = None,
 ) -> list[Callable[[], gym.Env]]:
-    """``n_envs`` constructors, environment ``i`` seeded with ``seed + i``."""
+    """``n_envs`` constructors, environment ``i`` seeded with ``seed + i``. ``assist``: the
+    keyword arguments of a :class:`~robocup_gym.envs.assist.TorsoAssist` around each
+    environment, with ``decay_steps`` and ``start_step`` counted over all environments together
+    (each gets its part), or ``None``."""
+    per_env = None
+    if assist is not None and assist.get("share", 0.0) > 0.0:
+        per_env = dict(assist)
+        per_env["decay_steps"] = max(1, round(assist.get("decay_steps", 0) / n_envs))
+        per_env["start_step"] = round(assist.get("start_step", 0) / n_envs)
     return [
-        _EnvFactory(env_id, backend, env_kwargs or {}, None if seed is None else seed + i)
+        _EnvFactory(env_id, backend, env_kwargs or {}, None if seed is None else seed + i, per_env)
         for i in range(n_envs)
     ]
 
@@ -75,17 +94,20 @@ def make_vec_env(
     kind: str = "auto",
     start_method: str = "",
     n_workers: int = 0,
+    assist: dict[str, Any] | None = None,
 ):
     """A vectorised environment of the task.
 
     ``kind``: ``"dummy"`` (all in this process), ``"subproc"`` (worker processes) or ``"auto"``
     (dummy for one environment, else subprocesses). ``n_workers`` (0 = one per CPU core, capped at
     ``n_envs``) is the number of worker processes. Every environment is wrapped in SB3's
-    ``Monitor`` (episode return/length for the logs).
+    ``Monitor`` (episode return/length for the logs). ``assist``: see :func:`env_factories`.
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    factories = env_factories(env_id, n_envs, backend=backend, env_kwargs=env_kwargs, seed=seed)
+    factories = env_factories(
+        env_id, n_envs, backend=backend, env_kwargs=env_kwargs, seed=seed, assist=assist
+    )
     wrapped = [_Monitored(f) for f in factories]
     if kind == "dummy" or (kind == "auto" and n_envs == 1):
         return DummyVecEnv(wrapped)

@@ -144,3 +144,54 @@ def test_action_noise_perturbs_the_command(make_env):
     for _ in range(5):
         env.step(np.zeros(2, dtype=np.float32))
     assert np.max(np.abs(_angles(env))) > 1.0  # a zero action alone would hold the arms at 0
+
+
+def test_mirror_pairs_come_from_the_joint_axes():
+    """A reflection across the sagittal plane turns a rotation about ``a`` by θ into one about
+    ``M a`` by −θ: pitch joints (axis x) keep their sign, roll/yaw joints flip it; the right
+    joint's range is then the left one's, mirrored."""
+    from robocup_gym.robot.nao import nao_model
+
+    for t in range(5):
+        m = nao_model(t)
+        signs = {m.joints[i].effector: s for i, _, s in m.mirror_pairs}
+        assert signs == {
+            "lae1": 1.0, "lae2": -1.0, "lae3": -1.0, "lae4": -1.0, "lle1": 1.0,
+            "lle2": -1.0, "lle3": 1.0, "lle4": 1.0, "lle5": 1.0, "lle6": -1.0,
+            **({"lle7": 1.0} if t == 4 else {}),
+        }  # fmt: skip
+        for i, k, s in m.mirror_pairs:
+            assert m.joints[k].effector == "r" + m.joints[i].effector[1:]
+            assert sorted(s * m.ranges_deg[i]) == pytest.approx(list(m.ranges_deg[k]))
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "ode"])
+@pytest.mark.parametrize("mode", ["velocity", "target_angle"])
+def test_mirrored_actions_move_the_robot_symmetrically(make_env, engine, mode):
+    from robocup_gym.envs.tasks.getup import GetUp
+    from robocup_gym.sim.engines.ode import available
+
+    if engine == "ode" and not available():
+        pytest.skip("no libode")
+    env = make_env(GetUp, backend=engine, mirror_actions=True, action_mode=mode)
+    assert env.action_space.shape == (10,)
+    assert env.action_labels[0] == "lae1+rae1" and env.action_labels[-1] == "lle6+rle6"
+    env.reset(seed=0, options={"start_side": "back"})
+    rng = np.random.default_rng(3)
+    for _ in range(60):
+        env.step(rng.uniform(-1, 1, 10))
+    q = env.perception.joint_angles_deg
+    pairs = env.robot_model.mirror_pairs
+    assert max(abs(q[i] - s * q[k]) for i, k, s in pairs) < 1e-3  # deg
+    moved = max(abs(q[i]) for i, _, _ in pairs)
+    assert moved > 10.0  # the joints did move, mirrored
+    assert abs(env.ground_truth.torso_pos[1]) < 1e-4  # no sideways drift: the motion is symmetric
+    toes = make_env(GetUp, backend=engine, mirror_actions=True, robot_type=4)
+    assert toes.action_space.shape == (11,)
+
+
+def test_mirrored_actions_are_refused_where_they_cannot_work(make_env):
+    from robocup_gym.envs import EnvConfigError
+
+    with pytest.raises(EnvConfigError, match="mirror_actions works on the Nao"):
+        make_env(mirror_actions=True, action_mode="target_angle_max_speed")

@@ -138,9 +138,43 @@ def test_getup_success_needs_a_held_pose_and_pays_once():
     env.close()
 
 
+@pytest.mark.parametrize("engine", ENGINES)
+def test_getup_draws_among_several_dropped_lying_poses(engine):
+    """``lying_poses``: pose 0 is the plain drop; the others come from drops with the tilt and
+    joints varied, the same in every environment; each is at rest; episodes draw among them."""
+    env = GetUp(engine=engine, lying_poses=4, start_side="back")
+    other = GetUp(engine=engine, lying_poses=4)
+    try:
+        poses = [env.lying_pose("back", k) for k in range(4)]
+        assert env.lying_pose("back", 0)[0] == pytest.approx(
+            GetUp(engine=engine).lying_pose("back")[0]
+        )
+        for k in range(1, 4):
+            assert np.abs(poses[k][2] - poses[0][2]).max() > 2.0  # joints differ by degrees
+            assert other.lying_pose("back", k)[0] == pytest.approx(poses[k][0], abs=1e-9)
+        seen = set()
+        for seed in range(12):
+            _, info = env.reset(seed=seed)
+            seen.add(info["lying_pose"])
+            k = info["lying_pose"]
+            assert env.torso_pos[2] == pytest.approx(poses[k][0], abs=1e-3)
+            z0 = env.torso_pos[2]
+            for _ in range(3):
+                env.step(np.zeros(env.action_space.shape))
+            assert abs(env.torso_pos[2] - z0) < 0.005  # at rest
+        assert len(seen) >= 3
+    finally:
+        env.close()
+        other.close()
+
+
 def test_getup_options_are_validated():
     with pytest.raises(EnvConfigError, match="start_side"):
         GetUp(start_side="sideways")
+    with pytest.raises(EnvConfigError, match="lying_poses"):
+        GetUp(lying_poses=0)
+    with pytest.raises(EnvConfigError, match="lying_pose_spread_deg"):
+        GetUp(lying_pose_spread_deg=float("nan"))
     env = GetUp()
     with pytest.raises(ValueError, match="start_side must be 'front' or 'back'"):
         env.reset(options={"start_side": "left"})

@@ -265,3 +265,30 @@ def test_a_league_robot_renders_where_opengl_is():
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     # (MuJoCo 3.5 prints rcsssmj's join warning about controls to stdout first)
     assert out.returncode == 0 and out.stdout.strip().splitlines()[-1] == "ok", out.stderr[-2000:]
+
+
+def test_the_training_assist_lifts_a_league_robot():
+    """``TorsoAssist`` on the in-process league backend: the push acts through MuJoCo's
+    ``xfrc_applied`` on the T1's torso, with the weight taken from its model."""
+    from robocup_gym.envs.assist import TorsoAssist
+
+    heights = {}
+    for share in (0.0, 1.5):
+        env = TorsoAssist(gymnasium.make("RobocupGym/GetUp-v0", robot="T1"), share, 10_000)
+        try:
+            assert env.weight_n == pytest.approx(league_robot("T1").total_mass * 9.81)
+            assert 20.0 < league_robot("T1").total_mass < 60.0  # kg
+            env.reset(seed=0, options={"start_side": "back"})
+            z0 = float(env.unwrapped.ground_truth.torso_pos[2])
+            for _ in range(30):
+                env.step(np.zeros(env.action_space.shape))
+            heights[share] = float(env.unwrapped.ground_truth.torso_pos[2]) - z0
+        finally:
+            env.close()
+    # (zero actions are mid-range PD targets: the limbs move a little on their own)
+    assert heights[1.5] > heights[0.0] + 0.3, heights
+
+
+def test_mirrored_actions_are_the_naos_only():
+    with pytest.raises(EnvConfigError, match="mirror_actions works on the Nao"):
+        gymnasium.make("RobocupGym/GetUp-v0", robot="T1", mirror_actions=True)

@@ -294,3 +294,32 @@ def test_a_robot_moves_between_worlds_exactly(engine):
     np.testing.assert_allclose(b.accelerometer(1), a.accelerometer(0), atol=1e3 * tol)
     with pytest.raises(ValueError, match="type"):
         b.import_robot_state(0, a.export_robot_state(0))  # type 0 into a type-2 robot
+
+
+def test_a_torso_force_pushes_the_robot_until_it_is_lifted(engine):
+    """``set_torso_force`` (the training assist): a push larger than the robot's weight lifts
+    it off the ground; one below it leaves a rigid standing robot standing; (0, 0, 0) ends it."""
+    weight = make_world(engine).robots[0].model.total_mass * 9.81
+    heights = {}
+    for share in (0.0, 0.5, 1.5):
+        w = make_world(engine)
+        _stand(w)
+        w.set_torso_force(0, (0.0, 0.0, share * weight))
+        z0 = w.torso_position(0)[2]
+        for _ in range(25):
+            w.step()
+        heights[share] = w.torso_position(0)[2] - z0
+    assert abs(heights[0.0]) < 0.01 and abs(heights[0.5]) < 0.01
+    # net 0.5 g upward for 0.5 s: ½ · 4.9 m/s² · (0.5 s)² = 0.61 m
+    assert 0.55 < heights[1.5] < 0.67
+    w = make_world(engine)
+    _stand(w)
+    w.set_torso_force(0, (0.0, 0.0, 1.5 * weight))
+    w.set_torso_force(0, (0.0, 0.0, 0.0))
+    z0 = w.torso_position(0)[2]
+    for _ in range(25):
+        w.step()
+    assert abs(w.torso_position(0)[2] - z0) < 0.01
+    for bad in ((0.0, float("nan"), 1.0), (1.0, 2.0), "up"):
+        with pytest.raises(ValueError, match="three finite numbers"):
+            w.set_torso_force(0, bad)

@@ -510,6 +510,9 @@ def test_episode_metrics_carry_the_locomotion_measures():
     assert w["forward_error_mps_mean"] == pytest.approx(0.2) and w["success_rate"] is None
     kick = summarize([episode_record({"ball_dx": 1.0}, 1.0, 3)])
     assert kick["success_rate"] is None and kick["forward_speed_mps_mean"] is None
+    assert kick["assist_share_mean"] is None
+    helped = [episode_record({"success": False, "assist_share": a}, 0.0, 5) for a in (0.8, 0.6)]
+    assert summarize(helped)["assist_share_mean"] == pytest.approx(0.7)
 
 
 def test_walk_reports_its_forward_speed_and_tracking_error():
@@ -573,3 +576,60 @@ def test_tasks_lists_the_tasks_and_the_robots():
         assert "pip install 'robocup-gym[mj]'" in out
     else:
         assert "T1" in out and "K1" in out and "--env robot=NAME" in out
+
+
+def test_train_with_an_assist_records_it_and_resume_keeps_it(tmp_path):
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+    from robocup_gym.train.config import TrainConfig
+    from robocup_gym.train.trainer import _steps_done
+
+    out = tmp_path / "runs"
+    args = ["train", "get-up", "--engine", "mujoco", "--n-envs", 2, "--timesteps", 64]
+    args += ["--assist-force", 0.5, "--assist-steps", 1000, "--assist-max-tilt", 60]
+    args += ["--out", out, "--no-progress"]
+    invoke([*args, "--eval-freq", 0, "--checkpoint-freq", 0, *TINY_PPO])
+    (run,) = out.iterdir()
+    cfg = TrainConfig.load(run / "config.yaml")
+    assert (cfg.assist_force, cfg.assist_steps, cfg.assist_max_tilt_deg) == (0.5, 1000, 60)
+    assert _steps_done(run / "model.zip") >= 64 and _steps_done(None) == 0
+    # the assist belongs to the run: a resume takes it from the run's config
+    result = CliRunner().invoke(
+        app, ["train", "--resume", str(run), "--assist-force", "0.2", "--no-progress"]
+    )
+    assert result.exit_code != 0 and "--assist-*" in result.output
+    bad = ["train", "get-up", "--assist-force", "0.5", "--out", str(tmp_path / "x")]
+    result = CliRunner().invoke(app, bad)
+    assert result.exit_code == 1 and "assist_steps >= 1" in result.output
+
+
+def test_pretrained_policies_are_found_evaluated_and_listed(ppo_run, tmp_path, monkeypatch):
+    """The shipped-policy machinery on a policy put where the package keeps them: found by
+    its name (loosely), evaluated in-process like a run, listed by `tasks`, unknown names
+    refused with the list."""
+    from robocup_gym.train import pretrained
+
+    shipped = tmp_path / "policies"
+    invoke(["export", ppo_run, "--onnx", shipped / "quick-kick.onnx"])
+    monkeypatch.setattr(pretrained, "POLICY_DIR", shipped)
+    assert pretrained.pretrained_names() == ["quick-kick"]
+    assert pretrained.pretrained_path("Quick_Kick") == shipped / "quick-kick.onnx"
+    assert pretrained.describe("quick-kick")["training"]["n_envs"] == 2
+    out = last_json(invoke(["eval", "--pretrained", "quick-kick", "--episodes", 2]).stdout)
+    assert out["pretrained"] == "quick-kick" and out["episodes"] == 2
+    assert out["env_id"] == "RobocupGym/VelocityKick-v0" and out["backend"] == "ode"
+    run_eval = last_json(invoke(["eval", ppo_run, "--episodes", 2]).stdout)
+    # the ONNX graph is the policy (to 1e-5): the same episodes, the same kicks
+    assert out["ball_dx_mean"] == pytest.approx(run_eval["ball_dx_mean"], abs=0.02)
+    assert "quick-kick" in invoke(["tasks"]).stdout
+    with pytest.raises(ValueError, match="shipped: quick-kick"):
+        pretrained.pretrained_path("walk")
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    result = CliRunner().invoke(app, ["eval", str(ppo_run), "--pretrained", "quick-kick"])
+    assert result.exit_code == 1 and "not both" in result.output
+    result = CliRunner().invoke(app, ["agent", "--pretrained", "nothing"])
+    assert result.exit_code == 1 and "no pretrained policy 'nothing'" in result.output

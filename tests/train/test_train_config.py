@@ -55,6 +55,18 @@ def test_yaml_round_trip_and_merge(tmp_path):
             {"backend": "gazebo"},
             "unknown backend 'gazebo'; choose one of mujoco, rcssserver3d, ode",
         ),
+        ({"assist_force": 0.8}, "assist_steps >= 1"),
+        ({"assist_force": float("nan"), "assist_steps": 10}, "share of the robot's weight"),
+        ({"assist_force": 3.0, "assist_steps": 10}, "share of the robot's weight"),
+        ({"assist_steps": -5}, "assist_steps must be >= 0"),
+        (
+            {"assist_force": 0.5, "assist_steps": 10, "assist_max_tilt_deg": 0.0},
+            "assist_max_tilt_deg must be within 0 and 180",
+        ),
+        (
+            {"assist_force": 0.5, "assist_steps": 10, "backend": "rcssserver3d"},
+            r"'rcssserver3d' backend\s+cannot",
+        ),
     ],
 )
 def test_invalid_config(kwargs, match):

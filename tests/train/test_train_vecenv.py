@@ -71,3 +71,32 @@ def test_worker_errors_name_the_environment():
         assert obs.shape[0] == 3
     finally:
         venv.close()
+
+
+def test_the_assist_is_shared_out_over_the_environments():
+    """``TrainConfig.assist_steps`` count all environments together: each gets its part, and
+    a resumed run's steps done continue the schedule; without an assist nothing is wrapped."""
+    from robocup_gym.envs.assist import TorsoAssist
+    from robocup_gym.train.vecenv import env_factories
+
+    fns = env_factories(
+        "RobocupGym/GetUp-v0",
+        4,
+        backend="mujoco",
+        seed=0,
+        assist={"share": 0.6, "decay_steps": 4000, "start_step": 1000, "max_tilt_deg": 60.0},
+    )
+    expected = {"share": 0.6, "decay_steps": 1000, "start_step": 250, "max_tilt_deg": 60.0}
+    assert all(f.assist == expected for f in fns)
+    env = fns[0]()
+    try:
+        assert isinstance(env, TorsoAssist)
+        assert (env.share, env.decay_steps, env.steps, env.max_tilt_deg) == (0.6, 1000, 250, 60)
+    finally:
+        env.close()
+    plain = env_factories("RobocupGym/GetUp-v0", 2, backend="mujoco", assist=None)
+    env = plain[0]()
+    try:
+        assert not isinstance(env, TorsoAssist)
+    finally:
+        env.close()

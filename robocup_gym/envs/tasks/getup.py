@@ -53,6 +53,15 @@ class GetUpConfig(EnvConfig):
     """The robot starts on the ground: lying is not an end here."""
     start_side: str = "random"
     """``"front"``, ``"back"`` or ``"random"`` (each episode one of the two)."""
+    lying_poses: int = 1
+    """Distinct lying poses per side; each episode starts from one drawn at random. Pose 0 is
+    the drop from 80° with every joint at 0; poses 1… come from drops with the tilt and every
+    joint angle drawn within ± ``lying_pose_spread_deg`` of that (a fixed draw per pose, the
+    same in every environment), so that a policy meets, and a benchmark measures, more than
+    one way of lying."""
+    lying_pose_spread_deg: float = 10.0
+    """How far poses 1… are drawn from pose 0: tilt and joint angles, ± deg (joint angles
+    kept in range)."""
     success_height: float = 0.28
     """Torso centre height above which the robot counts as up, m."""
     success_tilt_deg: float = 30.0
@@ -76,6 +85,14 @@ class GetUpConfig(EnvConfig):
             raise EnvConfigError(
                 f"start_side must be 'front', 'back' or 'random', got {self.start_side!r}"
             )
+        if not (isinstance(self.lying_poses, int | np.integer) and 1 <= self.lying_poses <= 64):
+            raise EnvConfigError(
+                f"lying_poses must be an integer in 1..64, got {self.lying_poses!r}"
+            )
+        if not (
+            math.isfinite(self.lying_pose_spread_deg) and 0.0 <= self.lying_pose_spread_deg <= 45.0
+        ):
+            raise EnvConfigError("lying_pose_spread_deg must be between 0 and 45 deg")
         if not (0.0 < self.success_height < 1.5):
             raise EnvConfigError("success_height must be between 0 and 1.5 m")
         if not (0.0 < self.success_tilt_deg < 90.0):
@@ -132,9 +149,9 @@ class GetUp(BaseEnv):
     config: GetUpConfig
     task_reset_options = frozenset({"start_side"})
 
-    REAL_SERVERS = ("rcssserver3d", "rcssservermj")
+    REAL_SERVERS = ("rcssserver3d", "rcssservermj", "agent-connection")
     """Backends that cannot start a robot lying down (their placement is upright only, or, on
-    rcssservermj, with every joint at 0)."""
+    rcssservermj, with every joint at 0; an agent alone can only beam)."""
 
     def __init__(self, config: GetUpConfig | None = None, **kwargs: Any) -> None:
         super().__init__(config, **kwargs)
@@ -145,8 +162,9 @@ class GetUp(BaseEnv):
                 f"GetUp starts the robot lying down, which the {name!r} backend cannot place; "
                 "train and evaluate it in-process (the default), or place the robot yourself"
             )
-        self._lying: dict[str, tuple[float, np.ndarray, np.ndarray]] = {}
+        self._lying: dict[tuple[str, int], tuple[float, np.ndarray, np.ndarray]] = {}
         self.side = "front"
+        self.pose_index = 0
         self._up_steps = 0
         self._prev_action = np.zeros(self.action_space.shape)
         self.success = False
@@ -155,21 +173,31 @@ class GetUp(BaseEnv):
         self.reward_terms: dict[str, float] = {}
 
     # ------------------------------------------------------------------ lying poses
-    def lying_pose(self, side: str) -> tuple[float, np.ndarray, np.ndarray]:
-        """``(torso z m, torso quat, joint angles deg)`` of the robot at rest on ``side``,
-        made once by dropping it in this environment's world."""
-        if side not in self._lying:
+    def lying_pose(self, side: str, index: int = 0) -> tuple[float, np.ndarray, np.ndarray]:
+        """``(torso z m, torso quat, joint angles deg)`` of the robot at rest on ``side``
+        (lying pose ``index``, see ``GetUpConfig.lying_poses``), made once by dropping it in
+        this environment's world."""
+        key = (side, int(index))
+        if key not in self._lying:
             # tilted forward (front) or backward (back), joints at 0: upright facing +x (the
             # torso's forward axis is its +y: turned -90° about z), then pitched about the
             # world's y axis (+: the top goes forward, +x). The Nao by 80°, joints held; a
             # league robot flat (90°, its lowest point on the ground) and limp: held stiff, the
             # tall T1 and K1 come to rest propped on toes and hands, differently on different
             # MuJoCo versions.
-            tilt = math.radians(90.0 if self.league else 80.0) * (1.0 if side == "front" else -1.0)
+            tilt_deg = 90.0 if self.league else 80.0
+            n = len(self.robot_model.joints)
+            start = np.zeros(n)
+            if index > 0:  # a fixed draw per pose: the same poses in every environment
+                rng = np.random.default_rng([int(index), SIDES.index(side)])
+                spread = self.config.lying_pose_spread_deg
+                tilt_deg = min(90.0, tilt_deg + rng.uniform(-spread, spread))
+                lo, hi = np.asarray(self.robot_model.ranges_deg, dtype=float).T
+                start = np.clip(rng.uniform(-spread, spread, n), lo, hi)
+            tilt = math.radians(tilt_deg) * (1.0 if side == "front" else -1.0)
             yaw = _quat_about((0.0, 0.0, 1.0), -math.pi / 2)
             pitch = _quat_about((0.0, 1.0, 0.0), tilt)
             quat = _quat_mul(pitch, yaw)
-            n = len(self.robot_model.joints)
             x, y = self.config.robot_start_pos
             # in a world of its own where the environment made its backend, so that the
             # episodes' world has no history of the drop (episodes are then reproducible)
@@ -179,7 +207,7 @@ class GetUp(BaseEnv):
                 world = self.backend
             try:
                 world.reset_episode(
-                    RobotPose(x, y, joint_angles_deg=np.zeros(n), quat=quat),
+                    RobotPose(x, y, joint_angles_deg=start, quat=quat),
                     ball_pos=(x + 5.0, y + 5.0),
                     play_mode=self.config.play_mode,
                 )
@@ -189,12 +217,12 @@ class GetUp(BaseEnv):
                 if world is not self.backend:
                     world.close()
             gt = p.ground_truth
-            self._lying[side] = (
+            self._lying[key] = (
                 float(gt.torso_pos[2]),
                 np.array(gt.torso_quat, dtype=float),
                 np.array(p.joint_angles_deg, dtype=float),
             )
-        return self._lying[side]
+        return self._lying[key]
 
     # ------------------------------------------------------------------ episode
     def _initial_state(self, options):
@@ -204,8 +232,11 @@ class GetUp(BaseEnv):
         if side not in SIDES:
             raise ValueError(f"reset option start_side must be 'front' or 'back', got {side!r}")
         start = super()._initial_state(options)
-        z, quat, angles = self.lying_pose(side)
+        n_poses = self.config.lying_poses
+        k = int(self.np_random.integers(n_poses)) if n_poses > 1 else 0
+        z, quat, angles = self.lying_pose(side, k)
         self.side = side
+        self.pose_index = k
         self._up_steps = 0
         self._prev_action = np.zeros(self.action_space.shape)
         self.success = False
@@ -266,6 +297,7 @@ class GetUp(BaseEnv):
     def _info(self) -> dict[str, Any]:
         info = super()._info()
         info["start_side"] = self.side
+        info["lying_pose"] = self.pose_index
         info["success"] = self.success
         info["steps_to_up"] = self.steps_to_up
         if self.reward_terms:

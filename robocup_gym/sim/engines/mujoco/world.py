@@ -1257,6 +1257,19 @@ class World(Senses):
         """Ball angular velocity, world, rad/s."""
         return self._data.qvel[self._ball_qvel + 3 : self._ball_qvel + 6].copy()
 
+    def set_torso_force(self, index: int, force: Sequence[float]) -> None:
+        """Push robot ``index``'s torso with ``force`` (N, world frame, at the torso's origin,
+        through its free joint) in every step until it is changed or :meth:`reset`;
+        ``(0, 0, 0)`` ends it. SimSpark has no such force: it is a training aid
+        (``TrainConfig.assist_force``), never part of an evaluation.
+
+        Raises:
+            ValueError: ``force`` is not three finite numbers.
+        """
+        f = phys.finite_force(force)
+        a = self.robot(index).qvel_root
+        self._data.qfrc_applied[a : a + 3] = f
+
     def torso_position(self, index: int = 0) -> np.ndarray:
         """Torso centre of robot ``index``, world, m."""
         a = self.robot(index).qpos_root

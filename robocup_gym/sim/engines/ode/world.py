@@ -291,6 +291,8 @@ class OdeWorld(Senses):
         self._ball_pairs = np.array([p for p, _ in ball_pairs], dtype=np.int64)
         self._ball_pair_robot = np.array([i for _, i in ball_pairs], dtype=np.int64)
         self._queued: dict[int, np.ndarray] = {}
+        self._pushes: dict[int, tuple[float, float, float]] = {}
+        """Robot index → the external force on its torso (:meth:`set_torso_force`)."""
         """Commands given with :meth:`command` for the next :meth:`step`."""
         self._out_pair = np.zeros(len(self._feedback), dtype=np.int32)
         self._out_pos = np.zeros((len(self._feedback), 3))
@@ -622,11 +624,29 @@ class OdeWorld(Senses):
                 f"{self._body_name(bad)} has a velocity that is not finite or beyond "
                 f"{SANE_SPEED:g}; place the ball and robots again"
             )
+        for i, force in self._pushes.items():
+            self._lib.dBodyAddForce(self.robots[i].bodies[0], *force)
         self._collide_and_step()
         self._fresh = False
         self.cycle += 1
         self._advance_clocks(phys.CYCLE_S)
         self._check_sane()
+
+    def set_torso_force(self, index: int, force: Sequence[float]) -> None:
+        """Push robot ``index``'s torso with ``force`` (N, world frame, at its centre of mass)
+        in every cycle until it is changed; ``(0, 0, 0)`` ends it. SimSpark has no such force:
+        it is a training aid (``TrainConfig.assist_force``, which lifts a robot that learns to
+        get up), never part of an evaluation.
+
+        Raises:
+            ValueError: ``force`` is not three finite numbers.
+        """
+        f = phys.finite_force(force)
+        self.robots[index]  # IndexError for an unknown robot
+        if any(f):
+            self._pushes[index] = f
+        else:
+            self._pushes.pop(index, None)
 
     def _check_sane(self) -> None:
         """Raise :class:`~robocup_gym.sim.SimulationDivergedError` (as the

@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 
 from robocup_gym.robot.league import RcsssmjUnavailableError, clearance, league_robot
+from robocup_gym.sim.physics import finite_force
 from robocup_gym.types import PDCommand
 
 __all__ = ["CYCLE_S", "LeagueSimulationError", "LeagueWorld", "PDCommand"]
@@ -368,6 +369,19 @@ class LeagueWorld:
     def joint_angles(self, index: int) -> np.ndarray:
         """Player ``index``'s joint angles, rad, model order."""
         return np.array([float(j.qpos[0]) for j in self.agents[index]._joints])
+
+    def set_torso_force(self, index: int, force: Sequence[float]) -> None:
+        """Push player ``index``'s torso with ``force`` (N, world frame, at the torso's centre of
+        mass, MuJoCo's ``xfrc_applied``, which ``rcsssmj`` leaves alone) in every step until it
+        is changed; ``(0, 0, 0)`` ends it. The server has no such force: a training aid
+        (``TrainConfig.assist_force``).
+
+        Raises:
+            ValueError: ``force`` is not three finite numbers.
+        """
+        f = finite_force(force)
+        body = self.sim.mj_model.body(self.agents[index].root_body_name).id
+        self.sim.mj_data.xfrc_applied[body, :3] = f
 
     def torso_pose(self, index: int) -> tuple[np.ndarray, np.ndarray]:
         """Player ``index``'s torso position (m) and orientation quaternion (w, x, y, z)."""

@@ -1,0 +1,106 @@
+"""Policies shipped with the package: trained with the project's own CLI on the default engine,
+exported to ONNX, ready to run.
+
+Each lives in ``robocup_gym/data/policies/`` as ``<name>.onnx`` (the graph, with its description
+in the metadata) and ``<name>.json`` (the same description, readable: task, environment options,
+observation layout, action mapping, and how it was trained). ``robocup-gym eval --pretrained
+NAME`` evaluates one in-process; ``robocup-gym agent --pretrained NAME`` drives a robot with it
+on a server; :func:`pretrained_policy` gives one to Python code.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.backends import DEFAULT_ENGINE
+
+__all__ = [
+    "POLICY_DIR",
+    "evaluate_pretrained",
+    "pretrained_names",
+    "pretrained_path",
+    "pretrained_policy",
+]
+
+POLICY_DIR = Path(__file__).resolve().parents[1] / "data" / "policies"
+"""Where the shipped policies are."""
+
+
+def pretrained_names() -> list[str]:
+    """The names of the shipped policies (``get-up``, …), sorted."""
+    if not POLICY_DIR.is_dir():
+        return []
+    return sorted(p.stem for p in POLICY_DIR.glob("*.onnx"))
+
+
+def pretrained_path(name: str) -> Path:
+    """The ONNX file of the shipped policy ``name`` (``get-up``; ``getup`` and ``GetUp`` too).
+
+    Raises:
+        ValueError: no such policy (the message lists the shipped ones).
+    """
+    names = pretrained_names()
+    key = str(name).strip().lower().replace("_", "-")
+    for n in names:
+        if key in (n, n.replace("-", "")):
+            return POLICY_DIR / f"{n}.onnx"
+    shipped = ", ".join(names) if names else "none"
+    raise ValueError(f"no pretrained policy {name!r}; shipped: {shipped}")
+
+
+def pretrained_policy(name: str):
+    """The shipped policy ``name`` as an :class:`~robocup_gym.train.export.OnnxPolicy`
+    (``policy(obs) → action``; ``policy.metadata`` has its task and options)."""
+    from robocup_gym.train.export import OnnxPolicy
+
+    return OnnxPolicy(pretrained_path(name))
+
+
+class _Predictor:
+    """``predict(obs, deterministic)`` over an ONNX policy, for :func:`run_episodes`."""
+
+    def __init__(self, policy) -> None:
+        self.policy = policy
+
+    def predict(self, obs: np.ndarray, deterministic: bool = True):
+        return self.policy(obs), None
+
+
+def evaluate_pretrained(
+    name: str, *, episodes: int = 10, seed: int = 100_000, backend: str | None = None
+) -> dict[str, Any]:
+    """Evaluate the shipped policy ``name`` in-process, as ``robocup-gym eval`` evaluates a
+    run: ``episodes`` episodes of its task with its options (episode ``k`` seeded ``seed + k``)
+    on ``backend`` (default: the engine it was trained on). Returns the summary (mean return,
+    the task's measures: ``success_rate``, ``forward_speed_mps_mean``, …)."""
+    from robocup_gym.train.evaluate import run_episodes
+    from robocup_gym.train.metrics import summarize
+    from robocup_gym.train.tasks import make_env
+
+    if int(episodes) < 1:
+        raise ValueError(f"episodes must be >= 1, got {episodes}")
+    policy = pretrained_policy(name)
+    meta = policy.metadata
+    backend = backend or meta.get("backend") or DEFAULT_ENGINE
+    env = make_env(meta["env_id"], backend=backend, env_kwargs=dict(meta.get("env_kwargs") or {}))
+    try:
+        records = run_episodes(_Predictor(policy), env, episodes, seed=seed)
+    finally:
+        env.close()
+    return {
+        "pretrained": pretrained_path(name).stem,
+        "model": str(policy.path),
+        "env_id": meta["env_id"],
+        "backend": backend,
+        "training": meta.get("training", {}),
+        **summarize(records),
+    }
+
+
+def describe(name: str) -> dict[str, Any]:
+    """The JSON description shipped beside the policy ``name``."""
+    return json.loads(pretrained_path(name).with_suffix(".json").read_text())
