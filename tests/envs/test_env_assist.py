@@ -27,6 +27,7 @@ def test_the_push_falls_linearly_to_zero():
 
 
 def _torso_heights(env, steps: int) -> list[float]:
+    """Torso heights over ``steps`` steps of a zero action (velocity mode: every joint held)."""
     env.reset(seed=0, options={"start_side": "back"})
     zero = np.zeros(env.action_space.shape)
     out = []
@@ -38,9 +39,16 @@ def _torso_heights(env, steps: int) -> list[float]:
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_strong_push_lifts_a_lying_robot_and_a_faded_one_does_not(engine):
-    plain = gym.make("RobocupGym/GetUp-v0", backend=engine)
-    pushed = TorsoAssist(gym.make("RobocupGym/GetUp-v0", backend=engine), 1.5, 10_000)
-    faded = TorsoAssist(gym.make("RobocupGym/GetUp-v0", backend=engine), 1.5, 10, start_step=10)
+    plain = gym.make("RobocupGym/GetUp-v0", backend=engine, action_mode="velocity")
+    pushed = TorsoAssist(
+        gym.make("RobocupGym/GetUp-v0", backend=engine, action_mode="velocity"), 1.5, 10_000
+    )
+    faded = TorsoAssist(
+        gym.make("RobocupGym/GetUp-v0", backend=engine, action_mode="velocity"),
+        1.5,
+        10,
+        start_step=10,
+    )
     try:
         lying = _torso_heights(plain, 30)
         assert max(lying) - min(lying) < 0.01  # holds still, lying
@@ -97,8 +105,14 @@ def test_bad_settings_and_backends_that_cannot_push_are_refused():
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_tilt_limited_push_leaves_a_lying_robot_alone(engine):
     """``max_tilt_deg``: no push while the torso lies flat (the robot must sit up first)."""
-    plain = gym.make("RobocupGym/GetUp-v0", backend=engine)
-    gated = TorsoAssist(gym.make("RobocupGym/GetUp-v0", backend=engine), 1.5, 10_000, 0, 60.0)
+    plain = gym.make("RobocupGym/GetUp-v0", backend=engine, action_mode="velocity")
+    gated = TorsoAssist(
+        gym.make("RobocupGym/GetUp-v0", backend=engine, action_mode="velocity"),
+        1.5,
+        10_000,
+        0,
+        60.0,
+    )
     try:
         assert _torso_heights(gated, 20) == pytest.approx(_torso_heights(plain, 20), abs=1e-9)
         gated.reset(seed=0, options={"start_side": "back"})
@@ -116,7 +130,9 @@ def test_the_success_schedule_lowers_the_push_with_each_success():
     from robocup_gym.envs.assist import FAILURE_STEP_UP, SUCCESS_STEP_DOWN
 
     env = TorsoAssist(
-        gym.make("RobocupGym/GetUp-v0", backend="mujoco", max_episode_steps=3),
+        gym.make(
+            "RobocupGym/GetUp-v0", backend="mujoco", max_episode_steps=3, action_mode="velocity"
+        ),
         0.5,
         0,
         schedule="success",

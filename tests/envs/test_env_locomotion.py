@@ -109,7 +109,7 @@ def test_walk_options_are_validated():
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("side", ["front", "back"])
 def test_getup_starts_lying_at_rest_made_by_a_drop(engine, side):
-    env = GetUp(engine=engine)
+    env = GetUp(engine=engine, action_mode="velocity")  # zero action: every joint held
     env.reset(seed=0, options={"start_side": side})
     z0 = env.torso_pos[2]
     _, x, y, _ = env.ground_truth.torso_quat
@@ -142,7 +142,7 @@ def test_getup_success_needs_a_held_pose_and_pays_once():
 def test_getup_draws_among_several_dropped_lying_poses(engine):
     """``lying_poses``: pose 0 is the plain drop; the others come from drops with the tilt and
     joints varied, the same in every environment; each is at rest; episodes draw among them."""
-    env = GetUp(engine=engine, lying_poses=4, start_side="back")
+    env = GetUp(engine=engine, lying_poses=4, start_side="back", action_mode="velocity")
     other = GetUp(engine=engine, lying_poses=4)
     try:
         poses = [env.lying_pose("back", k) for k in range(4)]
@@ -166,6 +166,29 @@ def test_getup_draws_among_several_dropped_lying_poses(engine):
     finally:
         env.close()
         other.close()
+
+
+def test_getup_pays_height_only_up_to_the_cap():
+    """A robot lifted above ``height_cap`` (by the training push, here) earns no more height
+    reward than one at the cap: springing off the ground is not getting up."""
+    from robocup_gym.envs.assist import TorsoAssist
+
+    env = TorsoAssist(GetUp(backend="mujoco", action_mode="velocity", w_height=6.0), 1.5, 10_000)
+    try:
+        env.reset(seed=0, options={"start_side": "back"})
+        terms = []
+        for _ in range(40):
+            info = env.step(np.zeros(env.action_space.shape))[4]
+            terms.append((env.unwrapped.torso_pos[2], info["reward_terms"]["height"]))
+        low = [(z, h) for z, h in terms if z < 0.39]
+        high = [(z, h) for z, h in terms if z > 0.41]
+        assert low and high
+        assert all(h == pytest.approx(6.0 * z) for z, h in low)
+        assert all(h == pytest.approx(6.0 * 0.40) for _, h in high)
+    finally:
+        env.close()
+    with pytest.raises(EnvConfigError, match="height_cap"):
+        GetUp(height_cap=0.0)
 
 
 def test_getup_options_are_validated():

@@ -181,6 +181,9 @@ def test_walk_sees_the_feet_on_the_ground_and_getup_lies_on_the_side_asked():
     assert env.config.success_height == pytest.approx(
         0.73 * league_robot("K1").standing_torso_height, abs=1e-3
     )
+    assert env.config.height_cap == pytest.approx(
+        1.04 * league_robot("K1").standing_torso_height, abs=1e-3
+    )
     env.close()
 
 

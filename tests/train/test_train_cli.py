@@ -633,3 +633,21 @@ def test_pretrained_policies_are_found_evaluated_and_listed(ppo_run, tmp_path, m
     assert result.exit_code == 1 and "not both" in result.output
     result = CliRunner().invoke(app, ["agent", "--pretrained", "nothing"])
     assert result.exit_code == 1 and "no pretrained policy 'nothing'" in result.output
+
+
+def test_getup_refuses_an_agent_connection_that_cannot_lay_the_robot_down():
+    """An agent alone can only beam a robot upright: GetUp says so instead of starting from a
+    pose it cannot make."""
+    from robocup_gym.envs import EnvConfigError, GetUp
+    from robocup_gym.server import SimServer
+    from robocup_gym.train.agent import AgentConnectionBackend
+
+    server = SimServer(agent_port=0, monitor_port=0, host="127.0.0.1", sync=True, real_time=False)
+    agent_port, _ = server.start_in_thread()
+    backend = AgentConnectionBackend("127.0.0.1", agent_port)
+    try:
+        with pytest.raises(EnvConfigError, match="'agent-connection' backend cannot place"):
+            GetUp(backend=backend)
+    finally:
+        backend.close()
+        server.stop()
