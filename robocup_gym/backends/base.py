@@ -128,6 +128,13 @@ class Backend(abc.ABC):
         """True if every :class:`Perception` carries :attr:`Perception.ground_truth`."""
         return True
 
+    @property
+    def places_any_orientation(self) -> bool:
+        """True if :meth:`reset_episode` can put the robot down in any orientation
+        (``RobotPose.quat``: a robot lying on its back, say), not only upright. The in-process
+        engines can; a real server only where its trainer can turn a robot."""
+        return True
+
     # ------------------------------------------------------------------ episode control
     @abc.abstractmethod
     def reset_episode(

@@ -558,6 +558,7 @@ class Rcssserver3dBackend(Backend):
         self.reset_max_cycles = int(reset_max_cycles)
         self.reset_gain = float(reset_gain)
         self.hover_height = float(hover_height)
+        self._rot: bool | None = None
         self.monitor_wait = float(monitor_wait)
         self.syn_interval = float(syn_interval)
         self.reset_timeout = float(reset_timeout)
@@ -953,11 +954,11 @@ class Rcssserver3dBackend(Backend):
             raise BackendError("the backend is closed")
         self._relaunch_if_dead()
         t0 = time.perf_counter()
-        if pose.quat is not None:
+        if pose.quat is not None and not self.places_any_orientation:
             raise BackendError(
-                "a real rcssserver3d places robots upright only (the trainer's move sets a "
-                "position and a heading); a start pose with a full orientation (quat) needs an "
-                "in-process engine"
+                "this rcssserver3d places robots upright only (the trainer's move sets a "
+                "position and a heading, and it ignores the SPL fork's (rot …)); a start pose "
+                "with a full orientation (quat) needs the SPL fork or an in-process engine"
             )
         target = self._start_angles(pose.joint_angles_deg)
         z = float(pose.z) if pose.z is not None else self._standing_z(target)
@@ -1023,12 +1024,12 @@ class Rcssserver3dBackend(Backend):
             )
 
         # 2. put robot and ball in place, clock and play mode; stop the joints
-        final = (
-            tc.play_mode(play_mode)
-            + tc.agent_move(self.unum, team, (pose.x, pose.y, z), yaw)
-            + tc.ball(bpos, bvel)
-            + tc.set_time(0.0)
-        )
+        if pose.quat is None:
+            place = tc.agent_move(self.unum, team, (pose.x, pose.y, z), yaw)
+        else:  # the fork's rot turns the robot (joints as driven) about its torso centre
+            rot = tc.rot_from_quat(pose.quat)
+            place = tc.agent(self.unum, team, move=(pose.x, pose.y, z, yaw), rot=rot)
+        final = tc.play_mode(play_mode) + place + tc.ball(bpos, bvel) + tc.set_time(0.0)
         # the two cycles after the placement get the smallest non-zero joint velocities the wire
         # carries (1e-4 rad/s: 2e-6 rad a cycle): a non-zero command wakes the joint's body, so
         # the robot is awake once it is put down, as the in-process engines place it, instead of
@@ -1088,6 +1089,34 @@ class Rcssserver3dBackend(Backend):
         self.resets += 1
         log.debug("reset %d: %s", self.resets, self.last_reset)
         return p
+
+    @property
+    def places_any_orientation(self) -> bool:
+        """Whether this server's trainer turns robots (the SPL fork's ``(rot rx ry rz)``;
+        upstream 0.7.3 ignores it): found out once, by turning the robot while it is held in
+        the air and reading its orientation back from the monitor stream (a few cycles)."""
+        if self._rot is None:
+            self._rot = self._probe_rot()
+        return self._rot
+
+    def _probe_rot(self) -> bool:
+        self._relaunch_if_dead()
+        assert self.unum is not None
+        team = "Left" if self.side == "left" else "Right"
+        zero = self._velocity_text(np.zeros(self._n))
+        high = (0.0, 0.0, 1.5)
+        p = self._exchange(
+            zero, tc.agent(self.unum, team, pos=high, rot=(0.0, 40.0, 0.0)), wait=False
+        )
+        for _ in range(3):
+            p = self._exchange(zero, wait=False)
+        self._sync_monitor(p)
+        s = self._tracker.newest()
+        if s is None or s.torso is None:
+            raise BackendError("no monitor frame shows the robot (is the monitor port right?)")
+        up_z = float(s.torso[2, 2])  # world z of the torso's up axis: cos 40° when turned
+        self._exchange(zero, tc.agent_move(self.unum, team, high, -90.0), wait=False)
+        return up_z < math.cos(math.radians(20.0))
 
     def _reset_visible(self, p: Perception, pose: RobotPose, z: float) -> bool:
         """Has the final trainer frame taken effect in the cycle ``p`` describes?"""

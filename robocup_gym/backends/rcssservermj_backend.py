@@ -128,6 +128,10 @@ class RcssServerMJBackend(Backend):
     def robot_model(self) -> Any:
         return self._model
 
+    @property
+    def places_any_orientation(self) -> bool:
+        return False  # rcssservermj places a player upright, every joint at 0
+
     # ------------------------------------------------------------------ wire
     def _recv(self) -> bytes:
         try:

@@ -10,9 +10,12 @@ are ``Left`` / ``Right`` (``kickOff`` also ``None``), case-sensitive.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Union
+
+import numpy as np
 
 from robocup_gym.protocol.constants import PLAY_MODES, TEAM_SIDES
 from robocup_gym.protocol.errors import ProtocolError
@@ -50,8 +53,10 @@ __all__ = [
     "parse_trainer_command",
     "parse_trainer_message",
     "play_mode",
+    "quat_from_rot",
     "repos",
     "reqfullstate",
+    "rot_from_quat",
     "score",
     "select",
     "set_time",
@@ -70,7 +75,8 @@ class BallCmd:
 
 @dataclass(frozen=True)
 class AgentCmd:
-    """``(agent (unum N) (team Left|Right) (pos …) (move …) (battery b) (temperature t))``.
+    """``(agent (unum N) (team Left|Right) (pos …) (move …) (battery b) (temperature t))``, and
+    the SPL fork's ``(rot rx ry rz)``.
 
     Without both ``unum`` and ``team`` the server only clears its player selection.
     """
@@ -84,6 +90,37 @@ class AgentCmd:
     at yaw 0, so facing +x needs yaw −90)."""
     battery: float | None = None
     temperature: float | None = None
+    rot: Vec3 | None = None
+    """(rx, ry, rz)°, the SPL fork's extension (upstream 0.7.3 ignores it): after ``pos`` and
+    ``move``, turn the robot rigidly about its torso centre so that the torso's orientation
+    becomes ``Rx(rx)·Ry(ry)·Rz(rz)`` (world frame; :func:`rot_from_quat`)."""
+
+
+def rot_from_quat(quat: Sequence[float]) -> tuple[float, float, float]:
+    """The ``(rot rx ry rz)`` angles (deg) that give a torso the orientation ``quat`` (w, x, y,
+    z): ``R = Rx(rx)·Ry(ry)·Rz(rz)``, as the fork's ``SoccerBase::RotateAgent`` builds it."""
+    import mujoco  # not at import time: importing mujoco fails on a bad MUJOCO_GL
+
+    r = np.zeros(9)
+    mujoco.mju_quat2Mat(r, np.asarray(quat, dtype=float) / np.linalg.norm(quat))
+    r = r.reshape(3, 3)
+    ry = math.asin(max(-1.0, min(1.0, r[0, 2])))
+    rx = math.atan2(-r[1, 2], r[2, 2])
+    rz = math.atan2(-r[0, 1], r[0, 0])
+    return (math.degrees(rx), math.degrees(ry), math.degrees(rz))
+
+
+def quat_from_rot(rot: Sequence[float]) -> np.ndarray:
+    """The torso orientation (w, x, y, z) that ``(rot rx ry rz)`` (deg) sets:
+    ``Rx(rx)·Ry(ry)·Rz(rz)``."""
+    import mujoco
+
+    out = np.array([1.0, 0.0, 0.0, 0.0])
+    for axis, angle in zip(np.eye(3), rot, strict=True):
+        q = np.zeros(4)
+        mujoco.mju_axisAngle2Quat(q, axis, math.radians(float(angle)))
+        mujoco.mju_mulQuat(out, out.copy(), q)
+    return out
 
 
 @dataclass(frozen=True)
@@ -257,6 +294,8 @@ def format_trainer_command(cmd: TrainerCommand) -> str:
             text += f" (pos {_nums(cmd.pos, 3, 'agent pos')})"
         if cmd.move is not None:
             text += f" (move {_nums(cmd.move, 4, 'agent move')})"
+        if cmd.rot is not None:
+            text += f" (rot {_nums(cmd.rot, 3, 'agent rot')})"
         if cmd.battery is not None:
             text += f" (battery {fmt_short(cmd.battery)})"
         if cmd.temperature is not None:
@@ -313,8 +352,10 @@ def agent(
     move: Sequence[float] | None = None,
     battery: float | None = None,
     temperature: float | None = None,
+    rot: Sequence[float] | None = None,
 ) -> str:
-    """``(agent (unum N) (team T) …)`` with any of pos, move, battery, temperature."""
+    """``(agent (unum N) (team T) …)`` with any of pos, move, battery, temperature and the SPL
+    fork's rot."""
     return format_trainer_command(
         AgentCmd(
             unum,
@@ -323,6 +364,7 @@ def agent(
             None if move is None else tuple(move),  # type: ignore[arg-type]
             battery,
             temperature,
+            None if rot is None else tuple(rot),  # type: ignore[arg-type]
         )
     )
 
@@ -472,6 +514,7 @@ def _parse_command(expr: list[SExpr]) -> TrainerCommand:
             _vec(subs, "move", 4),  # type: ignore[arg-type]
             None if battery is None else battery[0],
             None if temperature is None else temperature[0],
+            _vec(subs, "rot", 3),  # type: ignore[arg-type]
         )
     if name == "playMode":
         mode = _single_atom(args, name)

@@ -642,6 +642,11 @@ class SimServer:
                     host.teleport(i, (x, y, z), heading_deg=yaw + 90.0)
                 else:
                     conn.warn("agent move %r ignored: not finite", cmd.move)
+            if cmd.rot is not None:  # the SPL fork's: turn about the torso centre
+                if all(math.isfinite(v) for v in cmd.rot):
+                    host.teleport(i, host.world.torso_position(i), quat=tc.quat_from_rot(cmd.rot))
+                else:
+                    conn.warn("agent rot %r ignored: not finite", cmd.rot)
         elif kind is tc.PlayModeCmd:
             ref.set_play_mode(cmd.mode)
         elif kind is tc.KickOffCmd:

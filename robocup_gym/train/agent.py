@@ -225,6 +225,10 @@ class AgentConnectionBackend(Backend):
     def has_ground_truth(self) -> bool:
         return True
 
+    @property
+    def places_any_orientation(self) -> bool:
+        return False  # an agent alone can only beam itself upright
+
     def _world_xy(self, x: float, y: float) -> tuple[float, float]:
         """Team frame → world frame (the right team plays mirrored)."""
         return (-x, -y) if self.side == "right" else (x, y)

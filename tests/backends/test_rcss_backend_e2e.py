@@ -328,3 +328,33 @@ def test_a_server_killed_mid_episode_is_a_clear_error_and_the_next_reset_starts_
     assert b.server.pid != first and b.server.running
     np.testing.assert_allclose(p.ground_truth.torso_pos[:2], (-1.0, 0.0), atol=0.02)
     b.step(AgentCommand({"he1": 0.5}))
+
+
+def test_getup_over_the_wire_lies_where_it_lies_in_process(make_server):
+    """GetUp on the rcssserver3d backend against serve (which, like the SPL fork, turns robots
+    with the trainer's ``rot``): the lying pose arrives as in-process; a server that does not
+    turn robots is refused with a clear error."""
+    from robocup_gym.envs import EnvConfigError, GetUp
+
+    server = make_server(monitor_interval=2)
+    options = {"host": HOST, "agent_port": server.agent_port, "monitor_port": server.monitor_port}
+    local = GetUp(backend="ode", action_mode="velocity")
+    wire = GetUp(backend="rcssserver3d", backend_options=options, action_mode="velocity")
+    try:
+        assert wire.backend.places_any_orientation  # found out by turning the robot once
+        for side in ("back", "front"):
+            states = []
+            for env in (local, wire):
+                env.reset(seed=0, options={"start_side": side})
+                for _ in range(5):
+                    env.step(np.zeros(env.action_space.shape))
+                states.append((env.torso_pos.copy(), np.array(env.ground_truth.torso_quat)))
+            (p0, q0), (p1, q1) = states
+            np.testing.assert_allclose(p1, p0, atol=0.003)
+            assert min(np.abs(q1 - q0).max(), np.abs(q1 + q0).max()) < 0.01
+        wire.backend._rot = False  # as an upstream 0.7.3 server answers the probe
+        with pytest.raises(EnvConfigError, match="cannot place"):
+            GetUp(backend=wire.backend)
+    finally:
+        local.close()
+        wire.close()

@@ -288,3 +288,38 @@ def test_real_resets_start_awake_and_standing_as_in_process(real_binary, pose_na
     finally:
         real.close()
         ode.close()
+
+
+@pytest.mark.parametrize("side", ["front", "back"])
+def test_getup_lies_on_the_real_server_as_in_process(real_binary, side):
+    """GetUp on a real rcssserver3d whose trainer turns robots (the SPL fork's ``rot``): the
+    lying pose (dropped on the ODE engine) is placed there exactly, and the robot rests as it
+    does in-process. A server without ``rot`` refuses GetUp with a clear error instead."""
+    import gymnasium
+
+    import robocup_gym.envs  # noqa: F401
+    from robocup_gym.envs import EnvConfigError
+
+    states = {}
+    for backend in ("ode", "rcssserver3d"):
+        try:
+            env = gymnasium.make("RobocupGym/GetUp-v0", backend=backend, action_mode="velocity")
+        except EnvConfigError as exc:  # an upstream 0.7.3 server: upright placement only
+            assert "(rot" in str(exc)
+            pytest.skip("this rcssserver3d does not turn robots (not the SPL fork)")
+        try:
+            env.reset(seed=0, options={"start_side": side})
+            for _ in range(10):
+                env.step(np.zeros(env.action_space.shape))
+            gt = env.unwrapped.ground_truth
+            states[backend] = (
+                gt.torso_pos.copy(),
+                np.array(gt.torso_quat),
+                np.array(env.unwrapped.perception.joint_angles_deg),
+            )
+        finally:
+            env.close()
+    (p0, q0, j0), (p1, q1, j1) = states["ode"], states["rcssserver3d"]
+    np.testing.assert_allclose(p1, p0, atol=0.002)
+    assert min(np.abs(q1 - q0).max(), np.abs(q1 + q0).max()) < 0.005
+    np.testing.assert_allclose(j1, j0, atol=0.1)

@@ -160,6 +160,7 @@ _cmd = st.one_of(
         st.none() | st.tuples(_f, _f, _f, _f),
         st.none() | _f,
         st.none() | _f,
+        st.none() | _v3,
     ),
     st.builds(PlayModeCmd, st.sampled_from(PLAY_MODES)),
     st.builds(KickOffCmd, st.sampled_from(["Left", "Right", "None"])),
@@ -179,3 +180,26 @@ def test_format_parse_round_trip(cmds: list) -> None:
     text = format_trainer_commands(cmds)
     assert parse_trainer_message(text) == cmds
     assert all(format_trainer_command(c) in text for c in cmds)
+
+
+def test_the_forks_rot_angles_and_orientations_convert_both_ways() -> None:
+    """``(rot rx ry rz)`` sets the torso to ``Rx·Ry·Rz`` (measured on the SPL fork: the
+    monitor's torso orientation equals :func:`quat_from_rot` to 1e-4 for five rotations)."""
+    import numpy as np
+
+    from robocup_gym.protocol.trainer import agent, quat_from_rot, rot_from_quat
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        back = quat_from_rot(rot_from_quat(q))
+        assert min(np.abs(back - q).max(), np.abs(back + q).max()) < 1e-12
+    # about one axis: the angle itself
+    np.testing.assert_allclose(
+        quat_from_rot((30.0, 0.0, 0.0)), [0.9659258, 0.258819, 0, 0], atol=1e-6
+    )
+    assert rot_from_quat(quat_from_rot((10.0, -20.0, 30.0))) == pytest.approx((10.0, -20.0, 30.0))
+    text = agent(1, "Left", move=(1.0, 2.0, 0.06, -90.0), rot=(10.0, -20.0, 30.5))
+    assert text == "(agent (unum 1) (team Left) (move 1 2 0.06 -90) (rot 10 -20 30.5))"
+    assert parse_trainer_command(text).rot == (10.0, -20.0, 30.5)

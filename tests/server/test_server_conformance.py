@@ -194,3 +194,28 @@ def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
             c.send("(syn)")
         _answer(c)
         assert server.world.torso_position(i)[2] < 0.385  # landed
+
+
+def test_the_forks_rot_turns_the_robot_about_its_torso(make_server):
+    """The SPL fork's ``(agent … (rot rx ry rz))``: serve turns the robot rigidly about its
+    torso centre to ``Rx·Ry·Rz``, as the fork does (joints kept)."""
+    from robocup_gym.protocol.trainer import quat_from_rot
+
+    server = make_server()
+    with (
+        AgentClient(HOST, server.agent_port, timeout=3.0) as c,
+        MonitorClient(HOST, server.monitor_port, timeout=3.0) as m,
+    ):
+        c.handshake("T", 1)
+        c.send("(syn)")
+        _answer(c)
+        joints = server.world.joint_angles_deg(0).copy()
+        m.send("(agent (unum 1) (team Left) (pos -2 1 0.5) (rot -80 0 -90))")
+        time.sleep(0.05)
+        c.send("(syn)")
+        _answer(c)
+        q = server.world.torso_quat(0)
+        want = quat_from_rot((-80.0, 0.0, -90.0))
+        assert min(np.abs(q - want).max(), np.abs(q + want).max()) < 0.02  # one cycle falling
+        np.testing.assert_allclose(server.world.torso_position(0)[:2], (-2.0, 1.0), atol=0.01)
+        np.testing.assert_allclose(server.world.joint_angles_deg(0), joints, atol=0.5)

@@ -163,18 +163,20 @@ class GetUp(BaseEnv):
     config: GetUpConfig
     task_reset_options = frozenset({"start_side"})
 
-    REAL_SERVERS = ("rcssserver3d", "rcssservermj", "agent-connection")
-    """Backends that cannot start a robot lying down (their placement is upright only, or, on
-    rcssservermj, with every joint at 0; an agent alone can only beam)."""
+    IN_PROCESS = ("ode", "mujoco", "rcsssmj")
+    """Backends whose worlds the lying poses are dropped in; for a real server they are dropped
+    on the ODE engine (SimSpark's own step), which it runs."""
 
     def __init__(self, config: GetUpConfig | None = None, **kwargs: Any) -> None:
         super().__init__(config, **kwargs)
-        if self.backend.name in self.REAL_SERVERS:
+        if not self.backend.places_any_orientation:
             name = self.backend.name
             self.close()
             raise EnvConfigError(
-                f"GetUp starts the robot lying down, which the {name!r} backend cannot place; "
-                "train and evaluate it in-process (the default), or place the robot yourself"
+                f"GetUp starts the robot lying down, which the {name!r} backend cannot place "
+                "(a real rcssserver3d can only where its trainer turns robots: the SPL fork's "
+                "(rot …)); train and evaluate it in-process (the default), or place the robot "
+                "yourself"
             )
         self._lying: dict[tuple[str, int], tuple[float, np.ndarray, np.ndarray]] = {}
         self.side = "front"
@@ -215,7 +217,10 @@ class GetUp(BaseEnv):
             x, y = self.config.robot_start_pos
             # in a world of its own where the environment made its backend, so that the
             # episodes' world has no history of the drop (episodes are then reproducible)
-            if self._owns_backend:
+            if self.backend.name not in self.IN_PROCESS:  # a real server: drop it on ODE
+                kw = dict(robot_type=self.config.robot_type)
+                world = make_backend("ode", **kw)
+            elif self._owns_backend:
                 world = make_backend(self.backend.name, **self.backend_kwargs())
             else:
                 world = self.backend
