@@ -215,8 +215,9 @@ def test_the_locomotion_benchmarks_print_json_last(script):
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[2]
+    extra = ["--lying-poses", "3", "--robot-type", "2"] if script == "getup.py" else []
     out = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / script), "zero", "--episodes", "1"],
+        [sys.executable, str(root / "benchmarks" / script), "zero", "--episodes", "2", *extra],
         capture_output=True,
         text=True,
         timeout=300,
@@ -230,6 +231,7 @@ def test_the_locomotion_benchmarks_print_json_last(script):
         assert res["turn_error_deg_s"] == pytest.approx(30.0, abs=1.0)
     else:
         assert res["success_rate"] == 0.0 and res["front"]["got_up"] == 0
+        assert res["lying_poses"] == 3 and res["robot_type"] == 2
 
 
 def test_the_walk_benchmark_measures_turning_counter_clockwise_positive():

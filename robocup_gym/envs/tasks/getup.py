@@ -136,8 +136,13 @@ class GetUp(BaseEnv):
     ``success``          50         once, × (1 + share of the episode left)
     ===================  =========  ===========================================================
 
-    ``reset(options={"start_side": "back"})`` picks the side of one episode. Works on every Nao
-    type and on both in-process engines (a real server cannot place a lying robot).
+    Actions are target angles of mirrored left/right joint pairs (10 values on the Nao:
+    ``action_mode="target_angle"``, ``mirror_actions=True``). ``reset(options={"start_side":
+    "back"})`` picks the side of one episode; ``lying_poses`` > 1 varies the lying pose. Works on
+    every Nao type, on both in-process engines, on the league's robots, and on a real
+    rcssserver3d whose trainer turns robots (the SPL fork's ``rot``; the lying poses are then
+    dropped on the ODE engine). ``TorsoAssist`` (``robocup-gym train get-up --assist-force …``)
+    helps while training.
     """
 
     config_class = GetUpConfig
