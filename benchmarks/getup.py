@@ -10,7 +10,9 @@ from the front and ~55 from the back on rcssserver3d).
 ``pretrained:get-up`` the policy shipped with the package. The environment is deterministic: with
 one lying pose per side every episode of a side repeats the first. ``--lying-poses 8`` starts
 each episode from one of 8 drops per side (tilt and joints varied ±10°), which measures how
-well a policy copes with other ways of lying; ``--robot-type N`` another Nao type.
+well a policy copes with other ways of lying; ``--robot-type N`` another Nao type. A policy
+meant for one side (``start_side`` ``front`` or ``back`` in its options, as the shipped
+``get-up-front``) is measured on that side only.
 Prints one line per side and, as the last line, one JSON object (``success_rate``,
 ``cycles_to_up_median``, per side the same).
 
@@ -81,9 +83,11 @@ def main(argv: list[str] | None = None) -> dict:
     if args.robot_type is not None:
         overrides["robot_type"] = args.robot_type
     env, act = policy_and_env(args.policy, "RobocupGym/GetUp-v0", args.engine, overrides)
+    fixed = getattr(env.unwrapped.config, "start_side", "random")
+    sides = (fixed,) if fixed in ("front", "back") else ("front", "back")
     out: dict = {"policy": args.policy, "within_cycles": args.within, **overrides}
     try:
-        for side in ("front", "back"):
+        for side in sides:
             res = run(env, act, side, args.episodes, args.seed, args.within)
             out[side] = res
             print(
@@ -93,13 +97,14 @@ def main(argv: list[str] | None = None) -> dict:
             )
     finally:
         env.close()
-    both = [out[s]["success_rate"] for s in ("front", "back")]
+    both = [out[s]["success_rate"] for s in sides]
+    out["sides"] = list(sides)
     out["success_rate"] = float(np.mean(both))
-    medians = [out[s]["cycles_to_up_median"] for s in ("front", "back")]
+    medians = [out[s]["cycles_to_up_median"] for s in sides]
     out["cycles_to_up_median"] = (
         None if None in medians else float(np.mean([m for m in medians if m is not None]))
     )
-    out["meets_target"] = min(both) >= 0.9
+    out["meets_target"] = min(both) >= 0.9  # for the sides the policy is meant for
     print(json.dumps(out))
     return out
 

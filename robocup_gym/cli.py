@@ -437,6 +437,14 @@ if typer is not None:
             Path | None, typer.Option(help="Export this checkpoint instead of model.zip.")
         ] = None,
         atol: Annotated[float, typer.Option(help="Verification tolerance.")] = 1e-5,
+        env: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--env",
+                help="Environment option KEY=VALUE the policy is meant for, over the run's "
+                "(repeatable), e.g. --env start_side=front for a get-up from the front.",
+            ),
+        ] = None,
     ) -> None:
         """Export the policy to ONNX (verified against the SB3 policy) + a JSON description."""
         from robocup_gym.train.export import ExportError, export_onnx
@@ -444,8 +452,11 @@ if typer is not None:
         _single_thread_torch()
         console = _console()
         try:
+            overrides = _parse_assignments(env, "--env")
             with console.status("exporting and verifying…"):
-                meta = export_onnx(run, onnx, checkpoint=checkpoint, atol=atol)
+                meta = export_onnx(
+                    run, onnx, checkpoint=checkpoint, atol=atol, env_overrides=overrides
+                )
         except (ExportError, ValueError, FileNotFoundError) as exc:
             _fail(str(exc))
         v = meta["verification"]

@@ -87,6 +87,13 @@ def policy_and_env(
             backend=engine or meta.get("backend") or DEFAULT_ENGINE,
             env_kwargs={**(meta.get("env_kwargs") or {}), **extra},
         )
+        want = int(meta["input"]["shape"][1])
+        if env.observation_space.shape != (want,):
+            env.close()
+            raise ValueError(
+                f"with {extra} the environment's observations have shape "
+                f"{env.observation_space.shape}; the policy {policy!r} takes ({want},)"
+            )
         return env, onnx
     info = load_run(policy)
     model = load_model(info)

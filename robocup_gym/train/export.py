@@ -119,18 +119,36 @@ def _sample_observations(info: RunInfo, model, obs_space, n_random: int, seed: i
     return np.concatenate(rows, axis=0)
 
 
-def _env_description(info: RunInfo) -> dict[str, Any]:
-    """Observation/action layout of the run's environment (RobocupGym tasks)."""
+def _env_description(info: RunInfo, env_kwargs: dict[str, Any], model=None) -> dict[str, Any]:
+    """Observation/action layout of the policy's environment (RobocupGym tasks): the run's,
+    with ``env_kwargs``.
+
+    Raises:
+        ValueError: with ``model``, the environment's observation or action space is not the
+            policy's (an option given to the export changed it).
+    """
     from robocup_gym.train.tasks import make_env
 
     cfg = info.config
     out: dict[str, Any] = {}
     try:
-        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs)
+        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=env_kwargs)
     except Exception as exc:
+        if env_kwargs != cfg.env_kwargs:
+            raise ValueError(
+                f"the environment options {env_kwargs} do not make one: {exc}"
+            ) from exc
         return {"error": f"environment not available: {exc}"}
     try:
         base = env.unwrapped
+        if model is not None:
+            for what in ("observation_space", "action_space"):
+                mine, policy = getattr(env, what), getattr(model, what)
+                if mine.shape != policy.shape:
+                    raise ValueError(
+                        f"with {env_kwargs} the environment's {what} has shape {mine.shape}, the "
+                        f"policy's {policy.shape}: the options do not fit this policy"
+                    )
         config = getattr(base, "config", None)
         if config is not None and hasattr(config, "to_dict"):
             out["env_config"] = config.to_dict()
@@ -164,12 +182,18 @@ def export_onnx(
     atol: float = 1e-5,
     seed: int = 0,
     opset: int = 17,
+    env_overrides: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Write ``onnx_path`` (and ``<name>.json`` beside it); returns the metadata.
+
+    ``env_overrides``: environment options the policy is meant for, over the run's (a get-up
+    trained on both sides and exported for ``start_side="front"``, say); they go into the
+    description's ``env_kwargs`` and must leave the observation and action spaces as they are.
 
     Raises:
         ExportError: when ONNX Runtime's actions differ from ``model.predict`` by more than
             ``atol`` on any sample.
+        ValueError: the overrides change the spaces or make no environment.
     """
     import onnx
     import onnxruntime as ort
@@ -178,6 +202,8 @@ def export_onnx(
     info = load_run(run)
     cfg = info.config
     model = load_model(info, checkpoint=checkpoint)
+    env_kwargs = {**cfg.env_kwargs, **(env_overrides or {})}
+    described = _env_description(info, env_kwargs, model)
     obs_space, act_space = model.observation_space, model.action_space
     if len(obs_space.shape) != 1 or len(act_space.shape) != 1:
         raise ExportError("only flat Box observation and action spaces can be exported")
@@ -220,7 +246,7 @@ def export_onnx(
         "task": cfg.task,
         "env_id": cfg.env_id,
         "backend": cfg.backend,
-        "env_kwargs": cfg.env_kwargs,
+        "env_kwargs": env_kwargs,
         "algo": cfg.algo,
         "run": str(info.path),
         "model": str(checkpoint or info.model_path),
@@ -242,7 +268,7 @@ def export_onnx(
         "obs_normalization_in_graph": obs_stats is not None,
         "verification": {"samples": len(obs), "max_abs_diff": max_diff, "atol": atol},
         "training": _training_description(info),
-        **_env_description(info),
+        **described,
     }
     model_proto = onnx.load(str(onnx_path))
     entry = model_proto.metadata_props.add()

@@ -651,3 +651,21 @@ def test_getup_refuses_an_agent_connection_that_cannot_lay_the_robot_down():
     finally:
         backend.close()
         server.stop()
+
+
+def test_export_records_the_environment_the_policy_is_meant_for(ppo_run, tmp_path):
+    """``export --env KEY=VALUE``: options over the run's go into the description (a get-up
+    from the front only, say); options that change the spaces are refused."""
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    onnx = tmp_path / "k.onnx"
+    invoke(["export", ppo_run, "--onnx", onnx, "--env", "ball_spawn_noise=0.01"])
+    meta = json.loads(onnx.with_suffix(".json").read_text())
+    assert meta["env_kwargs"]["ball_spawn_noise"] == 0.01
+    assert meta["env_config"]["ball_spawn_noise"] == 0.01
+    bad = ["export", str(ppo_run), "--onnx", str(tmp_path / "b.onnx"), "--env", "robot_type=4"]
+    result = CliRunner().invoke(app, bad)
+    assert result.exit_code == 1 and "do not fit this policy" in result.output
+    assert not (tmp_path / "b.onnx").exists()
