@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.train.run import RunInfo, load_model, load_run
+from robocup_gym.train.run import RunInfo, load_model, load_run, space_mismatch
 
 METADATA_KEY = "robocup_gym"
 FORMAT = "robocup-gym-policy/1"
@@ -141,14 +141,13 @@ def _env_description(info: RunInfo, env_kwargs: dict[str, Any], model=None) -> d
         return {"error": f"environment not available: {exc}"}
     try:
         base = env.unwrapped
-        if model is not None:
-            for what in ("observation_space", "action_space"):
-                mine, policy = getattr(env, what), getattr(model, what)
-                if mine.shape != policy.shape:
-                    raise ValueError(
-                        f"with {env_kwargs} the environment's {what} has shape {mine.shape}, the "
-                        f"policy's {policy.shape}: the options do not fit this policy"
-                    )
+        mismatch = None if model is None else space_mismatch(env, model)
+        if mismatch is not None:
+            what, mine, policy = mismatch
+            raise ValueError(
+                f"with {env_kwargs} the environment's {what} has shape {mine}, the policy's "
+                f"{policy}: the options do not fit this policy"
+            )
         config = getattr(base, "config", None)
         if config is not None and hasattr(config, "to_dict"):
             out["env_config"] = config.to_dict()

@@ -38,6 +38,17 @@ def algo_class(algo: str):
     return {"ppo": PipelinedPPO, "sac": SAC}[algo.lower()]
 
 
+def space_mismatch(a, b) -> tuple[str, tuple, tuple] | None:
+    """The first of the observation and action spaces whose shapes differ between ``a`` and
+    ``b`` (environments or models), as ``(name, a's shape, b's shape)``; ``None`` if both
+    match."""
+    for name in ("observation_space", "action_space"):
+        sa, sb = getattr(a, name).shape, getattr(b, name).shape
+        if sa != sb:
+            return name, sa, sb
+    return None
+
+
 def new_run_dir(root: str | os.PathLike, task: str, algo: str) -> Path:
     """A fresh ``root/<task>-<algo>-<timestamp>`` folder (suffixed if it already exists)."""
     root = Path(root)

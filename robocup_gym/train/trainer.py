@@ -119,20 +119,20 @@ def _start_from_run(model, init, cfg: TrainConfig) -> None:
     Raises:
         ValueError: the runs' algorithms or observation/action spaces differ.
     """
-    from robocup_gym.train.run import algo_class
+    from robocup_gym.train.run import algo_class, space_mismatch
 
     if init.config.algo != cfg.algo:
         raise ValueError(
             f"init_from {init.path} was trained with {init.config.algo}, this run uses {cfg.algo}"
         )
     source = algo_class(cfg.algo).load(init.model_path, device=cfg.device)
-    for name in ("observation_space", "action_space"):
-        ours, theirs = getattr(model, name), getattr(source, name)
-        if ours.shape != theirs.shape:
-            raise ValueError(
-                f"init_from {init.path}: its {name.replace('_', ' ')} has shape {theirs.shape}, "
-                f"this run's {ours.shape} (the task and its options must match)"
-            )
+    mismatch = space_mismatch(model, source)
+    if mismatch is not None:
+        name, ours, theirs = mismatch
+        raise ValueError(
+            f"init_from {init.path}: its {name.replace('_', ' ')} has shape {theirs}, "
+            f"this run's {ours} (the task and its options must match)"
+        )
     model.set_parameters(str(init.model_path), exact_match=True, device=cfg.device)
 
 
