@@ -964,7 +964,7 @@ class Rcssserver3dBackend(Backend):
         z = float(pose.z) if pose.z is not None else self._standing_z(target)
         hover_z = z + self.hover_height
         yaw = float(pose.heading_deg) - 90.0  # the trainer's move takes the model's raw yaw
-        team = "Left" if self.side == "left" else "Right"
+        team = self._team
         assert self.unum is not None
         hover = tc.agent_move(self.unum, team, (pose.x, pose.y, hover_z), yaw)
         first = tc.play_mode(play_mode) + hover
@@ -1091,6 +1091,11 @@ class Rcssserver3dBackend(Backend):
         return p
 
     @property
+    def _team(self) -> str:
+        """The side as the trainer's commands name it (``Left``/``Right``)."""
+        return "Left" if self.side == "left" else "Right"
+
+    @property
     def places_any_orientation(self) -> bool:
         """Whether this server's trainer turns robots (the SPL fork's ``(rot rx ry rz)``;
         upstream 0.7.3 ignores it): found out once, by turning the robot while it is held in
@@ -1102,7 +1107,7 @@ class Rcssserver3dBackend(Backend):
     def _probe_rot(self) -> bool:
         self._relaunch_if_dead()
         assert self.unum is not None
-        team = "Left" if self.side == "left" else "Right"
+        team = self._team
         zero = self._velocity_text(np.zeros(self._n))
         high = (0.0, 0.0, 1.5)
         p = self._exchange(

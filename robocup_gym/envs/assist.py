@@ -21,6 +21,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from robocup_gym.envs.observations import up_z
 from robocup_gym.sim.physics import GRAVITY
 
 __all__ = ["SCHEDULES", "TorsoAssist", "assist_share"]
@@ -123,10 +124,8 @@ class TorsoAssist(gym.Wrapper):
             f = assist_share(self.share, self.decay_steps, self.steps) * self.weight_n
         if f > 0.0 and self.max_tilt_deg < 180.0:
             gt = self._base.ground_truth
-            if gt is not None:
-                _, x, y, _ = gt.torso_quat
-                if 1.0 - 2.0 * (x * x + y * y) < self._min_up_z:
-                    return 0.0
+            if gt is not None and up_z(gt.torso_quat) < self._min_up_z:
+                return 0.0
         return f
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:

@@ -49,6 +49,7 @@ from robocup_gym.envs.observations import (
     ObservationContext,
     heading_frame,
     torso_axes,
+    up_z,
 )
 from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.types import GroundTruth, Perception
@@ -694,10 +695,10 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         gt = p.ground_truth
         self.ground_truth = gt
         if gt is not None:
-            _, x, y, _ = gt.torso_quat
-            up_z = 1.0 - 2.0 * (x * x + y * y)
             cfg = self.config
-            self.fallen = bool(up_z < cfg.fall_up_z or gt.torso_pos[2] < cfg.fall_height)
+            self.fallen = bool(
+                up_z(gt.torso_quat) < cfg.fall_up_z or gt.torso_pos[2] < cfg.fall_height
+            )
             if self._needs_heading:
                 self._heading = heading_frame(gt.torso_quat)
         else:

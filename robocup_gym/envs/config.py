@@ -254,11 +254,11 @@ class EnvConfig:
     critically damped with SimSpark's one-cycle dead time (the error halves every cycle);
     the paper used 1.0."""
     mirror_actions: bool = False
-    """One action value per left/right pair of controlled joints (the Nao: 12 values instead of
-    22): the right joint does the mirror image of the left one across the sagittal plane, the
-    sign taken from the joints' axes, so the robot moves symmetrically. For symmetric skills
-    (getting up) it halves what the policy has to explore. ``velocity`` and ``target_angle``
-    modes, the Nao only."""
+    """One action value per left/right pair of controlled joints (the Nao's default joints: 10
+    values instead of 20): the right joint does the mirror image of the left one across the
+    sagittal plane, the sign taken from the joints' axes, so the robot moves symmetrically. For
+    symmetric skills (getting up) it halves what the policy has to explore. ``velocity`` and
+    ``target_angle`` modes, the Nao only."""
     action_noise_std: float = 0.0
     """σ of Gaussian noise added to the action (in [-1, 1] units, before scaling; the noisy
     action is clipped to [-1, 1])."""

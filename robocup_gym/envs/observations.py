@@ -23,7 +23,7 @@ import numpy as np
 
 from robocup_gym.robot.nao import NaoModel
 
-__all__ = ["COMPONENTS", "Component", "ObservationContext", "component_names"]
+__all__ = ["COMPONENTS", "Component", "ObservationContext", "component_names", "up_z"]
 
 
 @dataclass(frozen=True)
@@ -258,6 +258,13 @@ def heading_frame(quat: np.ndarray) -> tuple[float, float]:
     return fx / n, fy / n
 
 
+def up_z(quat: np.ndarray) -> float:
+    """World z of the torso's up axis (+z) from its quaternion (w, x, y, z): 1 upright, 0 lying,
+    the cosine of the torso's tilt."""
+    _, x, y, _ = quat
+    return float(1.0 - 2.0 * (x * x + y * y))
+
+
 def torso_axes(quat: np.ndarray) -> tuple[float, float, float, float, float, float]:
     """Forward (+y) and up (+z) axes of the torso in world coordinates from its quaternion."""
     w, x, y, z = quat
@@ -267,5 +274,5 @@ def torso_axes(quat: np.ndarray) -> tuple[float, float, float, float, float, flo
         2.0 * (y * z + w * x),
         2.0 * (x * z + w * y),
         2.0 * (y * z - w * x),
-        1.0 - 2.0 * (x * x + y * y),
+        up_z(quat),
     )

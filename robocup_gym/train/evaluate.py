@@ -78,23 +78,10 @@ def policy_and_env(
         zeros = np.zeros(env.action_space.shape)
         return env, lambda obs: zeros
     if policy.startswith("pretrained:"):
-        from robocup_gym.train.pretrained import pretrained_policy
+        from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
 
         onnx = pretrained_policy(policy.split(":", 1)[1])
-        meta = onnx.metadata
-        env = make_env(
-            meta["env_id"],
-            backend=engine or meta.get("backend") or DEFAULT_ENGINE,
-            env_kwargs={**(meta.get("env_kwargs") or {}), **extra},
-        )
-        want = int(meta["input"]["shape"][1])
-        if env.observation_space.shape != (want,):
-            env.close()
-            raise ValueError(
-                f"with {extra} the environment's observations have shape "
-                f"{env.observation_space.shape}; the policy {policy!r} takes ({want},)"
-            )
-        return env, onnx
+        return pretrained_env(onnx, engine, extra), onnx
     info = load_run(policy)
     model = load_model(info)
     normalize = info.obs_normalizer()

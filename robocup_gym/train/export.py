@@ -23,7 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.train.run import RunInfo, load_model, load_run, space_mismatch
+from robocup_gym.train.run import (
+    RunInfo,
+    curve_so_far,
+    load_model,
+    load_run,
+    space_mismatch,
+)
 
 METADATA_KEY = "robocup_gym"
 FORMAT = "robocup-gym-policy/1"
@@ -296,13 +302,9 @@ def _training_description(info: RunInfo) -> dict[str, Any]:
             "max_tilt_deg": cfg.assist_max_tilt_deg,
             "schedule": cfg.assist_schedule,
         }
-    curve = info.path / "progress.csv"
-    if curve.exists():
-        rows = curve.read_text().splitlines()
-        if len(rows) > 1:
-            head, last = rows[0].split(","), rows[-1].split(",")
-            if "wall_s" in head:
-                out["wall_s"] = float(last[head.index("wall_s")])
+    wall_s, _ = curve_so_far(info.path / "progress.csv")
+    if wall_s > 0.0:
+        out["wall_s"] = wall_s
     return out
 
 

@@ -21,6 +21,7 @@ from robocup_gym.backends import DEFAULT_ENGINE
 __all__ = [
     "POLICY_DIR",
     "evaluate_pretrained",
+    "pretrained_env",
     "pretrained_names",
     "pretrained_path",
     "pretrained_policy",
@@ -38,7 +39,8 @@ def pretrained_names() -> list[str]:
 
 
 def pretrained_path(name: str) -> Path:
-    """The ONNX file of the shipped policy ``name`` (``get-up``; ``getup`` and ``GetUp`` too).
+    """The ONNX file of the shipped policy ``name`` (``get-up-front``; ``Get_Up_Front`` and
+    ``getupfront`` too).
 
     Raises:
         ValueError: no such policy (the message lists the shipped ones).
@@ -60,6 +62,33 @@ def pretrained_policy(name: str):
     return OnnxPolicy(pretrained_path(name))
 
 
+def pretrained_env(policy, backend: str | None = None, env_overrides: dict[str, Any] | None = None):
+    """The environment an exported ``policy`` (an :class:`~robocup_gym.train.export.OnnxPolicy`)
+    is meant for: its task with its options (``env_overrides`` over them) on ``backend``
+    (default: the engine it was trained on).
+
+    Raises:
+        ValueError: the overrides give observations of another size than the policy takes.
+    """
+    from robocup_gym.train.tasks import make_env
+
+    meta = policy.metadata
+    extra = dict(env_overrides or {})
+    env = make_env(
+        meta["env_id"],
+        backend=backend or meta.get("backend") or DEFAULT_ENGINE,
+        env_kwargs={**(meta.get("env_kwargs") or {}), **extra},
+    )
+    want = int(meta["input"]["shape"][1])
+    if env.observation_space.shape != (want,):
+        env.close()
+        raise ValueError(
+            f"with {extra} the environment's observations have shape "
+            f"{env.observation_space.shape}; the policy {policy.path.stem!r} takes ({want},)"
+        )
+    return env
+
+
 class _Predictor:
     """``predict(obs, deterministic)`` over an ONNX policy, for :func:`run_episodes`."""
 
@@ -79,14 +108,13 @@ def evaluate_pretrained(
     the task's measures: ``success_rate``, ``forward_speed_mps_mean``, …)."""
     from robocup_gym.train.evaluate import run_episodes
     from robocup_gym.train.metrics import summarize
-    from robocup_gym.train.tasks import make_env
 
     if int(episodes) < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     policy = pretrained_policy(name)
     meta = policy.metadata
     backend = backend or meta.get("backend") or DEFAULT_ENGINE
-    env = make_env(meta["env_id"], backend=backend, env_kwargs=dict(meta.get("env_kwargs") or {}))
+    env = pretrained_env(policy, backend)
     try:
         records = run_episodes(_Predictor(policy), env, episodes, seed=seed)
     finally:

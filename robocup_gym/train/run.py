@@ -14,6 +14,7 @@ Layout of ``runs/<task>-<algo>-<YYYYmmdd-HHMMSS>/``::
 
 from __future__ import annotations
 
+import csv
 import os
 import re
 import time
@@ -36,6 +37,28 @@ def algo_class(algo: str):
     from robocup_gym.train.pipelined import PipelinedPPO
 
     return {"ppo": PipelinedPPO, "sac": SAC}[algo.lower()]
+
+
+def curve_so_far(curve: Path) -> tuple[float, int]:
+    """Wall-clock seconds and episodes of a run so far (the last row of its progress.csv;
+    ``(0.0, 0)`` when there is none)."""
+    if not curve.exists():
+        return 0.0, 0
+    last = None
+    with curve.open() as f:
+        for row in csv.DictReader(f):
+            last = row
+    if not last:
+        return 0.0, 0
+    try:
+        wall = float(last["wall_s"])
+    except (KeyError, TypeError, ValueError):
+        wall = 0.0
+    try:
+        episodes = int(float(last["episodes"]))
+    except (KeyError, TypeError, ValueError):
+        episodes = 0
+    return wall, episodes
 
 
 def space_mismatch(a, b) -> tuple[str, tuple, tuple] | None:

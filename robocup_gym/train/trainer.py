@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import csv
 import os
 import shutil
 import signal
@@ -14,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from robocup_gym.train.config import TrainConfig
-from robocup_gym.train.run import checkpoints, load_run, new_run_dir
+from robocup_gym.train.run import checkpoints, curve_so_far, load_run, new_run_dir
 from robocup_gym.train.tasks import (
     make_env,
     resolve_task,
@@ -37,27 +36,6 @@ class TrainResult:
     recent: dict[str, Any] = field(default_factory=dict)
     """Running means over the last 100 training episodes."""
     last_eval: dict[str, Any] | None = None
-
-
-def _previous_curve(curve: Path) -> tuple[float, int]:
-    """Wall-clock seconds and episodes of a resumed run so far (last row of progress.csv)."""
-    if not curve.exists():
-        return 0.0, 0
-    last = None
-    with curve.open() as f:
-        for row in csv.DictReader(f):
-            last = row
-    if not last:
-        return 0.0, 0
-    try:
-        wall = float(last["wall_s"])
-    except (KeyError, TypeError, ValueError):
-        wall = 0.0
-    try:
-        episodes = int(float(last["episodes"]))
-    except (KeyError, TypeError, ValueError):
-        episodes = 0
-    return wall, episodes
 
 
 STOP_SIGNALS = tuple(
@@ -200,7 +178,7 @@ def train(
 
     remaining = cfg.timesteps - int(model.num_timesteps)
     curve = path / "progress.csv"
-    wall0, episodes0 = _previous_curve(curve) if start_from is not None else (0.0, 0)
+    wall0, episodes0 = curve_so_far(curve) if start_from is not None else (0.0, 0)
     from robocup_gym.train.callbacks import (
         CheckpointCallback,
         EpisodeStatsCallback,

@@ -19,6 +19,7 @@ from robocup_gym.backends import make_backend
 from robocup_gym.backends.base import RobotPose
 from robocup_gym.envs.base_env import BaseEnv
 from robocup_gym.envs.config import BALL_REST_Z, ActionMode, EnvConfig, EnvConfigError
+from robocup_gym.envs.observations import up_z
 from robocup_gym.types import AgentCommand
 
 __all__ = ["GETUP_OBSERVATIONS", "GetUp", "GetUpConfig"]
@@ -223,8 +224,7 @@ class GetUp(BaseEnv):
             # in a world of its own where the environment made its backend, so that the
             # episodes' world has no history of the drop (episodes are then reproducible)
             if self.backend.name not in self.IN_PROCESS:  # a real server: drop it on ODE
-                kw = dict(robot_type=self.config.robot_type)
-                world = make_backend("ode", **kw)
+                world = make_backend("ode", robot_type=self.config.robot_type)
             elif self._owns_backend:
                 world = make_backend(self.backend.name, **self.backend_kwargs())
             else:
@@ -274,11 +274,10 @@ class GetUp(BaseEnv):
 
     def _is_up(self) -> bool:
         gt = self.ground_truth
-        _, x, y, _ = gt.torso_quat
-        up_z = 1.0 - 2.0 * (x * x + y * y)
         c = self.config
         return bool(
-            gt.torso_pos[2] > c.success_height and up_z > math.cos(math.radians(c.success_tilt_deg))
+            gt.torso_pos[2] > c.success_height
+            and up_z(gt.torso_quat) > math.cos(math.radians(c.success_tilt_deg))
         )
 
     def _is_terminated(self) -> bool:
@@ -287,12 +286,10 @@ class GetUp(BaseEnv):
     def _get_reward(self, action: np.ndarray) -> float:
         c = self.config
         gt = self.ground_truth
-        _, x, y, _ = gt.torso_quat
-        up_z = 1.0 - 2.0 * (x * x + y * y)
         up = self._is_up()
         terms = {
             "height": c.w_height * min(float(gt.torso_pos[2]), c.height_cap),
-            "upright": c.w_upright * up_z,
+            "upright": c.w_upright * up_z(gt.torso_quat),
             "time": 0.0 if up else c.w_time,
             "action_rate": c.w_action_rate * float(np.sum((action - self._prev_action) ** 2)),
             "success": 0.0,

@@ -15,7 +15,7 @@ import numpy as np
 
 from robocup_gym.envs.base_env import BaseEnv
 from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, EnvConfig, EnvConfigError
-from robocup_gym.envs.observations import heading_frame
+from robocup_gym.envs.observations import heading_frame, up_z
 
 __all__ = ["WALK_OBSERVATIONS", "Walk", "WalkConfig", "walk_reward_terms"]
 
@@ -228,8 +228,7 @@ class Walk(BaseEnv):
         v = gt.torso_vel if gt.torso_vel is not None else np.zeros(3)
         w = gt.torso_ang_vel if gt.torso_ang_vel is not None else np.zeros(3)
         velocity = np.array([cos * v[0] + sin * v[1], cos * v[1] - sin * v[0], v[2]])
-        _, x, y, _ = gt.torso_quat
-        up_z = 1.0 - 2.0 * (x * x + y * y)
+        upright = up_z(gt.torso_quat)
         touchdowns = []
         forces = self.perception.force_sensors
         contact = gt.feet_contact  # robots without foot pressure perceptors (the league's)
@@ -250,7 +249,7 @@ class Walk(BaseEnv):
             velocity=velocity,
             turn_rate=float(w[2]),
             command=self.velocity_command,
-            up_z=up_z,
+            up_z=upright,
             touchdown_air_times=touchdowns,
             action=action,
             last_action=self._prev_action,

@@ -291,9 +291,9 @@ class OdeWorld(Senses):
         self._ball_pairs = np.array([p for p, _ in ball_pairs], dtype=np.int64)
         self._ball_pair_robot = np.array([i for _, i in ball_pairs], dtype=np.int64)
         self._queued: dict[int, np.ndarray] = {}
+        """Commands given with :meth:`command` for the next :meth:`step`."""
         self._pushes: dict[int, tuple[float, float, float]] = {}
         """Robot index → the external force on its torso (:meth:`set_torso_force`)."""
-        """Commands given with :meth:`command` for the next :meth:`step`."""
         self._out_pair = np.zeros(len(self._feedback), dtype=np.int32)
         self._out_pos = np.zeros((len(self._feedback), 3))
         self._pair_frp = [(p[5], p[6]) for p in self._pairs]
