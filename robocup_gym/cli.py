@@ -81,15 +81,16 @@ def _backend(backend: str | None, engine: str | None) -> str | None:
 
 
 def _parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
-    """``["a=1", "b=[1, 2]"]`` → ``{"a": 1, "b": [1, 2]}`` (values read as YAML)."""
-    import yaml
+    """``["a=1", "b=[1, 2]"]`` → ``{"a": 1, "b": [1, 2]}`` (values read as YAML; ``3e-4`` is a
+    number)."""
+    from robocup_gym.train.config import load_yaml
 
     out: dict[str, Any] = {}
     for item in items or []:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
             _fail(f"{what} expects KEY=VALUE, got {item!r}")
-        out[key.strip()] = yaml.safe_load(value)
+        out[key.strip()] = load_yaml(value)
     return out
 
 

@@ -25,6 +25,10 @@ class ActionMapper:
             the mirror image of the left one (:attr:`NaoModel.mirror_pairs`), so the robot moves
             symmetrically and the action has fewer values (``velocity`` and ``target_angle``
             modes).
+        around_deg: Target-angle modes: the pose (deg, canonical order, every joint) that action
+            0 holds, with ``spread_deg``; ``None``: action 0 is the middle of each joint's range.
+        spread_deg: With ``around_deg``: an action of ±1 is ``around_deg`` ± this many degrees,
+            clipped to the joint's range.
     """
 
     def __init__(
@@ -34,6 +38,8 @@ class ActionMapper:
         mode: ActionMode,
         gain: float,
         mirror: bool = False,
+        around_deg: np.ndarray | None = None,
+        spread_deg: float | None = None,
     ):
         self.model = model
         self.joints = np.asarray(joints, dtype=int)
@@ -63,8 +69,9 @@ class ActionMapper:
             self._full = np.zeros(n)
         self.max_speed = model.max_speeds[self.joints].astype(float)
         lo, hi = model.ranges_deg[self.joints].T.astype(float)
-        self.angle_mid = (lo + hi) / 2.0
-        self.angle_half = (hi - lo) / 2.0
+        self.angle_mid, self.angle_half, self._limits = _target_window(
+            lo, hi, self.joints, around_deg, spread_deg
+        )
         self._command = np.zeros(len(model.joints))
 
     def expand(self, action: np.ndarray) -> np.ndarray:
@@ -80,7 +87,7 @@ class ActionMapper:
     def targets_deg(self, action: np.ndarray) -> np.ndarray:
         """Target angles (deg) of the target-angle modes for ``action``."""
         a = action[0::2] if self.mode is ActionMode.TARGET_ANGLE_MAX_SPEED else self.expand(action)
-        return self.angle_mid + a * self.angle_half
+        return _targets(self, a)
 
     def velocities(self, action: np.ndarray, joint_angles_deg: np.ndarray) -> np.ndarray:
         """Velocities (rad/s) of the controlled joints for a clipped ``action`` given the current
@@ -90,10 +97,10 @@ class ActionMapper:
         if mode is ActionMode.VELOCITY:
             return action * self.max_speed
         if mode is ActionMode.TARGET_ANGLE:
-            target = self.angle_mid + action * self.angle_half
+            target = _targets(self, action)
             limit = self.max_speed
         else:
-            target = self.angle_mid + action[0::2] * self.angle_half
+            target = _targets(self, action[0::2])
             limit = (action[1::2] + 1.0) * (0.5 * self.max_speed)
         err = np.radians(target - joint_angles_deg[self.joints])
         return np.clip(self.gain * err, -limit, limit)
@@ -141,6 +148,7 @@ class PDActionMapper:
         mode: ``TARGET_ANGLE``, ``TARGET_ANGLE_GAINS`` or ``TORQUE``.
         saturation_deg: See above, degrees.
         damping_s: See above, seconds.
+        around_deg, spread_deg: As :class:`ActionMapper`'s (model order).
     """
 
     def __init__(
@@ -150,6 +158,8 @@ class PDActionMapper:
         mode: ActionMode,
         saturation_deg: float,
         damping_s: float,
+        around_deg: np.ndarray | None = None,
+        spread_deg: float | None = None,
     ) -> None:
         self.model = model
         self.joints = np.asarray(joints, dtype=int)
@@ -170,8 +180,9 @@ class PDActionMapper:
         """Default derivative gain per joint (model order), N·m·s/rad."""
         self.tau_max = tmax
         lo, hi = model.ranges_deg[self.joints].T.astype(float)
-        self.angle_mid = (lo + hi) / 2.0
-        self.angle_half = (hi - lo) / 2.0
+        self.angle_mid, self.angle_half, self._limits = _target_window(
+            lo, hi, self.joints, around_deg, spread_deg
+        )
         self._names = model.effector_names
         self._lo, self._hi = model.ranges_deg.T.astype(float)
         self._others = np.setdiff1d(np.arange(len(model.joints)), self.joints)
@@ -186,7 +197,7 @@ class PDActionMapper:
     def targets_deg(self, action: np.ndarray) -> np.ndarray:
         """Target angles (deg) of the target-angle modes for ``action``."""
         a = action[0::3] if self.mode is ActionMode.TARGET_ANGLE_GAINS else action
-        return self.angle_mid + a * self.angle_half
+        return _targets(self, a)
 
     def command(self, action: np.ndarray, joint_angles_deg: np.ndarray | None = None):
         """The PD commands (effector name → :class:`PDCommand`) for a clipped ``action``, every
@@ -233,3 +244,29 @@ class PDActionMapper:
         if self.mode is ActionMode.TARGET_ANGLE_GAINS:
             return [f"{n}/{part}" for n in names for part in ("angle", "kp", "kd")]
         return list(names)
+
+
+def _target_window(
+    lo: np.ndarray,
+    hi: np.ndarray,
+    joints: np.ndarray,
+    around_deg: np.ndarray | None,
+    spread_deg: float | None,
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
+    """(centre, half width, clip limits or ``None``) of the target angles an action in [-1, 1]
+    spans, per controlled joint (deg): the joint's whole range, or ``around_deg`` ±
+    ``spread_deg`` clipped to it."""
+    if around_deg is None:
+        return (lo + hi) / 2.0, (hi - lo) / 2.0, None
+    if spread_deg is None or not (np.isfinite(spread_deg) and spread_deg > 0):
+        raise ValueError(f"spread_deg must be a number > 0 with around_deg, got {spread_deg!r}")
+    centre = np.asarray(around_deg, dtype=float)[joints]
+    return centre, np.full(len(joints), float(spread_deg)), (lo, hi)
+
+
+def _targets(mapper, a: np.ndarray) -> np.ndarray:
+    """Target angles (deg) of a mapper's target window for action values ``a``."""
+    target = mapper.angle_mid + a * mapper.angle_half
+    if mapper._limits is not None:
+        target = np.clip(target, *mapper._limits)
+    return target

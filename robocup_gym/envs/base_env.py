@@ -282,13 +282,27 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             )
 
         # ---- actions
+        spread = config.target_around_start_deg
+        around = None if spread is None else self._start_angles
         if self.league:
             self._actions = PDActionMapper(
-                model, ctrl, config.action_mode, config.pd_saturation_deg, config.pd_damping_s
+                model,
+                ctrl,
+                config.action_mode,
+                config.pd_saturation_deg,
+                config.pd_damping_s,
+                around_deg=around,
+                spread_deg=spread,
             )
         else:
             self._actions = ActionMapper(
-                model, ctrl, config.action_mode, config.target_gain, bool(config.mirror_actions)
+                model,
+                ctrl,
+                config.action_mode,
+                config.target_gain,
+                bool(config.mirror_actions),
+                around_deg=around,
+                spread_deg=spread,
             )
         n_act = self._actions.size
         self.action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
@@ -312,6 +326,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             "time": self._w_time,
             "kick_target": self._w_kick_target,
             "velocity_command": self._w_velocity_command,
+            "gait_phase": self._w_gait_phase,
             "torso_velocity": self._w_torso_velocity,
             "last_action": self._w_last_action,
         }
@@ -372,6 +387,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.ball_spawn_pos = config.ball_start.copy()
         self.kick_target = np.array(config.kick_target, dtype=float)
         self.velocity_command = np.zeros(3)
+        self.gait_clock = (0.0, 0.0)
+        """The task's gait clock (phase at the episode's start in [0, 1), frequency in Hz): the
+        ``gait_phase`` observation; (0, 0) unless the task sets it."""
         """The planar velocity a task commands (forward m/s, left m/s, turn deg/s; the
         ``velocity_command`` observation); zeros unless the task sets it."""
         self.episode_start: EpisodeStart | None = None
@@ -830,6 +848,17 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _w_velocity_command(self, out: np.ndarray) -> None:
         out[:] = self.velocity_command
+
+    @property
+    def gait_phase(self) -> float:
+        """The gait clock's phase now, in [0, 1) (see :attr:`gait_clock`)."""
+        start, hz = self.gait_clock
+        return (start + hz * CYCLE_S * self.episode_step) % 1.0
+
+    def _w_gait_phase(self, out: np.ndarray) -> None:
+        angle = 2.0 * math.pi * self.gait_phase
+        out[0] = math.sin(angle)
+        out[1] = math.cos(angle)
 
     def _w_torso_velocity(self, out: np.ndarray) -> None:
         gt = self.ground_truth

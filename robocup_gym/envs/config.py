@@ -253,6 +253,12 @@ class EnvConfig:
     """Proportional gain of the target-angle modes, 1/s: velocity = gain × angle error. 12.5 is
     critically damped with SimSpark's one-cycle dead time (the error halves every cycle);
     the paper used 1.0."""
+    target_around_start_deg: float | None = None
+    """Target-angle modes: ``None``, an action of ±1 spans each joint's whole range (0 is its
+    middle); a number of degrees, the action spans the start pose (``joint_start_deg``) ± that
+    many degrees, clipped to the range, so action 0 holds the start pose (the default-pose offset
+    of legged_gym's and MuJoCo Playground's locomotion policies, their ``action_scale``). Modes
+    without target angles (``velocity``, ``torque``) ignore it."""
     mirror_actions: bool = False
     """One action value per left/right pair of controlled joints (the Nao's default joints: 10
     values instead of 20): the right joint does the mirror image of the left one across the
@@ -456,6 +462,12 @@ class EnvConfig:
             raise EnvConfigError(
                 f"action_mode {self.action_mode.value!r} is for the league's robots (PD joints); "
                 "the Nao's: 'velocity', 'target_angle', 'target_angle_max_speed'"
+            )
+        if self.target_around_start_deg is not None:
+            need(
+                _finite(self.target_around_start_deg) and 0.0 < self.target_around_start_deg <= 360,
+                "target_around_start_deg must be None or a number of degrees in (0, 360], got "
+                f"{self.target_around_start_deg!r}",
             )
         if self.mirror_actions and (
             league or self.action_mode is ActionMode.TARGET_ANGLE_MAX_SPEED

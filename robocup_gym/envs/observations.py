@@ -218,6 +218,16 @@ COMPONENTS: dict[str, Component] = {
             _labels("velocity_command", ["forward", "left", "turn"]),
         ),
         Component(
+            "gait_phase",
+            "The task's gait clock φ in [0, 1) as (sin 2πφ, cos 2πφ) (Walk: φ advances at "
+            "`gait_frequency_hz` from a random start; the left foot is meant to swing first). "
+            "(0, 1) in tasks without a gait clock.",
+            "1",
+            "[-1, 1] each",
+            _const([-1.0, -1.0], [1.0, 1.0]),
+            _labels("gait_phase", ["sin", "cos"]),
+        ),
+        Component(
             "torso_velocity",
             "Velocity of the torso centre in the heading frame (forward, left, up) and its turn "
             "rate about the world's up axis (CCW positive). Ground truth.",

@@ -22,7 +22,9 @@ merged over the defaults::
 from __future__ import annotations
 
 import copy
+import functools
 import os
+import re
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -59,6 +61,35 @@ SAC_PAPER_DEFAULTS: dict[str, Any] = {}
 
 DEFAULT_N_ENVS = 16
 """The paper's number of worker environments."""
+
+
+_YAML_FLOAT = re.compile(
+    r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)(?:[eE][-+]?[0-9]+)?$"
+    r"|^[-+]?\.(?:inf|Inf|INF)$|^\.(?:nan|NaN|NAN)$"
+)
+
+
+@functools.cache
+def _yaml_loader() -> type:
+    import yaml
+
+    class _Loader(yaml.SafeLoader):
+        """PyYAML's safe loader with YAML 1.2's floats."""
+
+    _Loader.yaml_implicit_resolvers = {
+        k: [(tag, rx) for tag, rx in v if tag != "tag:yaml.org,2002:float"]
+        for k, v in yaml.SafeLoader.yaml_implicit_resolvers.items()
+    }
+    _Loader.add_implicit_resolver("tag:yaml.org,2002:float", _YAML_FLOAT, list("-+0123456789."))
+    return _Loader
+
+
+def load_yaml(text: str) -> Any:
+    """YAML as users write it: PyYAML's safe loader, except that numbers in exponent notation
+    without a dot (``3e-4``, ``1e6``) are floats, as in YAML 1.2, not strings."""
+    import yaml
+
+    return yaml.load(text, Loader=_yaml_loader())  # a SafeLoader subclass: safe
 
 
 def algo_defaults(algo: str) -> dict[str, Any]:
@@ -237,10 +268,9 @@ class TrainConfig:
     @classmethod
     def load(cls, path: str | os.PathLike) -> TrainConfig:
         """Read a YAML config file (any subset of the fields)."""
-        import yaml
 
         text = Path(path).read_text()
-        data = yaml.safe_load(text) or {}
+        data = load_yaml(text) or {}
         if not isinstance(data, dict):
             raise ValueError(
                 f"{path}: a config file must hold a mapping, got {type(data).__name__}"

@@ -70,6 +70,68 @@ def test_walking_at_the_command_earns_the_tracking_reward():
     assert down["fall"] == -10.0 and down["alive"] == 0.0
 
 
+def test_feet_in_contact_as_the_gait_clock_asks_earn_the_phase_reward():
+    w = WalkConfig().w_feet_phase
+    # φ = 0.1: the left foot's swing (φ in [0, 0.4)), the right foot's stance
+    assert _terms(phase=0.1, feet_down=(False, True))["feet_phase"] == pytest.approx(w)
+    assert _terms(phase=0.1, feet_down=(True, True))["feet_phase"] == pytest.approx(w / 2)
+    assert _terms(phase=0.1, feet_down=(True, False))["feet_phase"] == 0.0
+    # φ = 0.6: the right foot's swing
+    assert _terms(phase=0.6, feet_down=(True, False))["feet_phase"] == pytest.approx(w)
+    # φ = 0.45 and 0.95: both feet down (double support)
+    assert _terms(phase=0.45, feet_down=(True, True))["feet_phase"] == pytest.approx(w)
+    assert _terms(phase=0.95, feet_down=(True, True))["feet_phase"] == pytest.approx(w)
+    # told to stand: both feet down whatever the clock says
+    stand = np.zeros(3)
+    assert _terms(command=stand, phase=0.1, feet_down=(True, True))["feet_phase"] == w
+    assert _terms(command=stand, phase=0.1, feet_down=(False, True))["feet_phase"] == w / 2
+    assert _terms(phase=0.1)["feet_phase"] == 0.0  # no contact given: no term
+
+
+def test_the_gait_clock_is_observed_and_runs_at_its_frequency():
+    env = Walk(gait_frequency_hz=2.0)
+    obs, _ = env.reset(seed=3)
+    start, hz = env.gait_clock
+    assert 0.0 <= start < 1.0 and hz == 2.0
+    sl = env.component_slices["gait_phase"]
+    assert env.observation_labels[sl] == ["gait_phase/sin", "gait_phase/cos"]
+    for k in range(1, 40):
+        obs = env.step(np.zeros(env.action_space.shape))[0]
+        phase = (start + 2.0 * 0.02 * k) % 1.0  # 20 ms per step
+        assert env.gait_phase == pytest.approx(phase)
+        angle = 2 * math.pi * phase
+        np.testing.assert_allclose(obs[sl], [math.sin(angle), math.cos(angle)], atol=1e-6)
+    starts = {round(Walk().reset(seed=s)[0][sl][0], 6) for s in range(5)}
+    assert len(starts) == 5  # a random start phase per episode
+    env.close()
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_walk_actions_are_targets_around_the_walking_pose(engine):
+    env = Walk(engine=engine)
+    env.reset(seed=0, options={"velocity_command": (0.0, 0.0, 0.0)})
+    mapper = env._actions
+    joints = mapper.joints
+    start = env._start_angles[joints]
+    np.testing.assert_allclose(mapper.targets_deg(np.zeros(len(joints))), start)
+    lo, hi = env.robot_model.ranges_deg[joints].T
+    np.testing.assert_allclose(
+        mapper.targets_deg(np.ones(len(joints))), np.minimum(start + 30.0, hi)
+    )
+    np.testing.assert_allclose(
+        mapper.targets_deg(-np.ones(len(joints))), np.maximum(start - 30.0, lo)
+    )
+    for _ in range(50):  # action 0 holds the pose: the robot stands
+        _, _, terminated, _, _ = env.step(np.zeros(env.action_space.shape))
+        assert not terminated
+    q = env.perception.joint_angles_deg[joints]
+    assert np.abs(q - start).max() < 1.0
+    env.close()
+    whole = Walk(target_around_start_deg=None)._actions  # the joint's whole range
+    mid = whole.targets_deg(np.zeros(len(joints)))
+    np.testing.assert_allclose(mid, (lo + hi) / 2)
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_fall_ends_a_walk_episode_with_the_penalty(engine):
     env = Walk(engine=engine, joint_start_deg={"rle3": 60.0, "lle3": 60.0})  # hips bent: topples
@@ -103,6 +165,14 @@ def test_walk_options_are_validated():
         Walk(forward_speed_range=(1.0, -1.0))
     with pytest.raises(EnvConfigError, match="standing_command_prob"):
         Walk(standing_command_prob=2.0)
+    with pytest.raises(EnvConfigError, match="gait_frequency_hz must be in"):
+        Walk(gait_frequency_hz=0.0)
+    with pytest.raises(EnvConfigError, match="swing_share"):
+        Walk(swing_share=0.7)
+    with pytest.raises(EnvConfigError, match="target_around_start_deg must be None or"):
+        Walk(target_around_start_deg=-5.0)
+    with pytest.raises(EnvConfigError, match="w_feet_phase must be finite"):
+        Walk(w_feet_phase=math.nan)
 
 
 # ------------------------------------------------------------------ GetUp

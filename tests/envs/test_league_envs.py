@@ -103,7 +103,8 @@ def test_bad_league_options_are_clear_errors():
 
 
 def _knee_after(mode: str, action_value: float, cycles: int = 15) -> float:
-    env = Walk(robot="T1", action_mode=mode, terminate_on_fall=False)
+    # target angles over each joint's whole range (Walk's default spans the start pose ± 30°)
+    env = Walk(robot="T1", action_mode=mode, terminate_on_fall=False, target_around_start_deg=None)
     env.reset(seed=0)
     a = np.zeros(env.action_space.shape)
     labels = env.action_labels

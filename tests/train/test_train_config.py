@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from math import inf
+
 import pytest
 
-from robocup_gym.train.config import TrainConfig, algo_defaults
+from robocup_gym.train.config import TrainConfig, algo_defaults, load_yaml
 from robocup_gym.train.tasks import kebab, registered_tasks, resolve_task, task_name
 
 
@@ -44,6 +46,24 @@ def test_yaml_round_trip_and_merge(tmp_path):
     again = TrainConfig.load(tmp_path / "saved.yaml")
     assert again.resolved_algo_kwargs() == hp
     assert cfg.merged(n_envs=None, seed=7).n_envs == 4
+
+
+def test_numbers_in_exponent_notation_are_numbers(tmp_path):
+    # PyYAML reads `3e-4` (no dot) as a string; SB3 then refuses it as a learning rate
+    path = tmp_path / "c.yaml"
+    path.write_text("algo_kwargs: {learning_rate: 3e-4, n_steps: 2e2}\n")
+    hp = TrainConfig.load(path).resolved_algo_kwargs()
+    assert hp["learning_rate"] == 3e-4 and isinstance(hp["learning_rate"], float)
+    assert hp["n_steps"] == 200.0
+    assert load_yaml("[1E+3, -.5, 7, 0x10, 1e-4x, .inf]") == [1000.0, -0.5, 7, 16, "1e-4x", inf]
+
+
+def test_hp_flags_read_exponent_notation():
+    from robocup_gym.cli import _parse_assignments
+
+    got = _parse_assignments(["learning_rate=3e-4", "policy_kwargs={log_std_init: -1e0}"], "--hp")
+    assert got == {"learning_rate": 3e-4, "policy_kwargs": {"log_std_init": -1.0}}
+    assert isinstance(got["learning_rate"], float)
 
 
 @pytest.mark.parametrize(

@@ -14,7 +14,12 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.envs.base_env import BaseEnv
-from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, EnvConfig, EnvConfigError
+from robocup_gym.envs.config import (
+    PAPER_STANDING_POSE_DEG,
+    ActionMode,
+    EnvConfig,
+    EnvConfigError,
+)
 from robocup_gym.envs.observations import heading_frame, up_z
 
 __all__ = ["WALK_OBSERVATIONS", "Walk", "WalkConfig", "walk_reward_terms"]
@@ -29,10 +34,11 @@ WALK_OBSERVATIONS = (
     "torso_height",
     "torso_velocity",
     "velocity_command",
+    "gait_phase",
     "last_action",
 )
-"""What a walking policy sees by default: its body, the torso's pose and velocity, the command
-and its last action."""
+"""What a walking policy sees by default: its body, the torso's pose and velocity, the command,
+the gait clock and its last action."""
 
 
 @dataclass
@@ -44,6 +50,16 @@ class WalkConfig(EnvConfig):
     """10 s episodes."""
     joint_start_deg: Any = field(default_factory=lambda: dict(PAPER_STANDING_POSE_DEG))
     """The crouched pose walking starts from (the paper's standing pose), deg by name."""
+    action_mode: ActionMode | str = ActionMode.TARGET_ANGLE
+    """Target angles (on the Nao: velocity = ``target_gain`` × error), …"""
+    target_around_start_deg: float | None = 30.0
+    """… spanning the start pose ± 30°: action 0 stands in the walking pose."""
+    gait_frequency_hz: float = 1.5
+    """Gait cycles (one step of each foot) per second: the clock of the ``gait_phase``
+    observation and of the ``feet_phase`` reward; each episode starts it at a random phase."""
+    swing_share: float = 0.4
+    """Share of a gait cycle each foot is meant to be in the air while the command asks to move:
+    the left foot for φ in [0, swing_share), the right for φ in [0.5, 0.5 + swing_share)."""
     forward_speed_range: tuple[float, float] = (-0.3, 0.8)
     """Commanded forward speed, m/s, drawn uniformly."""
     sideways_speed_range: tuple[float, float] = (-0.3, 0.3)
@@ -62,6 +78,9 @@ class WalkConfig(EnvConfig):
     """Weight of exp(−(ω − command_ω)² / σ) per step (ω in rad/s)."""
     w_upright: float = 0.3
     """Weight of the torso's up axis z component (1 upright)."""
+    w_feet_phase: float = 0.5
+    """Weight of the share of feet (0, ½ or 1) whose ground contact is what the gait clock asks
+    for (both down while the command is to stand)."""
     w_feet_air_time: float = 1.0
     """Weight of Σ (air time − 0.2 s) over the feet that touch down this step (only while the
     command asks to move): rewards steps of a useful length."""
@@ -91,8 +110,14 @@ class WalkConfig(EnvConfig):
             raise EnvConfigError("standing_command_prob must be in [0, 1]")
         if not (math.isfinite(self.tracking_sigma) and self.tracking_sigma > 0):
             raise EnvConfigError("tracking_sigma must be > 0")
+        if not (math.isfinite(self.gait_frequency_hz) and 0.0 < self.gait_frequency_hz <= 10.0):
+            raise EnvConfigError(
+                f"gait_frequency_hz must be in (0, 10] Hz, got {self.gait_frequency_hz!r}"
+            )
+        if not 0.0 <= self.swing_share <= 0.5:
+            raise EnvConfigError(f"swing_share must be in [0, 0.5], got {self.swing_share!r}")
         for name in (
-            "w_tracking_linear", "w_tracking_turn", "w_upright", "w_feet_air_time",
+            "w_tracking_linear", "w_tracking_turn", "w_upright", "w_feet_phase", "w_feet_air_time",
             "w_action_rate", "w_joint_speed", "w_vertical_speed", "w_alive", "fall_penalty",
         ):  # fmt: skip
             if not math.isfinite(getattr(self, name)):
@@ -111,6 +136,8 @@ def walk_reward_terms(
     last_action: np.ndarray,
     joint_speeds: np.ndarray,
     fallen: bool,
+    phase: float = 0.0,
+    feet_down: tuple[bool, bool] | None = None,
 ) -> dict[str, float]:
     """Walk's reward as named terms (already weighted), for one step.
 
@@ -123,16 +150,28 @@ def walk_reward_terms(
         action, last_action: This and the previous action, [-1, 1].
         joint_speeds: Joint speeds, rad/s.
         fallen: Whether the robot fell this step.
+        phase: The gait clock's phase in [0, 1).
+        feet_down: Whether the (left, right) foot touches the ground; ``None``: no
+            ``feet_phase`` term (0).
     """
     c = config
     lin_err = float((velocity[0] - command[0]) ** 2 + (velocity[1] - command[1]) ** 2)
     turn_err = float((turn_rate - math.radians(command[2])) ** 2)
     moving = bool(np.any(np.abs(command[:2]) > 0.05) or abs(command[2]) > 3.0)
     air = sum(t - 0.2 for t in touchdown_air_times) if moving else 0.0
+    feet_phase = 0.0
+    if feet_down is not None:
+        swing = (
+            (phase % 1.0 < c.swing_share, (phase - 0.5) % 1.0 < c.swing_share)
+            if moving
+            else (False, False)
+        )
+        feet_phase = sum(down != up for down, up in zip(feet_down, swing, strict=True)) / 2.0
     return {
         "tracking_linear": c.w_tracking_linear * math.exp(-lin_err / c.tracking_sigma),
         "tracking_turn": c.w_tracking_turn * math.exp(-turn_err / c.tracking_sigma),
         "upright": c.w_upright * float(up_z),
+        "feet_phase": c.w_feet_phase * feet_phase,
         "feet_air_time": c.w_feet_air_time * air,
         "action_rate": c.w_action_rate * float(np.sum((action - last_action) ** 2)),
         "joint_speed": c.w_joint_speed * float(np.sum(joint_speeds**2)),
@@ -149,6 +188,9 @@ class Walk(BaseEnv):
     ``standing_command_prob``) and draws a new one every ``command_change_steps`` steps; the
     command is part of the observation (``velocity_command``). The robot starts standing in the
     crouched walking pose, placed instantly. A fall ends the episode (``terminate_on_fall``).
+    Actions are target angles around that pose (± ``target_around_start_deg``); a gait clock
+    (``gait_frequency_hz``, observed as ``gait_phase``) says when each foot should swing, as in
+    MuJoCo Playground's humanoid joystick tasks.
     Every step pays the sum of these terms (each documented in :class:`WalkConfig`; ``info``
     holds them under ``reward_terms``):
 
@@ -158,6 +200,7 @@ class Walk(BaseEnv):
     ``tracking_linear``   1.5          exp(−|v_xy − cmd_xy|² / σ), heading frame, σ = 0.25
     ``tracking_turn``     0.8          exp(−(ω_z − cmd_ω)² / σ), rad/s
     ``upright``           0.3          world z of the torso's up axis
+    ``feet_phase``        0.5          share of feet in contact as the gait clock asks
     ``feet_air_time``     1.0          Σ (air time − 0.2 s) of feet touching down (when moving)
     ``action_rate``       −0.02        |a_t − a_{t−1}|²
     ``joint_speed``       −2e-4        Σ joint speed², (rad/s)²
@@ -199,6 +242,8 @@ class Walk(BaseEnv):
         self._prev_action = np.zeros(self.action_space.shape)
         self.reward_terms = {}
         self._forward = [0.0, 0.0, 0]  # sum of forward speeds, of |forward error|, steps
+        self.gait_clock = (float(self.np_random.uniform()), float(self.config.gait_frequency_hz))
+        self._phase_acted = 0.0
         command = options.get("velocity_command")
         if command is None:
             self._draw_command()
@@ -214,6 +259,7 @@ class Walk(BaseEnv):
 
     def step(self, action: Any):
         c = self.config
+        self._phase_acted = self.gait_phase  # the phase the policy saw when choosing the action
         if (
             c.command_change_steps
             and self.episode_step
@@ -230,15 +276,17 @@ class Walk(BaseEnv):
         velocity = np.array([cos * v[0] + sin * v[1], cos * v[1] - sin * v[0], v[2]])
         upright = up_z(gt.torso_quat)
         touchdowns = []
+        down: list[bool] = []
         forces = self.perception.force_sensors
         contact = gt.feet_contact  # robots without foot pressure perceptors (the league's)
         for foot in ("lf", "rf"):
-            down = (
+            on_ground = bool(
                 contact[foot]
                 if contact is not None
                 else foot in forces and forces[foot].force[2] > 1.0
             )
-            if down:
+            down.append(on_ground)
+            if on_ground:
                 if self._air[foot] > 0.0:
                     touchdowns.append(self._air[foot])
                 self._air[foot] = 0.0
@@ -255,6 +303,8 @@ class Walk(BaseEnv):
             last_action=self._prev_action,
             joint_speeds=self.joint_velocities,
             fallen=self.fallen,
+            phase=self._phase_acted,
+            feet_down=(down[0], down[1]),
         )
         self._prev_action = np.array(action, dtype=float)
         self.reward_terms = terms
