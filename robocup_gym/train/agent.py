@@ -340,6 +340,7 @@ def run_onnx_agent(
     Episode ``k`` is reset with seed ``seed + k`` (as ``robocup-gym eval``).
     """
     from robocup_gym.train.export import OnnxPolicy
+    from robocup_gym.train.pretrained import recorded_env_options
     from robocup_gym.train.tasks import make_env
 
     if int(episodes) < 1:
@@ -349,10 +350,8 @@ def run_onnx_agent(
             raise ValueError(f"{what} {p} is not a port number (1-65535)")
     policy = OnnxPolicy(onnx_path)
     meta = policy.metadata
-    env_kwargs = dict(meta.get("env_kwargs") or {})
-    robot_type = int(
-        env_kwargs.get("robot_type", (meta.get("env_config") or {}).get("robot_type", 0))
-    )
+    env_kwargs = recorded_env_options(meta)
+    robot_type = int(env_kwargs.get("robot_type", 0))
     backend: Backend
     if monitor_port is not None:
         from robocup_gym.backends.rcssserver3d_backend import Rcssserver3dBackend

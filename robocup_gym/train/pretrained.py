@@ -25,6 +25,7 @@ __all__ = [
     "pretrained_names",
     "pretrained_path",
     "pretrained_policy",
+    "recorded_env_options",
 ]
 
 POLICY_DIR = Path(__file__).resolve().parents[1] / "data" / "policies"
@@ -62,10 +63,20 @@ def pretrained_policy(name: str):
     return OnnxPolicy(pretrained_path(name))
 
 
+def recorded_env_options(meta: dict[str, Any]) -> dict[str, Any]:
+    """The environment options an exported policy's description (``meta``) records: every
+    option of the configuration it was exported with (``env_config``; so that a later change
+    of a task's defaults does not change the environment a shipped policy runs in), with its
+    ``env_kwargs`` over them. ``backend_options`` (objects, written as text) are left out."""
+    recorded = dict(meta.get("env_config") or {})
+    recorded.pop("backend_options", None)
+    return {**recorded, **(meta.get("env_kwargs") or {})}
+
+
 def pretrained_env(policy, backend: str | None = None, env_overrides: dict[str, Any] | None = None):
     """The environment an exported ``policy`` (an :class:`~robocup_gym.train.export.OnnxPolicy`)
-    is meant for: its task with its options (``env_overrides`` over them) on ``backend``
-    (default: the engine it was trained on).
+    is meant for: its task with its recorded options (:func:`recorded_env_options`;
+    ``env_overrides`` over them) on ``backend`` (default: the engine it was trained on).
 
     Raises:
         ValueError: the overrides give observations of another size than the policy takes.
@@ -77,7 +88,7 @@ def pretrained_env(policy, backend: str | None = None, env_overrides: dict[str, 
     env = make_env(
         meta["env_id"],
         backend=backend or meta.get("backend") or DEFAULT_ENGINE,
-        env_kwargs={**(meta.get("env_kwargs") or {}), **extra},
+        env_kwargs={**recorded_env_options(meta), **extra},
     )
     want = int(meta["input"]["shape"][1])
     if env.observation_space.shape != (want,):

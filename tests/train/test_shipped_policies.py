@@ -10,8 +10,10 @@ pytest.importorskip("onnxruntime")
 from robocup_gym.sim.engines.ode import available
 from robocup_gym.train.pretrained import (
     describe,
+    pretrained_env,
     pretrained_names,
     pretrained_policy,
+    recorded_env_options,
 )
 from robocup_gym.train.tasks import make_env
 
@@ -34,8 +36,7 @@ def test_the_get_ups_are_shipped_and_describe_themselves():
 def test_each_get_up_lifts_the_robot_within_80_cycles(name):
     """From its side's lying pose (the plain drop, the one it was trained on), on ODE."""
     policy = pretrained_policy(name)
-    meta = policy.metadata
-    env = make_env(meta["env_id"], backend="ode", env_kwargs=meta["env_kwargs"])
+    env = pretrained_env(policy, "ode")
     try:
         obs, _ = env.reset(seed=0)
         start_z = env.unwrapped.torso_pos[2]
@@ -48,3 +49,29 @@ def test_each_get_up_lifts_the_robot_within_80_cycles(name):
         assert env.unwrapped.torso_pos[2] > max(0.28, start_z + 0.1)  # up, and held up
     finally:
         env.close()
+
+
+def test_a_shipped_policy_runs_in_the_environment_it_was_exported_with():
+    """Every recorded option, not today's task defaults: a later change of a default must not
+    change what a shipped policy sees or does."""
+    for name in GETUPS:
+        policy = pretrained_policy(name)
+        meta = policy.metadata
+        env = pretrained_env(policy, "mujoco")
+        try:
+            config = env.unwrapped.config.to_dict()
+            for key, value in meta["env_config"].items():
+                if key != "backend_options":
+                    assert config[key] == value, key
+        finally:
+            env.close()
+    meta = describe("get-up-front")
+    changed = {**meta, "env_config": {**meta["env_config"], "w_height": 2.0, "height_cap": 0.3}}
+    options = recorded_env_options(changed)
+    assert options["w_height"] == 2.0 and options["height_cap"] == 0.3
+    assert options["start_side"] == "front" and "backend_options" not in options
+    env = make_env(meta["env_id"], backend="mujoco", env_kwargs=options)
+    assert env.unwrapped.config.w_height == 2.0
+    env.close()
+    legacy = {"env_kwargs": {"start_side": "back"}}  # a description without env_config
+    assert recorded_env_options(legacy) == {"start_side": "back"}
