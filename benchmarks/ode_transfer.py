@@ -46,7 +46,7 @@ def main(argv: list[str] | None = None) -> dict:
         raise SystemExit(f"ode_transfer: {args.run} was trained on {cfg.backend}, not an engine")
     model = load_model(info)
     normalizer = info.obs_normalizer()
-    env = make_env(cfg.env_id, backend="mujoco", env_kwargs=cfg.env_kwargs)  # recorded there
+    env = make_env(cfg.env_id, backend="mujoco", env_kwargs=cfg.env_options())  # recorded there
     world = env.unwrapped.backend.world
     rows = []
     try:
@@ -85,7 +85,7 @@ def main(argv: list[str] | None = None) -> dict:
             )
     finally:
         env.close()
-    ode_env = make_env(cfg.env_id, backend="ode", env_kwargs=cfg.env_kwargs)
+    ode_env = make_env(cfg.env_id, backend="ode", env_kwargs=cfg.env_options())
     try:
         for k, row in enumerate(rows):
             (rec,) = run_episodes(

@@ -297,7 +297,11 @@ class EnvConfig:
     """Radius (m) of the ball's spawn noise: every episode the ball starts at a uniformly random
     point on the circle of this radius around ``ball_start_pos`` (as the paper)."""
     max_episode_steps: int = 40
-    """Steps (20 ms agent cycles) after which an episode is truncated (paper's kick runs: 40)."""
+    """Steps (20 ms agent cycles) after which an episode is truncated (paper's kick runs: 40).
+    ``gymnasium.make(id, max_episode_steps=N)`` does not set it (Gymnasium keeps that argument
+    for its own ``TimeLimit`` wrapper): pass ``config=<Task>Config(max_episode_steps=N)``, a task
+    class's keyword, or ``robocup_gym.train.tasks.make_env``'s ``env_kwargs`` (and so ``--env``
+    on the CLI), which sets both."""
     wait_steps: int = 0
     """After the episode ends (terminated or truncated) the world runs on for this many cycles
     with zero joint velocities before the final reward is computed, so the ball can roll."""

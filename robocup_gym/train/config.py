@@ -127,6 +127,11 @@ class TrainConfig:
     the default there) or ``rcssservermj`` (a real server)."""
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     """Keyword arguments for ``gymnasium.make`` (the task's config fields)."""
+    env_config: dict[str, Any] = field(default_factory=dict)
+    """Every option of the run's environment as it was when the run started (filled in by the
+    trainer). Resuming, evaluating and exporting the run build its environment from these,
+    ``env_kwargs`` over them (:meth:`env_options`), so that a later change of a task's defaults
+    does not change a run's environment. Empty in runs from before it existed."""
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
     """Hyperparameters passed to the SB3 algorithm (merged over the paper's defaults)."""
     init_from: str = ""
@@ -276,6 +281,11 @@ class TrainConfig:
                 f"{path}: a config file must hold a mapping, got {type(data).__name__}"
             )
         return cls.from_dict(data)
+
+    def env_options(self, **overrides: Any) -> dict[str, Any]:
+        """The options to build this run's environment with: :attr:`env_config`, then
+        :attr:`env_kwargs`, then ``overrides``."""
+        return {**self.env_config, **self.env_kwargs, **overrides}
 
     def merged(self, **overrides: Any) -> TrainConfig:
         """A copy with the given fields replaced (``None`` values are ignored)."""

@@ -86,9 +86,7 @@ def policy_and_env(
     model = load_model(info)
     normalize = info.obs_normalizer()
     cfg = info.config
-    env = make_env(
-        cfg.env_id, backend=engine or cfg.backend, env_kwargs={**cfg.env_kwargs, **extra}
-    )
+    env = make_env(cfg.env_id, backend=engine or cfg.backend, env_kwargs=cfg.env_options(**extra))
 
     def act(obs):
         o = normalize(obs) if normalize is not None else obs
@@ -279,7 +277,7 @@ def evaluate_run(
     model = load_model(info, checkpoint=checkpoint)
     normalizer = info.obs_normalizer()
     backend = backend or cfg.backend
-    env = make_env(cfg.env_id, backend=backend, env_kwargs=cfg.env_kwargs)
+    env = make_env(cfg.env_id, backend=backend, env_kwargs=cfg.env_options())
     try:
         records = run_episodes(
             model, env, episodes, seed=seed, deterministic=deterministic, obs_normalizer=normalizer
@@ -326,7 +324,7 @@ def record_video(
 
     ensure_gl_backend()
     cfg = info.config
-    env_kwargs = dict(cfg.env_kwargs)
+    env_kwargs = cfg.env_options()
     wait = 0
     probe = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=env_kwargs)
     base_cfg = getattr(probe.unwrapped, "config", None)

@@ -100,7 +100,7 @@ def _sample_observations(info: RunInfo, model, obs_space, n_random: int, seed: i
         from robocup_gym.train.tasks import make_env
 
         cfg = info.config
-        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs)
+        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options())
         seen: list[np.ndarray] = []
         orig_step = env.step
 
@@ -126,8 +126,8 @@ def _sample_observations(info: RunInfo, model, obs_space, n_random: int, seed: i
 
 
 def _env_description(info: RunInfo, env_kwargs: dict[str, Any], model=None) -> dict[str, Any]:
-    """Observation/action layout of the policy's environment (RobocupGym tasks): the run's,
-    with ``env_kwargs``.
+    """Observation/action layout of the policy's environment (RobocupGym tasks): the run's
+    (:meth:`TrainConfig.env_options`), with ``env_kwargs`` over it.
 
     Raises:
         ValueError: with ``model``, the environment's observation or action space is not the
@@ -138,7 +138,7 @@ def _env_description(info: RunInfo, env_kwargs: dict[str, Any], model=None) -> d
     cfg = info.config
     out: dict[str, Any] = {}
     try:
-        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=env_kwargs)
+        env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options(**env_kwargs))
     except Exception as exc:
         if env_kwargs != cfg.env_kwargs:
             raise ValueError(

@@ -91,11 +91,22 @@ def make_env(
     env_kwargs: dict[str, Any] | None = None,
     render_mode: str | None = None,
 ) -> gym.Env:
-    """``gymnasium.make`` with the backend and config passed only to RobocupGym tasks."""
+    """``gymnasium.make`` with the backend and config passed only to RobocupGym tasks.
+
+    A task's ``max_episode_steps`` reaches its config (``gymnasium.make`` would take it as its
+    own ``TimeLimit`` and leave the task's episode length, after which it computes its final
+    reward, as it was); the ``TimeLimit`` gets the same number."""
     kwargs = dict(env_kwargs or {})
     if is_robocup_task(env_id):
         _register_tasks()  # subprocess workers start with an empty registry
         kwargs.setdefault("backend", backend)
+        if "max_episode_steps" in kwargs and "config" not in kwargs:
+            options = {k: v for k, v in kwargs.items() if k not in _NOT_CONFIG}
+            config = _config_of(env_id, options)
+            if config is not None:
+                kwargs = {k: v for k, v in kwargs.items() if k in _NOT_CONFIG}
+                kwargs["config"] = config
+                kwargs["max_episode_steps"] = int(config.max_episode_steps)
     elif backend != DEFAULT_ENGINE:
         raise ValueError(f"--backend/--engine only apply to RobocupGym tasks, not {env_id!r}")
     if render_mode is not None:
@@ -107,16 +118,11 @@ _NOT_CONFIG = ("backend", "render_mode", "render_size", "config")
 """``gymnasium.make`` keywords of the tasks that are not config fields."""
 
 
-def validate_env_kwargs(env_id: str, env_kwargs: dict[str, Any] | None) -> None:
-    """Check a RobocupGym task's options without starting any simulator, so that a typo fails
-    before a run folder or a worker process exists.
-
-    Raises:
-        ValueError: (:class:`~robocup_gym.envs.config.EnvConfigError`) naming the option and the
-            valid ones, or the value and what it must be.
-    """
-    if not is_robocup_task(env_id) or not env_kwargs:
-        return
+def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
+    """The task's config with ``env_kwargs`` applied (validated), without starting any
+    simulator; ``None`` for an environment that is not a RobocupGym task with a config."""
+    if not is_robocup_task(env_id):
+        return None
     _register_tasks()
     entry = gym.registry[env_id].entry_point
     if isinstance(entry, str):
@@ -128,11 +134,39 @@ def validate_env_kwargs(env_id: str, env_kwargs: dict[str, Any] | None) -> None:
         cls = entry
     default_config = getattr(cls, "default_config", None)
     if default_config is None:
-        return
-    options = {k: v for k, v in env_kwargs.items() if k not in _NOT_CONFIG}
+        return None
+    options = {k: v for k, v in (env_kwargs or {}).items() if k not in _NOT_CONFIG}
     robot = options.get("robot", "nao")
     base = default_config(robot) if robot != "nao" else default_config()
-    base.replace(**options)
+    return base.replace(**options)
+
+
+def resolved_env_config(env_id: str, env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
+    """Every option of the task ``env_id`` with ``env_kwargs`` applied, as plain values (what a
+    run records in ``TrainConfig.env_config``); ``{}`` for other environments.
+    ``backend_options`` (objects) are left out.
+
+    Raises:
+        ValueError: an unknown option or an invalid value (as :func:`validate_env_kwargs`).
+    """
+    config = _config_of(env_id, env_kwargs)
+    if config is None:
+        return {}
+    out = config.to_dict()
+    out.pop("backend_options", None)
+    return out
+
+
+def validate_env_kwargs(env_id: str, env_kwargs: dict[str, Any] | None) -> None:
+    """Check a RobocupGym task's options without starting any simulator, so that a typo fails
+    before a run folder or a worker process exists.
+
+    Raises:
+        ValueError: (:class:`~robocup_gym.envs.config.EnvConfigError`) naming the option and the
+            valid ones, or the value and what it must be.
+    """
+    if env_kwargs:
+        _config_of(env_id, env_kwargs)
 
 
 def validate_algo_kwargs(algo: str, algo_kwargs: dict[str, Any]) -> None:

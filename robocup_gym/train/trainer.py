@@ -17,6 +17,7 @@ from robocup_gym.train.run import checkpoints, curve_so_far, load_run, new_run_d
 from robocup_gym.train.tasks import (
     make_env,
     resolve_task,
+    resolved_env_config,
     task_name,
     validate_algo_kwargs,
     validate_env_kwargs,
@@ -80,7 +81,9 @@ def prepare_run(
     ``config.yaml``. Nothing is created when a check fails."""
     env_id = resolve_task(config.task)
     config = config.merged(env_id=env_id)
-    validate_env_kwargs(env_id, config.env_kwargs)
+    validate_env_kwargs(env_id, config.env_options())
+    # freeze every option of the environment, so that the run keeps it if a default changes
+    config = config.merged(env_config=resolved_env_config(env_id, config.env_options()))
     validate_algo_kwargs(config.algo, config.algo_kwargs)
     if run_dir is None:
         path = new_run_dir(out, task_name(env_id), config.algo)
@@ -233,7 +236,7 @@ def train(
     evaluator = None
     if cfg.eval_freq > 0 and cfg.eval_episodes > 0:
         evaluator = PeriodicEvalCallback(
-            lambda: make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_kwargs),
+            lambda: make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options()),
             cfg.eval_freq,
             cfg.eval_episodes,
             path / "evaluations.jsonl",
@@ -318,7 +321,7 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
             cfg.env_id,
             cfg.n_envs,
             backend=cfg.backend,
-            env_kwargs=cfg.env_kwargs,
+            env_kwargs=cfg.env_options(),
             seed=cfg.seed if start_from is None else cfg.seed + 7919 * (1 + _n_ckpt(path)),
             kind=cfg.vec_env,
             start_method=cfg.start_method,

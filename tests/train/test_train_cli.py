@@ -26,6 +26,8 @@ def test_train_writes_a_complete_run_folder(ppo_run):
     assert cfg.env_id == "RobocupGym/VelocityKick-v0" and cfg.n_envs == 2 and cfg.seed == 3
     assert cfg.resolved_algo_kwargs()["gamma"] == 0.99  # paper defaults kept, overrides merged
     assert cfg.resolved_algo_kwargs()["n_steps"] == 16
+    # every option of the environment recorded, as built
+    assert cfg.env_config["wait_steps"] == 20 and cfg.env_config["max_episode_steps"] == 40
     assert (ppo_run / "model.zip").exists()
     ckpts = sorted((ppo_run / "checkpoints").glob("model_*_steps.zip"))
     assert len(ckpts) >= 2

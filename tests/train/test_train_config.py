@@ -58,6 +58,43 @@ def test_numbers_in_exponent_notation_are_numbers(tmp_path):
     assert load_yaml("[1E+3, -.5, 7, 0x10, 1e-4x, .inf]") == [1000.0, -0.5, 7, 16, "1e-4x", inf]
 
 
+def test_a_run_records_every_option_of_its_environment(tmp_path):
+    """A run keeps its environment when a task's defaults change later: the trainer records
+    every option (TrainConfig.env_config); resume, eval and export build from it."""
+    import yaml
+
+    from robocup_gym.envs.tasks.walk import WalkConfig
+    from robocup_gym.train.trainer import prepare_run
+
+    _, path = prepare_run(
+        TrainConfig(task="walk", env_kwargs={"max_episode_steps": 50}), out=tmp_path
+    )
+    saved = TrainConfig.load(path / "config.yaml")
+    assert saved.env_kwargs == {"max_episode_steps": 50}
+    recorded = saved.env_config
+    assert recorded["max_episode_steps"] == 50
+    assert recorded["gait_frequency_hz"] == WalkConfig().gait_frequency_hz
+    assert recorded["action_mode"] == "target_angle" and "backend_options" not in recorded
+    assert set(recorded) == {f for f in WalkConfig.__dataclass_fields__} - {"backend_options"}
+    # as if the run had started when Walk's default gait was 2 Hz
+    data = yaml.safe_load((path / "config.yaml").read_text())
+    data["env_config"]["gait_frequency_hz"] = 2.0
+    (path / "config.yaml").write_text(yaml.safe_dump(data))
+    from robocup_gym.train.tasks import make_env
+
+    old = TrainConfig.load(path / "config.yaml")
+    options = old.env_options(max_episode_steps=60)
+    assert options["gait_frequency_hz"] == 2.0 and options["max_episode_steps"] == 60
+    env = make_env(old.env_id, backend="mujoco", env_kwargs=old.env_options())
+    assert env.unwrapped.config.gait_frequency_hz == 2.0
+    assert env.unwrapped.config.max_episode_steps == 50
+    env.close()
+    # gymnasium.make would keep max_episode_steps for its TimeLimit; make_env gives it the task
+    assert env.spec.max_episode_steps == 50
+    legacy = TrainConfig(task="walk", env_kwargs={"max_episode_steps": 50})  # no env_config
+    assert legacy.env_options() == {"max_episode_steps": 50}
+
+
 def test_hp_flags_read_exponent_notation():
     from robocup_gym.cli import _parse_assignments
 
