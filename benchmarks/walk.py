@@ -9,9 +9,10 @@ default engine for ``--episodes`` episodes per command, each as long as the run'
 * sideways 0.3 m/s to the left: mean error of the leftward speed;
 * turning 30 deg/s: mean error of the turn rate.
 
-``--policy zero`` runs a policy that sends zero actions (a baseline, and a smoke test without a
-trained run). Prints one line per command and, as the last line, one JSON object
-(``forward_speed_mps``, ``falls``, ``sideways_error_mps``, ``turn_error_deg_s``, …).
+``pretrained:NAME`` runs a shipped policy; ``zero`` runs a policy that sends zero actions (a
+baseline, and a smoke test without a trained run). Prints one line per command and, as the
+last line, one JSON object (``forward_speed_mps``, ``falls``, ``sideways_error_mps``,
+``turn_error_deg_s``, …).
 
     python benchmarks/walk.py runs/walk-ppo-<time> --episodes 20
 """
@@ -78,7 +79,11 @@ def _wrap(a: float) -> float:
 
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("policy", help="a Walk run folder, or 'zero' (a zero-action baseline)")
+    parser.add_argument(
+        "policy",
+        help="a Walk run folder, 'pretrained:NAME' (a shipped policy) or 'zero' (a zero-action "
+        "baseline)",
+    )
     parser.add_argument("--episodes", type=int, default=20)
     parser.add_argument("--seed", type=int, default=100_000)
     parser.add_argument(

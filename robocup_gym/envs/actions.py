@@ -72,6 +72,9 @@ class ActionMapper:
         self.angle_mid, self.angle_half, self._limits = _target_window(
             lo, hi, self.joints, around_deg, spread_deg
         )
+        self.target_offset_deg = np.zeros(n)
+        """Added to every target angle (deg, per controlled joint, in action order) before the
+        clip to the joint's range: a task's reference motion (Walk's gait), set each step."""
         self._command = np.zeros(len(model.joints))
 
     def expand(self, action: np.ndarray) -> np.ndarray:
@@ -183,6 +186,8 @@ class PDActionMapper:
         self.angle_mid, self.angle_half, self._limits = _target_window(
             lo, hi, self.joints, around_deg, spread_deg
         )
+        self.target_offset_deg = np.zeros(n)
+        """As :attr:`ActionMapper.target_offset_deg`."""
         self._names = model.effector_names
         self._lo, self._hi = model.ranges_deg.T.astype(float)
         self._others = np.setdiff1d(np.arange(len(model.joints)), self.joints)
@@ -252,12 +257,12 @@ def _target_window(
     joints: np.ndarray,
     around_deg: np.ndarray | None,
     spread_deg: float | None,
-) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
-    """(centre, half width, clip limits or ``None``) of the target angles an action in [-1, 1]
-    spans, per controlled joint (deg): the joint's whole range, or ``around_deg`` ±
-    ``spread_deg`` clipped to it."""
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """(centre, half width, clip limits) of the target angles an action in [-1, 1] spans, per
+    controlled joint (deg): the joint's whole range, or ``around_deg`` ± ``spread_deg`` clipped
+    to it."""
     if around_deg is None:
-        return (lo + hi) / 2.0, (hi - lo) / 2.0, None
+        return (lo + hi) / 2.0, (hi - lo) / 2.0, (lo, hi)
     if spread_deg is None or not (np.isfinite(spread_deg) and spread_deg > 0):
         raise ValueError(f"spread_deg must be a number > 0 with around_deg, got {spread_deg!r}")
     centre = np.asarray(around_deg, dtype=float)[joints]
@@ -265,8 +270,7 @@ def _target_window(
 
 
 def _targets(mapper, a: np.ndarray) -> np.ndarray:
-    """Target angles (deg) of a mapper's target window for action values ``a``."""
-    target = mapper.angle_mid + a * mapper.angle_half
-    if mapper._limits is not None:
-        target = np.clip(target, *mapper._limits)
-    return target
+    """Target angles (deg) of a mapper's target window for action values ``a``, shifted by its
+    ``target_offset_deg`` and clipped to the joints' ranges."""
+    target = mapper.angle_mid + a * mapper.angle_half + mapper.target_offset_deg
+    return np.clip(target, *mapper._limits)

@@ -12,7 +12,7 @@ from gymnasium.utils.env_checker import check_env
 
 import robocup_gym.envs  # noqa: F401 (registers the tasks)
 from robocup_gym.envs import EnvConfigError, GetUp, Walk, WalkConfig
-from robocup_gym.envs.tasks.walk import walk_reward_terms
+from robocup_gym.envs.tasks.walk import reference_gait_deg, walk_reward_terms
 from robocup_gym.sim.engines.ode import available
 
 ENGINES = [
@@ -72,15 +72,15 @@ def test_walking_at_the_command_earns_the_tracking_reward():
 
 def test_feet_in_contact_as_the_gait_clock_asks_earn_the_phase_reward():
     w = WalkConfig().w_feet_phase
-    # φ = 0.1: the left foot's swing (φ in [0, 0.4)), the right foot's stance
+    # φ = 0.1: the left foot's swing (φ within 0.2 of 0.25), the right foot's stance
     assert _terms(phase=0.1, feet_down=(False, True))["feet_phase"] == pytest.approx(w)
     assert _terms(phase=0.1, feet_down=(True, True))["feet_phase"] == pytest.approx(w / 2)
     assert _terms(phase=0.1, feet_down=(True, False))["feet_phase"] == 0.0
     # φ = 0.6: the right foot's swing
     assert _terms(phase=0.6, feet_down=(True, False))["feet_phase"] == pytest.approx(w)
-    # φ = 0.45 and 0.95: both feet down (double support)
-    assert _terms(phase=0.45, feet_down=(True, True))["feet_phase"] == pytest.approx(w)
-    assert _terms(phase=0.95, feet_down=(True, True))["feet_phase"] == pytest.approx(w)
+    # φ = 0.02, 0.48 and 0.98: both feet down (double support)
+    for phase in (0.02, 0.48, 0.98):
+        assert _terms(phase=phase, feet_down=(True, True))["feet_phase"] == pytest.approx(w)
     # told to stand: both feet down whatever the clock says
     stand = np.zeros(3)
     assert _terms(command=stand, phase=0.1, feet_down=(True, True))["feet_phase"] == w
@@ -132,6 +132,54 @@ def test_walk_actions_are_targets_around_the_walking_pose(engine):
     np.testing.assert_allclose(mid, (lo + hi) / 2)
 
 
+def test_the_reference_gait_lifts_each_leg_in_its_half_of_the_cycle():
+    c = WalkConfig()
+    forward = np.array([0.3, 0.0, 0.0])
+    assert reference_gait_deg(c, 0.25, np.zeros(3)) == {}  # told to stand: no stepping
+    left = reference_gait_deg(c, 0.25, forward)  # sin = 1: the left leg at the top of its lift
+    assert left["lle3"] == pytest.approx(c.gait_lift_deg) and left["lle4"] == -2 * c.gait_lift_deg
+    assert left["rle3"] == pytest.approx(0.0, abs=1e-9) and left["rle4"] == 0.0
+    assert left["lle2"] == left["rle2"] == pytest.approx(c.gait_sway_deg)
+    assert left["lle6"] == pytest.approx(-c.gait_sway_deg)
+    right = reference_gait_deg(c, 0.75, forward)
+    assert right["rle4"] == pytest.approx(-2 * c.gait_lift_deg) and right["lle4"] == 0.0
+    # the stride: proportional to the forward command, at most gait_stride_max_deg
+    at0 = reference_gait_deg(c, 0.0, forward)  # cos = 1
+    assert at0["rle3"] == pytest.approx(0.3 * c.gait_stride_deg_per_mps)
+    assert at0["lle3"] == pytest.approx(-0.3 * c.gait_stride_deg_per_mps)
+    fast = reference_gait_deg(c, 0.0, np.array([5.0, 0.0, 0.0]))
+    assert fast["rle3"] == pytest.approx(c.gait_stride_max_deg)
+    half = reference_gait_deg(c, 0.25, forward, ramp=0.5)
+    assert half["lle3"] == pytest.approx(c.gait_lift_deg / 2)
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
+def test_zero_actions_walk_forward_on_the_reference_gait():
+    """The residual policy's starting point: zero actions follow the reference gait on ODE."""
+    env = Walk(command_change_steps=0)
+    env.reset(seed=0, options={"velocity_command": (0.5, 0.0, 0.0)})
+    start = env.torso_pos.copy()
+    touchdowns = 0
+    for _ in range(250):  # 5 s
+        _, _, terminated, _, info = env.step(np.zeros(env.action_space.shape))
+        assert not terminated
+        touchdowns += info["reward_terms"]["feet_air_time"] != 0.0
+    speed = (env.torso_pos[0] - start[0]) / 5.0
+    assert speed > 0.25 and touchdowns >= 15  # 2 Hz: 20 touchdowns in 5 s
+    offsets = env._actions.target_offset_deg
+    assert np.abs(offsets).max() > 5.0
+    env.reset(seed=0, options={"velocity_command": (0.0, 0.0, 0.0)})
+    env.step(np.zeros(env.action_space.shape))
+    assert not offsets.any()  # standing: no reference
+    env.close()
+    plain = Walk(reference_gait=False, command_change_steps=0)
+    plain.reset(seed=0, options={"velocity_command": (0.5, 0.0, 0.0)})
+    for _ in range(50):
+        plain.step(np.zeros(plain.action_space.shape))
+    assert not plain._actions.target_offset_deg.any()
+    plain.close()
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_fall_ends_a_walk_episode_with_the_penalty(engine):
     env = Walk(engine=engine, joint_start_deg={"rle3": 60.0, "lle3": 60.0})  # hips bent: topples
@@ -173,6 +221,10 @@ def test_walk_options_are_validated():
         Walk(target_around_start_deg=-5.0)
     with pytest.raises(EnvConfigError, match="w_feet_phase must be finite"):
         Walk(w_feet_phase=math.nan)
+    with pytest.raises(EnvConfigError, match="gait_lift_deg must be a number of degrees"):
+        Walk(gait_lift_deg=math.inf)
+    with pytest.raises(EnvConfigError, match="gait_stride_max_deg must be in"):
+        Walk(gait_stride_max_deg=-1.0)
 
 
 # ------------------------------------------------------------------ GetUp
@@ -278,7 +330,7 @@ def test_getup_options_are_validated():
 @pytest.mark.parametrize("script", ["walk.py", "getup.py"])
 def test_the_locomotion_benchmarks_print_json_last(script):
     """``benchmarks/walk.py`` and ``benchmarks/getup.py`` with the zero-action baseline: the
-    JSON is there, and the baseline neither walks nor gets up."""
+    JSON is there; the baseline does not get up, and walks only as the reference gait does."""
     import json
     import subprocess
     import sys
@@ -297,8 +349,10 @@ def test_the_locomotion_benchmarks_print_json_last(script):
     res = json.loads(out.strip().splitlines()[-1])
     assert res["meets_target"] is False
     if script == "walk.py":
-        assert abs(res["forward_speed_mps"]) < 0.01 and res["falls"] == 0
-        assert res["turn_error_deg_s"] == pytest.approx(30.0, abs=1.0)
+        # zero actions follow the reference gait: a walk, slower than the target, that does
+        # not turn by itself
+        assert 0.25 < res["forward_speed_mps"] < 0.5 and res["falls"] == 0
+        assert res["turn_error_deg_s"] == pytest.approx(30.0, abs=10.0)
     else:
         assert res["success_rate"] == 0.0 and res["front"]["got_up"] == 0
         assert res["lying_poses"] == 3 and res["robot_type"] == 2

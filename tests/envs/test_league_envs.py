@@ -296,3 +296,11 @@ def test_the_training_assist_lifts_a_league_robot():
 def test_mirrored_actions_are_the_naos_only():
     with pytest.raises(EnvConfigError, match="mirror_actions works on the Nao"):
         gymnasium.make("RobocupGym/GetUp-v0", robot="T1", mirror_actions=True)
+
+
+def test_the_reference_gait_is_the_naos_only():
+    env = Walk(robot="T1")
+    assert env.config.reference_gait is False and env._gait_slots is None
+    env.close()
+    with pytest.raises(EnvConfigError, match="reference_gait is a stepping pattern for the Nao"):
+        Walk(robot="T1", reference_gait=True)

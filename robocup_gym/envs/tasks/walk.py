@@ -21,8 +21,16 @@ from robocup_gym.envs.config import (
     EnvConfigError,
 )
 from robocup_gym.envs.observations import heading_frame, up_z
+from robocup_gym.sim.physics import CYCLE_S
 
-__all__ = ["WALK_OBSERVATIONS", "Walk", "WalkConfig", "walk_reward_terms"]
+__all__ = [
+    "WALK_OBSERVATIONS",
+    "Walk",
+    "WalkConfig",
+    "asks_to_move",
+    "reference_gait_deg",
+    "walk_reward_terms",
+]
 
 WALK_OBSERVATIONS = (
     "joint_pos",
@@ -54,12 +62,29 @@ class WalkConfig(EnvConfig):
     """Target angles (on the Nao: velocity = ``target_gain`` × error), …"""
     target_around_start_deg: float | None = 30.0
     """… spanning the start pose ± 30°: action 0 stands in the walking pose."""
-    gait_frequency_hz: float = 1.5
+    gait_frequency_hz: float = 2.0
     """Gait cycles (one step of each foot) per second: the clock of the ``gait_phase``
-    observation and of the ``feet_phase`` reward; each episode starts it at a random phase."""
+    observation, of the reference gait and of the ``feet_phase`` reward; each episode starts it
+    at a random phase."""
     swing_share: float = 0.4
     """Share of a gait cycle each foot is meant to be in the air while the command asks to move:
-    the left foot for φ in [0, swing_share), the right for φ in [0.5, 0.5 + swing_share)."""
+    the left foot for φ within ``swing_share``/2 of 0.25, the right within it of 0.75."""
+    reference_gait: bool = True
+    """Add an open-loop stepping pattern, clocked by the gait phase, to the target angles while
+    the command asks to move (:func:`reference_gait_deg`): the action corrects it (a residual
+    policy; zero actions step). The Nao with a target-angle ``action_mode`` only (the velocity
+    mode has no targets to add to, and ignores it)."""
+    gait_sway_deg: float = 5.0
+    """Reference gait: amplitude of the hip and ankle roll that shifts the weight onto the
+    standing foot, deg."""
+    gait_lift_deg: float = 12.0
+    """Reference gait: peak leg lift of the swinging foot (hip and ankle pitch + this, knee pitch
+    − twice this), deg."""
+    gait_stride_deg_per_mps: float = 45.0
+    """Reference gait: amplitude of the fore-aft hip/ankle pitch swing per m/s of commanded
+    forward speed, deg per m/s (open loop, 2 Hz: 16° walks ~0.34 m/s on ODE)."""
+    gait_stride_max_deg: float = 20.0
+    """Reference gait: largest stride amplitude, deg."""
     forward_speed_range: tuple[float, float] = (-0.3, 0.8)
     """Commanded forward speed, m/s, drawn uniformly."""
     sideways_speed_range: tuple[float, float] = (-0.3, 0.3)
@@ -116,12 +141,75 @@ class WalkConfig(EnvConfig):
             )
         if not 0.0 <= self.swing_share <= 0.5:
             raise EnvConfigError(f"swing_share must be in [0, 0.5], got {self.swing_share!r}")
+        for name in ("gait_sway_deg", "gait_lift_deg", "gait_stride_deg_per_mps"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and abs(value) <= 90.0):
+                raise EnvConfigError(
+                    f"{name} must be a number of degrees within ±90, got {value!r}"
+                )
+        if not (math.isfinite(self.gait_stride_max_deg) and 0.0 <= self.gait_stride_max_deg <= 90):
+            raise EnvConfigError(
+                f"gait_stride_max_deg must be in [0, 90] deg, got {self.gait_stride_max_deg!r}"
+            )
+        if self.reference_gait and self.robot != "nao":
+            raise EnvConfigError(
+                f"reference_gait is a stepping pattern for the Nao, not the {self.robot}; pass "
+                "reference_gait=False"
+            )
         for name in (
             "w_tracking_linear", "w_tracking_turn", "w_upright", "w_feet_phase", "w_feet_air_time",
             "w_action_rate", "w_joint_speed", "w_vertical_speed", "w_alive", "fall_penalty",
         ):  # fmt: skip
             if not math.isfinite(getattr(self, name)):
                 raise EnvConfigError(f"{name} must be finite, got {getattr(self, name)!r}")
+
+
+def asks_to_move(command: np.ndarray) -> bool:
+    """Whether a command (forward m/s, left m/s, turn deg/s) asks to move: more than 0.05 m/s
+    or 3 deg/s."""
+    return bool(abs(command[0]) > 0.05 or abs(command[1]) > 0.05 or abs(command[2]) > 3.0)
+
+
+def reference_gait_deg(
+    config: WalkConfig, phase: float, command: np.ndarray, ramp: float = 1.0
+) -> dict[str, float]:
+    """The reference gait's target-angle offsets (deg, by Nao effector name) at gait phase
+    ``phase`` for ``command``; empty while the command asks to stand.
+
+    With s = sin 2πφ and c = cos 2πφ: both hip rolls + ``gait_sway_deg``·s and both ankle
+    rolls − it (the weight moves onto the standing foot); the left leg lifts while s > 0 and the
+    right while s < 0 (hip and ankle pitch + ``gait_lift_deg``·|s|, knee − twice that); the hips
+    and ankles swing fore and aft with c, the stride ``gait_stride_deg_per_mps`` × the forward
+    command (at most ``gait_stride_max_deg``). Every amplitude is scaled by ``ramp`` (0–1: the
+    episode's first gait cycle eases in)."""
+    if not asks_to_move(command):
+        return {}
+    c = config
+    angle = 2.0 * math.pi * phase
+    s, co = math.sin(angle) * ramp, math.cos(angle) * ramp
+    sway = c.gait_sway_deg * s
+    stride = float(
+        np.clip(
+            c.gait_stride_deg_per_mps * command[0], -c.gait_stride_max_deg, c.gait_stride_max_deg
+        )
+    )
+    out = {"lle2": sway, "rle2": sway, "lle6": -sway, "rle6": -sway}
+    for leg, lift in (("l", max(0.0, s)), ("r", max(0.0, -s))):
+        lift *= c.gait_lift_deg
+        out[f"{leg}le3"] = lift
+        out[f"{leg}le4"] = -2.0 * lift
+        out[f"{leg}le5"] = lift
+    swing = stride * co
+    out["lle3"] -= swing
+    out["rle3"] += swing
+    out["lle5"] += swing
+    out["rle5"] -= swing
+    return out
+
+
+def _within(phase: float, centre: float, half: float) -> bool:
+    """Whether ``phase`` lies less than ``half`` from ``centre`` on the unit circle."""
+    return abs((phase - centre + 0.5) % 1.0 - 0.5) < half
 
 
 def walk_reward_terms(
@@ -157,14 +245,13 @@ def walk_reward_terms(
     c = config
     lin_err = float((velocity[0] - command[0]) ** 2 + (velocity[1] - command[1]) ** 2)
     turn_err = float((turn_rate - math.radians(command[2])) ** 2)
-    moving = bool(np.any(np.abs(command[:2]) > 0.05) or abs(command[2]) > 3.0)
+    moving = asks_to_move(command)
     air = sum(t - 0.2 for t in touchdown_air_times) if moving else 0.0
     feet_phase = 0.0
     if feet_down is not None:
+        half = c.swing_share / 2.0
         swing = (
-            (phase % 1.0 < c.swing_share, (phase - 0.5) % 1.0 < c.swing_share)
-            if moving
-            else (False, False)
+            (_within(phase, 0.25, half), _within(phase, 0.75, half)) if moving else (False, False)
         )
         feet_phase = sum(down != up for down, up in zip(feet_down, swing, strict=True)) / 2.0
     return {
@@ -221,6 +308,11 @@ class Walk(BaseEnv):
     def __init__(self, config: WalkConfig | None = None, **kwargs: Any) -> None:
         self._forward = [0.0, 0.0, 0]
         super().__init__(config, **kwargs)
+        self._gait_slots: dict[str, int] | None = None
+        """Action slot of each controlled joint by effector name, with the reference gait."""
+        if self.config.reference_gait and self.config.action_mode is not ActionMode.VELOCITY:
+            names = self.robot_model.effector_names
+            self._gait_slots = {names[j]: k for k, j in enumerate(self._actions.joints)}
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
         self.reward_terms: dict[str, float] = {}
@@ -257,9 +349,25 @@ class Walk(BaseEnv):
             self.velocity_command[:] = cmd
         return start
 
+    @classmethod
+    def league_defaults(cls, robot: str) -> dict[str, Any]:
+        """:meth:`BaseEnv.league_defaults`, plus no reference gait (a pattern for the Nao)."""
+        out = super().league_defaults(robot)
+        out["reference_gait"] = False
+        return out
+
     def step(self, action: Any):
         c = self.config
         self._phase_acted = self.gait_phase  # the phase the policy saw when choosing the action
+        if self._gait_slots is not None:
+            offsets = self._actions.target_offset_deg
+            offsets[:] = 0.0
+            ramp = min(1.0, self.episode_step * CYCLE_S * c.gait_frequency_hz)
+            reference = reference_gait_deg(c, self._phase_acted, self.velocity_command, ramp)
+            for name, value in reference.items():
+                k = self._gait_slots.get(name)
+                if k is not None:
+                    offsets[k] = value
         if (
             c.command_change_steps
             and self.episode_step
