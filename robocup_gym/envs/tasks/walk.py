@@ -275,9 +275,11 @@ class Walk(BaseEnv):
     ``standing_command_prob``) and draws a new one every ``command_change_steps`` steps; the
     command is part of the observation (``velocity_command``). The robot starts standing in the
     crouched walking pose, placed instantly. A fall ends the episode (``terminate_on_fall``).
-    Actions are target angles around that pose (± ``target_around_start_deg``); a gait clock
-    (``gait_frequency_hz``, observed as ``gait_phase``) says when each foot should swing, as in
-    MuJoCo Playground's humanoid joystick tasks.
+    Actions are target angles around that pose (± ``target_around_start_deg``) added to a
+    reference gait (``reference_gait``: an open-loop stepping pattern, :func:`reference_gait_deg`)
+    while the command asks to move, so zero actions walk and the policy learns corrections. A
+    gait clock (``gait_frequency_hz``, observed as ``gait_phase``) drives the pattern and says
+    when each foot should swing, as in MuJoCo Playground's humanoid joystick tasks.
     Every step pays the sum of these terms (each documented in :class:`WalkConfig`; ``info``
     holds them under ``reward_terms``):
 
