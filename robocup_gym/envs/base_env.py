@@ -387,11 +387,11 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.ball_spawn_pos = config.ball_start.copy()
         self.kick_target = np.array(config.kick_target, dtype=float)
         self.velocity_command = np.zeros(3)
+        """The planar velocity a task commands (forward m/s, left m/s, turn deg/s; the
+        ``velocity_command`` observation); zeros unless the task sets it."""
         self.gait_clock = (0.0, 0.0)
         """The task's gait clock (phase at the episode's start in [0, 1), frequency in Hz): the
         ``gait_phase`` observation; (0, 0) unless the task sets it."""
-        """The planar velocity a task commands (forward m/s, left m/s, turn deg/s; the
-        ``velocity_command`` observation); zeros unless the task sets it."""
         self.episode_start: EpisodeStart | None = None
         self.diverged_episodes = 0
         """Episodes ended early because the simulation diverged."""

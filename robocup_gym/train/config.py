@@ -273,7 +273,6 @@ class TrainConfig:
     @classmethod
     def load(cls, path: str | os.PathLike) -> TrainConfig:
         """Read a YAML config file (any subset of the fields)."""
-
         text = Path(path).read_text()
         data = load_yaml(text) or {}
         if not isinstance(data, dict):

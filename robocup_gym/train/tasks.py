@@ -144,10 +144,12 @@ def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
 def resolved_env_config(env_id: str, env_kwargs: dict[str, Any] | None) -> dict[str, Any]:
     """Every option of the task ``env_id`` with ``env_kwargs`` applied, as plain values (what a
     run records in ``TrainConfig.env_config``); ``{}`` for other environments.
-    ``backend_options`` (objects) are left out.
+    ``backend_options`` (objects) are left out. No simulator is started, so a typo fails before
+    a run folder or a worker process exists.
 
     Raises:
-        ValueError: an unknown option or an invalid value (as :func:`validate_env_kwargs`).
+        ValueError: (:class:`~robocup_gym.envs.config.EnvConfigError`) naming the option and the
+            valid ones, or the value and what it must be.
     """
     config = _config_of(env_id, env_kwargs)
     if config is None:
@@ -155,18 +157,6 @@ def resolved_env_config(env_id: str, env_kwargs: dict[str, Any] | None) -> dict[
     out = config.to_dict()
     out.pop("backend_options", None)
     return out
-
-
-def validate_env_kwargs(env_id: str, env_kwargs: dict[str, Any] | None) -> None:
-    """Check a RobocupGym task's options without starting any simulator, so that a typo fails
-    before a run folder or a worker process exists.
-
-    Raises:
-        ValueError: (:class:`~robocup_gym.envs.config.EnvConfigError`) naming the option and the
-            valid ones, or the value and what it must be.
-    """
-    if env_kwargs:
-        _config_of(env_id, env_kwargs)
 
 
 def validate_algo_kwargs(algo: str, algo_kwargs: dict[str, Any]) -> None:

@@ -20,7 +20,6 @@ from robocup_gym.train.tasks import (
     resolved_env_config,
     task_name,
     validate_algo_kwargs,
-    validate_env_kwargs,
 )
 
 
@@ -81,8 +80,8 @@ def prepare_run(
     ``config.yaml``. Nothing is created when a check fails."""
     env_id = resolve_task(config.task)
     config = config.merged(env_id=env_id)
-    validate_env_kwargs(env_id, config.env_options())
-    # freeze every option of the environment, so that the run keeps it if a default changes
+    # check the options (before any folder or worker exists) and freeze every option of the
+    # environment, so that the run keeps it if a default changes
     config = config.merged(env_config=resolved_env_config(env_id, config.env_options()))
     validate_algo_kwargs(config.algo, config.algo_kwargs)
     if run_dir is None:
