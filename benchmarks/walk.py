@@ -10,9 +10,9 @@ default engine for ``--episodes`` episodes per command, each as long as the run'
 * turning 30 deg/s: mean error of the turn rate.
 
 ``pretrained:NAME`` runs a shipped policy; ``zero`` runs a policy that sends zero actions (a
-baseline, and a smoke test without a trained run). Prints one line per command and, as the
-last line, one JSON object (``forward_speed_mps``, ``falls``, ``sideways_error_mps``,
-``turn_error_deg_s``, …).
+baseline, and a smoke test without a trained run). ``--robot-type N`` runs another Nao type.
+Prints one line per command and, as the last line, one JSON object (``forward_speed_mps``,
+``falls``, ``sideways_error_mps``, ``turn_error_deg_s``, …).
 
     python benchmarks/walk.py runs/walk-ppo-<time> --episodes 20
 """
@@ -42,18 +42,21 @@ def run(env, act, command, episodes: int, seed: int) -> dict:
     for k in range(episodes):
         obs, info = env.reset(seed=seed + k, options={"velocity_command": command})
         start = u.torso_pos.copy()
-        heading = math.radians(u.config.robot_start_heading_deg)
-        heading0 = _heading(u.ground_truth.torso_quat)
+        start_heading = math.radians(u.config.robot_start_heading_deg)
+        heading, turned = _heading(u.ground_truth.torso_quat), 0.0
         done, steps = False, 0
         while not done:
             obs, _, terminated, truncated, info = env.step(act(obs))
             steps += 1
             done = terminated or truncated
+            now = _heading(u.ground_truth.torso_quat)
+            turned += _wrap(now - heading)  # summed per step: turns past 180° count whole
+            heading = now
         t = steps * 0.02
         d = u.torso_pos - start
-        fwd = d[0] * math.cos(heading) + d[1] * math.sin(heading)
-        left = -d[0] * math.sin(heading) + d[1] * math.cos(heading)
-        dyaw = math.degrees(_wrap(_heading(u.ground_truth.torso_quat) - heading0))
+        fwd = d[0] * math.cos(start_heading) + d[1] * math.sin(start_heading)
+        left = -d[0] * math.sin(start_heading) + d[1] * math.cos(start_heading)
+        dyaw = math.degrees(turned)
         speeds.append(fwd / t)
         lefts.append(left / t)
         turns.append(dyaw / t)
@@ -92,11 +95,22 @@ def main(argv: list[str] | None = None) -> dict:
         default=None,
         help="default: the run's own (ode for 'zero')",
     )
+    parser.add_argument(
+        "--robot-type",
+        type=int,
+        default=None,
+        help="Nao type 0-4 (default: the run's own; a policy takes only types with its joints)",
+    )
     args = parser.parse_args(argv)
     from robocup_gym.train.evaluate import policy_and_env
 
-    env, act = policy_and_env(args.policy, "RobocupGym/Walk-v0", args.engine)
-    out: dict = {"policy": args.policy, "episodes_per_command": args.episodes}
+    overrides = {} if args.robot_type is None else {"robot_type": args.robot_type}
+    env, act = policy_and_env(args.policy, "RobocupGym/Walk-v0", args.engine, overrides)
+    out: dict = {
+        "policy": args.policy,
+        "episodes_per_command": args.episodes,
+        "robot_type": env.unwrapped.config.robot_type,
+    }
     try:
         for name, command in COMMANDS.items():
             res = run(env, act, command, args.episodes, args.seed)

@@ -60,9 +60,19 @@ def test_walking_at_the_command_earns_the_tracking_reward():
     assert off["tracking_linear"] < 0.1
     turning = _terms(command=np.array([0.0, 0.0, 30.0]), turn_rate=math.radians(30.0))
     assert turning["tracking_turn"] == pytest.approx(0.8)
-    # a good step (0.35 s in the air) is rewarded while moving, shuffling (0.05 s) is not
-    assert _terms(touchdown_air_times=[0.35])["feet_air_time"] == pytest.approx(0.15)
+    # a step longer than the clock's swing (0.4 / 3 Hz = 0.133 s) is rewarded while moving,
+    # shuffling (0.05 s) is not
+    assert _terms(touchdown_air_times=[0.35])["feet_air_time"] == pytest.approx(0.35 - 0.4 / 3)
     assert _terms(touchdown_air_times=[0.05])["feet_air_time"] < 0
+    longer = walk_reward_terms(
+        WalkConfig(feet_air_time_target_s=0.3),
+        **{
+            "velocity": np.zeros(3), "turn_rate": 0.0, "command": np.array([0.5, 0.0, 0.0]),
+            "up_z": 1.0, "touchdown_air_times": [0.35], "action": np.zeros(4),
+            "last_action": np.zeros(4), "joint_speeds": np.zeros(4), "fallen": False,
+        },
+    )  # fmt: skip
+    assert longer["feet_air_time"] == pytest.approx(0.05)
     assert _terms(command=np.zeros(3), touchdown_air_times=[0.35])["feet_air_time"] == 0.0
     jerky = _terms(action=np.ones(4), last_action=-np.ones(4))
     assert jerky["action_rate"] == pytest.approx(-0.02 * 16)
@@ -133,9 +143,11 @@ def test_walk_actions_are_targets_around_the_walking_pose(engine):
 
 
 def test_the_reference_gait_lifts_each_leg_in_its_half_of_the_cycle():
-    c = WalkConfig()
+    c = WalkConfig(gait_sway_deg=5.0)
     forward = np.array([0.3, 0.0, 0.0])
-    assert reference_gait_deg(c, 0.25, np.zeros(3)) == {}  # told to stand: no stepping
+    assert reference_gait_deg(c, 0.25, forward, ramp=0.0) == {}  # level 0: no pattern
+    in_place = reference_gait_deg(c, 0.25, np.zeros(3))  # a zero command at level 1 steps
+    assert in_place["lle4"] == pytest.approx(-2 * c.gait_lift_deg) and in_place["lle1"] == 0.0
     left = reference_gait_deg(c, 0.25, forward)  # sin = 1: the left leg at the top of its lift
     assert left["lle3"] == pytest.approx(c.gait_lift_deg) and left["lle4"] == -2 * c.gait_lift_deg
     assert left["rle3"] == pytest.approx(0.0, abs=1e-9) and left["rle4"] == 0.0
@@ -151,6 +163,42 @@ def test_the_reference_gait_lifts_each_leg_in_its_half_of_the_cycle():
     assert fast["rle3"] == pytest.approx(c.gait_stride_max_deg)
     half = reference_gait_deg(c, 0.25, forward, ramp=0.5)
     assert half["lle3"] == pytest.approx(c.gait_lift_deg / 2)
+    assert at0["lle1"] == at0["rle1"] == 0.0  # no turn asked: no hip yaw-pitch swing
+
+
+def test_the_reference_gait_swings_the_hips_sideways_and_turns_them_on_command():
+    c = WalkConfig()
+    left = reference_gait_deg(c, 0.0, np.array([0.0, 0.2, 0.0]))  # cos = 1
+    side = 0.2 * c.gait_side_deg_per_mps
+    assert left["lle2"] == pytest.approx(-side) and left["rle2"] == pytest.approx(side)
+    assert left["lle6"] == pytest.approx(side) and left["rle6"] == pytest.approx(-side)
+    assert left["lle3"] == pytest.approx(0.0) and left["lle1"] == 0.0  # no stride, no turn
+    half_way = reference_gait_deg(c, 0.5, np.array([0.0, 0.2, 0.0]))  # cos = −1: swung back
+    assert half_way["lle2"] == pytest.approx(side)
+    far = reference_gait_deg(c, 0.0, np.array([0.0, -5.0, 0.0]))
+    assert far["lle2"] == pytest.approx(c.gait_side_max_deg)
+    turn = reference_gait_deg(c, 0.0, np.array([0.0, 0.0, 20.0]))
+    assert turn["lle1"] == turn["rle1"] == pytest.approx(20.0 * c.gait_turn_deg_per_dps)
+    fast = reference_gait_deg(c, 0.0, np.array([0.0, 0.0, -500.0]))
+    assert fast["lle1"] == pytest.approx(-c.gait_turn_max_deg)
+    # forward and sideways at their fullest at once (0.5 m/s × 40 = 20°, 0.3 m/s × 40 = 12°):
+    # each scaled by 1/√2, and a command beyond both keeps its direction
+    both = reference_gait_deg(c, 0.0, np.array([0.5, 0.3, 0.0]))
+    assert both["rle3"] == pytest.approx(c.gait_stride_max_deg / math.sqrt(2))
+    assert both["rle2"] == pytest.approx(c.gait_side_max_deg / math.sqrt(2))
+    beyond = reference_gait_deg(c, 0.0, np.array([1.0, 0.6, 0.0]))
+    assert beyond["rle3"] == pytest.approx(both["rle3"])
+    assert beyond["rle2"] == pytest.approx(both["rle2"])
+    small = reference_gait_deg(c, 0.0, np.array([0.1, 0.05, 5.0]))  # within the limit: as is
+    assert small["rle3"] == pytest.approx(0.1 * c.gait_stride_deg_per_mps)
+    with pytest.raises(EnvConfigError, match="gait_side_max_deg"):
+        WalkConfig(gait_side_max_deg=-1.0).validate()
+    with pytest.raises(EnvConfigError, match="gait_turn_deg_per_dps"):
+        WalkConfig(gait_turn_deg_per_dps=float("nan")).validate()
+    with pytest.raises(EnvConfigError, match="gait_lead_s"):
+        WalkConfig(gait_lead_s=3.0).validate()
+    with pytest.raises(EnvConfigError, match="feet_air_time_target_s"):
+        WalkConfig(feet_air_time_target_s=-0.1).validate()
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
@@ -165,7 +213,7 @@ def test_zero_actions_walk_forward_on_the_reference_gait():
         assert not terminated
         touchdowns += info["reward_terms"]["feet_air_time"] != 0.0
     speed = (env.torso_pos[0] - start[0]) / 5.0
-    assert speed > 0.25 and touchdowns >= 15  # 2 Hz: 20 touchdowns in 5 s
+    assert speed > 0.4 and touchdowns >= 25  # 3 Hz: 30 touchdowns in 5 s
     offsets = env._actions.target_offset_deg
     assert np.abs(offsets).max() > 5.0
     env.reset(seed=0, options={"velocity_command": (0.0, 0.0, 0.0)})
@@ -178,6 +226,66 @@ def test_zero_actions_walk_forward_on_the_reference_gait():
         plain.step(np.zeros(plain.action_space.shape))
     assert not plain._actions.target_offset_deg.any()
     plain.close()
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
+def test_zero_actions_step_sideways_and_turn_on_the_reference_gait():
+    env = Walk(command_change_steps=0)
+    env.reset(seed=1, options={"velocity_command": (0.0, 0.3, 0.0)})
+    start = env.torso_pos.copy()
+    for _ in range(250):  # 5 s
+        assert not env.step(np.zeros(env.action_space.shape))[2]
+    moved = env.torso_pos - start  # the robot starts facing +x: left is +y
+    assert moved[1] / 5.0 > 0.15 and abs(moved[0]) < 0.25
+    env.reset(seed=1, options={"velocity_command": (0.0, 0.0, -30.0)})
+    turned, heading = 0.0, _heading(env)
+    for _ in range(250):
+        assert not env.step(np.zeros(env.action_space.shape))[2]
+        now = _heading(env)
+        turned += (now - heading + math.pi) % (2 * math.pi) - math.pi
+        heading = now
+    assert math.degrees(turned) / 5.0 < -15.0  # clockwise, as commanded
+    env.close()
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
+def test_the_reference_gait_eases_in_follows_command_changes_and_eases_out():
+    """The pattern's level rises over one gait cycle, the command it follows changes with a
+    time constant of one cycle, and told to stand it fades out over one cycle: zero actions
+    survive random commands that change mid-episode."""
+    env = Walk(command_change_steps=0)
+    env.reset(seed=2, options={"velocity_command": (0.4, 0.0, 0.0)})
+    steps_per_cycle = round(1.0 / (0.02 * env.config.gait_frequency_hz))  # 17 at 3 Hz
+    levels = []
+    for _ in range(steps_per_cycle + 2):
+        env.step(np.zeros(env.action_space.shape))
+        levels.append(env._gait_level)
+    assert levels[0] == pytest.approx(0.06) and levels[-1] == 1.0
+    assert np.all(np.diff(levels) >= 0)
+    env.velocity_command[:] = (0.0, 0.2, 0.0)  # a new command: followed, not jumped to
+    env.step(np.zeros(env.action_space.shape))
+    assert 0.3 < env._gait_command[0] < 0.4 and 0.0 < env._gait_command[1] < 0.05
+    env.velocity_command[:] = 0.0  # stand: the pattern fades over a cycle, then stops
+    for k in range(steps_per_cycle + 1):
+        env.step(np.zeros(env.action_space.shape))
+        if k == 0:
+            assert env._gait_level > 0.8 and env._actions.target_offset_deg.any()
+    assert env._gait_level == 0.0 and not env._actions.target_offset_deg.any()
+    env.close()
+    changing = Walk(command_change_steps=100)
+    for seed in range(4):
+        changing.reset(seed=seed)
+        for _ in range(500):
+            _, _, terminated, truncated, _ = changing.step(np.zeros(changing.action_space.shape))
+            assert not terminated
+            if truncated:
+                break
+    changing.close()
+
+
+def _heading(env) -> float:
+    w, x, y, z = env.ground_truth.torso_quat
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -347,13 +455,14 @@ def test_the_locomotion_benchmarks_print_json_last(script):
         check=True,
     ).stdout
     res = json.loads(out.strip().splitlines()[-1])
-    assert res["meets_target"] is False
     if script == "walk.py":
-        # zero actions follow the reference gait: a walk, slower than the target, that does
-        # not turn by itself
-        assert 0.25 < res["forward_speed_mps"] < 0.5 and res["falls"] == 0
-        assert res["turn_error_deg_s"] == pytest.approx(30.0, abs=10.0)
+        # zero actions follow the reference gait: it walks forward, sideways and turns
+        assert 0.4 < res["forward_speed_mps"] < 0.7
+        assert res["sideways"]["left_speed_mps"] > 0.15 and res["sideways_error_mps"] < 0.15
+        assert res["turn"]["turn_rate_deg_s"] > 15.0 and res["turn_error_deg_s"] < 15.0
+        assert res["meets_target"] == (res["forward_speed_mps"] >= 0.5 and res["falls"] == 0)
     else:
+        assert res["meets_target"] is False
         assert res["success_rate"] == 0.0 and res["front"]["got_up"] == 0
         assert res["lying_poses"] == 3 and res["robot_type"] == 2
 

@@ -3,6 +3,8 @@ what their names say in-process on the default engine."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -79,27 +81,49 @@ def test_a_shipped_policy_runs_in_the_environment_it_was_exported_with():
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
-def test_the_walk_goes_forward_and_stands_when_told():
+def test_the_walk_goes_where_it_is_told_and_stands_when_told():
     """The shipped Walk policy on ODE, from several start phases of the gait clock: 4 s at
-    0.5 m/s forward moves the robot forward without a fall; told to stand, it stays put."""
+    0.5 m/s forward moves the robot ~2 m forward without a fall; 0.3 m/s to the left moves it
+    left, 30°/s turns it counter-clockwise; told to stand, it stays put."""
     assert "walk" in pretrained_names()
     meta = describe("walk")
     assert meta["env_id"] == "RobocupGym/Walk-v0" and meta["env_config"]["reference_gait"]
     policy = pretrained_policy("walk")
     env = pretrained_env(policy, "ode", {"command_change_steps": 0})
+    u = env.unwrapped
     try:
-        for command in ((0.5, 0.0, 0.0), (0.0, 0.0, 0.0)):
-            for seed in range(3):
+        for command, seeds in (
+            ((0.5, 0.0, 0.0), 3),
+            ((0.0, 0.0, 0.0), 3),
+            ((0.0, 0.3, 0.0), 1),
+            ((0.0, 0.0, 30.0), 1),
+        ):
+            for seed in range(seeds):
                 obs, _ = env.reset(seed=seed, options={"velocity_command": command})
-                start = env.unwrapped.torso_pos.copy()
+                start, yaw0 = u.torso_pos.copy(), _yaw(u)
+                turned = 0.0
                 for _ in range(200):
                     obs, _, terminated, _, info = env.step(policy(obs))
                     assert not terminated, f"fell (command {command}, seed {seed})"
-                moved = env.unwrapped.torso_pos - start
+                    yaw = _yaw(u)
+                    turned += (yaw - yaw0 + math.pi) % (2 * math.pi) - math.pi
+                    yaw0 = yaw
+                moved = u.torso_pos - start  # the robot starts facing +x
                 if command[0]:
-                    assert 0.5 < moved[0] < 3.0 and abs(moved[1]) < moved[0], (seed, moved)
+                    assert 1.6 < moved[0] < 3.0 and abs(moved[1]) < moved[0] / 2, (seed, moved)
+                elif command[1]:
+                    assert 0.6 < moved[1] < 2.0 and abs(moved[0]) < moved[1], (seed, moved)
+                elif command[2]:
+                    assert 40.0 < math.degrees(turned) < 180.0, (seed, math.degrees(turned))
+                    assert np.hypot(moved[0], moved[1]) < 0.4, (seed, moved)
                 else:
                     assert np.hypot(moved[0], moved[1]) < 0.2, (seed, moved)
                 assert info["velocity_command"][0] == command[0]
     finally:
         env.close()
+
+
+def _yaw(env) -> float:
+    """The torso's heading, rad (counter-clockwise from +x)."""
+    w, x, y, z = env.ground_truth.torso_quat
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))

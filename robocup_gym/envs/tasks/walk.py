@@ -62,7 +62,7 @@ class WalkConfig(EnvConfig):
     """Target angles (on the Nao: velocity = ``target_gain`` × error), …"""
     target_around_start_deg: float | None = 30.0
     """… spanning the start pose ± 30°: action 0 stands in the walking pose."""
-    gait_frequency_hz: float = 2.0
+    gait_frequency_hz: float = 3.0
     """Gait cycles (one step of each foot) per second: the clock of the ``gait_phase``
     observation, of the reference gait and of the ``feet_phase`` reward; each episode starts it
     at a random phase."""
@@ -74,17 +74,36 @@ class WalkConfig(EnvConfig):
     the command asks to move (:func:`reference_gait_deg`): the action corrects it (a residual
     policy; zero actions step). The Nao with a target-angle ``action_mode`` only (the velocity
     mode has no targets to add to, and ignores it)."""
-    gait_sway_deg: float = 5.0
+    gait_sway_deg: float = 0.0
     """Reference gait: amplitude of the hip and ankle roll that shifts the weight onto the
-    standing foot, deg."""
-    gait_lift_deg: float = 12.0
+    standing foot, deg (at 3 Hz the steps are short enough to need none: 3° fell once in 16
+    zero-action episodes at 0.5 m/s, 0° never)."""
+    gait_lift_deg: float = 16.0
     """Reference gait: peak leg lift of the swinging foot (hip and ankle pitch + this, knee pitch
     − twice this), deg."""
-    gait_stride_deg_per_mps: float = 45.0
+    gait_stride_deg_per_mps: float = 40.0
     """Reference gait: amplitude of the fore-aft hip/ankle pitch swing per m/s of commanded
-    forward speed, deg per m/s (open loop, 2 Hz: 16° walks ~0.34 m/s on ODE)."""
+    forward speed, deg per m/s (open loop on ODE at 3 Hz, zero actions walk ~1.07 × the command
+    up to the largest stride)."""
     gait_stride_max_deg: float = 20.0
-    """Reference gait: largest stride amplitude, deg."""
+    """Reference gait: largest stride amplitude, deg (20°: 0.54 m/s open loop; 25° falls)."""
+    gait_side_deg_per_mps: float = 40.0
+    """Reference gait: amplitude of the sideways hip roll swing (the ankles keep the feet flat)
+    per m/s of commanded leftward speed, deg per m/s (open loop: ~0.025 m/s per degree)."""
+    gait_side_max_deg: float = 12.0
+    """Reference gait: largest sideways swing, deg (12°: 0.30 m/s open loop; 14° falls)."""
+    gait_turn_deg_per_dps: float = 0.3
+    """Reference gait: amplitude of the hip yaw-pitch swing per deg/s of commanded turn rate,
+    deg per (deg/s) (open loop: 4° turns ~16°/s)."""
+    gait_turn_max_deg: float = 10.0
+    """Reference gait: largest hip yaw-pitch swing, deg."""
+    gait_lead_s: float = 0.05
+    """Reference gait: how far ahead of the gait clock the pattern plays, s: a foot leaves the
+    ground about this long after its lift is commanded (the joints' lag), so a lead lets the
+    feet swing when the clock (and ``feet_phase``) asks."""
+    feet_air_time_target_s: float | None = None
+    """Air time above which a step is paid (``feet_air_time``), s; ``None``: the swing the
+    clock asks for, ``swing_share`` / ``gait_frequency_hz`` (0.133 s at 3 Hz)."""
     forward_speed_range: tuple[float, float] = (-0.3, 0.8)
     """Commanded forward speed, m/s, drawn uniformly."""
     sideways_speed_range: tuple[float, float] = (-0.3, 0.3)
@@ -107,8 +126,8 @@ class WalkConfig(EnvConfig):
     """Weight of the share of feet (0, ½ or 1) whose ground contact is what the gait clock asks
     for (both down while the command is to stand)."""
     w_feet_air_time: float = 1.0
-    """Weight of Σ (air time − 0.2 s) over the feet that touch down this step (only while the
-    command asks to move): rewards steps of a useful length."""
+    """Weight of Σ (air time − ``feet_air_time_target_s``) over the feet that touch down this
+    step (only while the command asks to move): rewards steps of a useful length."""
     w_action_rate: float = -0.02
     """Weight of |a_t − a_{t−1}|² (actions in [-1, 1])."""
     w_joint_speed: float = -2e-4
@@ -141,16 +160,24 @@ class WalkConfig(EnvConfig):
             )
         if not 0.0 <= self.swing_share <= 0.5:
             raise EnvConfigError(f"swing_share must be in [0, 0.5], got {self.swing_share!r}")
-        for name in ("gait_sway_deg", "gait_lift_deg", "gait_stride_deg_per_mps"):
+        for name in (
+            "gait_sway_deg", "gait_lift_deg", "gait_stride_deg_per_mps", "gait_side_deg_per_mps",
+            "gait_turn_deg_per_dps",
+        ):  # fmt: skip
             value = getattr(self, name)
             if not (math.isfinite(value) and abs(value) <= 90.0):
                 raise EnvConfigError(
                     f"{name} must be a number of degrees within ±90, got {value!r}"
                 )
-        if not (math.isfinite(self.gait_stride_max_deg) and 0.0 <= self.gait_stride_max_deg <= 90):
-            raise EnvConfigError(
-                f"gait_stride_max_deg must be in [0, 90] deg, got {self.gait_stride_max_deg!r}"
-            )
+        for name in ("gait_stride_max_deg", "gait_side_max_deg", "gait_turn_max_deg"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= 90.0):
+                raise EnvConfigError(f"{name} must be in [0, 90] deg, got {value!r}")
+        if not (math.isfinite(self.gait_lead_s) and abs(self.gait_lead_s) <= 1.0):
+            raise EnvConfigError(f"gait_lead_s must be within ±1 s, got {self.gait_lead_s!r}")
+        target = self.feet_air_time_target_s
+        if target is not None and not (math.isfinite(target) and target >= 0.0):
+            raise EnvConfigError(f"feet_air_time_target_s must be >= 0 s, got {target!r}")
         if self.reference_gait and self.robot != "nao":
             raise EnvConfigError(
                 f"reference_gait is a stepping pattern for the Nao, not the {self.robot}; pass "
@@ -174,36 +201,64 @@ def reference_gait_deg(
     config: WalkConfig, phase: float, command: np.ndarray, ramp: float = 1.0
 ) -> dict[str, float]:
     """The reference gait's target-angle offsets (deg, by Nao effector name) at gait phase
-    ``phase`` for ``command``; empty while the command asks to stand.
+    ``phase`` for ``command`` (forward m/s, left m/s, turn deg/s), at level ``ramp``.
 
     With s = sin 2πφ and c = cos 2πφ: both hip rolls + ``gait_sway_deg``·s and both ankle
     rolls − it (the weight moves onto the standing foot); the left leg lifts while s > 0 and the
     right while s < 0 (hip and ankle pitch + ``gait_lift_deg``·|s|, knee − twice that); the hips
     and ankles swing fore and aft with c, the stride ``gait_stride_deg_per_mps`` × the forward
-    command (at most ``gait_stride_max_deg``). Every amplitude is scaled by ``ramp`` (0–1: the
-    episode's first gait cycle eases in)."""
-    if not asks_to_move(command):
+    command (at most ``gait_stride_max_deg``); the hip rolls swing sideways with c (left −, right
+    +, the ankle rolls keeping the feet flat), ``gait_side_deg_per_mps`` × the leftward command
+    (at most ``gait_side_max_deg``); both hip yaw-pitches swing with c, ``gait_turn_deg_per_dps``
+    × the turn command (at most ``gait_turn_max_deg``). Each swing carries the lifted foot one
+    way and the standing foot back, so the body moves the other. A command that asks for more
+    than one swing's largest amplitude at once is scaled down until the three shares of their
+    largest (stride, side, turn) have a Euclidean norm of 1: a step does not both stride and
+    side-step its fullest.
+
+    ``ramp`` (0–1) scales every amplitude: :class:`Walk` eases the pattern in over a gait cycle
+    when the command asks to move and out over one when it asks to stand; 0 gives no pattern
+    (an empty dict)."""
+    if ramp <= 0.0:
         return {}
     c = config
+
+    def share(per_unit: float, value: float, largest: float) -> float:
+        return per_unit * value / largest if largest > 0.0 else 0.0
+
+    shares = np.array(
+        [
+            share(c.gait_stride_deg_per_mps, command[0], c.gait_stride_max_deg),
+            share(c.gait_side_deg_per_mps, command[1], c.gait_side_max_deg),
+            share(c.gait_turn_deg_per_dps, command[2], c.gait_turn_max_deg),
+        ]
+    )
+    norm = float(np.linalg.norm(shares))
+    if norm > 1.0:
+        shares /= norm
+    largest = (c.gait_stride_max_deg, c.gait_side_max_deg, c.gait_turn_max_deg)
+    stride_amp, side_amp, turn_amp = (float(x) * m for x, m in zip(shares, largest, strict=True))
     angle = 2.0 * math.pi * phase
     s, co = math.sin(angle) * ramp, math.cos(angle) * ramp
     sway = c.gait_sway_deg * s
-    stride = float(
-        np.clip(
-            c.gait_stride_deg_per_mps * command[0], -c.gait_stride_max_deg, c.gait_stride_max_deg
-        )
-    )
-    out = {"lle2": sway, "rle2": sway, "lle6": -sway, "rle6": -sway}
+    stride, side, turn = stride_amp * co, side_amp * co, turn_amp * co
+    out = {
+        "lle1": turn,
+        "rle1": turn,
+        "lle2": sway - side,
+        "rle2": sway + side,
+        "lle6": -sway + side,
+        "rle6": -sway - side,
+    }
     for leg, lift in (("l", max(0.0, s)), ("r", max(0.0, -s))):
         lift *= c.gait_lift_deg
         out[f"{leg}le3"] = lift
         out[f"{leg}le4"] = -2.0 * lift
         out[f"{leg}le5"] = lift
-    swing = stride * co
-    out["lle3"] -= swing
-    out["rle3"] += swing
-    out["lle5"] += swing
-    out["rle5"] -= swing
+    out["lle3"] -= stride
+    out["rle3"] += stride
+    out["lle5"] += stride
+    out["rle5"] -= stride
     return out
 
 
@@ -246,7 +301,12 @@ def walk_reward_terms(
     lin_err = float((velocity[0] - command[0]) ** 2 + (velocity[1] - command[1]) ** 2)
     turn_err = float((turn_rate - math.radians(command[2])) ** 2)
     moving = asks_to_move(command)
-    air = sum(t - 0.2 for t in touchdown_air_times) if moving else 0.0
+    target = (
+        c.feet_air_time_target_s
+        if c.feet_air_time_target_s is not None
+        else c.swing_share / c.gait_frequency_hz
+    )
+    air = sum(t - target for t in touchdown_air_times) if moving else 0.0
     feet_phase = 0.0
     if feet_down is not None:
         half = c.swing_share / 2.0
@@ -290,7 +350,7 @@ class Walk(BaseEnv):
     ``tracking_turn``     0.8          exp(−(ω_z − cmd_ω)² / σ), rad/s
     ``upright``           0.3          world z of the torso's up axis
     ``feet_phase``        0.5          share of feet in contact as the gait clock asks
-    ``feet_air_time``     1.0          Σ (air time − 0.2 s) of feet touching down (when moving)
+    ``feet_air_time``     1.0          Σ (air time − swing share / f) of feet touching down
     ``action_rate``       −0.02        |a_t − a_{t−1}|²
     ``joint_speed``       −2e-4        Σ joint speed², (rad/s)²
     ``vertical_speed``    −0.5         torso vertical speed², (m/s)²
@@ -338,6 +398,8 @@ class Walk(BaseEnv):
         self._forward = [0.0, 0.0, 0]  # sum of forward speeds, of |forward error|, steps
         self.gait_clock = (float(self.np_random.uniform()), float(self.config.gait_frequency_hz))
         self._phase_acted = 0.0
+        self._gait_level = 0.0
+        """The reference gait's level (0–1, :func:`reference_gait_deg`'s ``ramp``)."""
         command = options.get("velocity_command")
         if command is None:
             self._draw_command()
@@ -349,6 +411,8 @@ class Walk(BaseEnv):
                     f"m/s, turn deg/s), got {command!r}"
                 )
             self.velocity_command[:] = cmd
+        self._gait_command = self.velocity_command.copy()
+        """The command the reference gait follows (the command, low-pass filtered)."""
         return start
 
     @classmethod
@@ -364,8 +428,15 @@ class Walk(BaseEnv):
         if self._gait_slots is not None:
             offsets = self._actions.target_offset_deg
             offsets[:] = 0.0
-            ramp = min(1.0, self.episode_step * CYCLE_S * c.gait_frequency_hz)
-            reference = reference_gait_deg(c, self._phase_acted, self.velocity_command, ramp)
+            # the pattern eases in and out over a gait cycle, and follows command changes with a
+            # time constant of one cycle: no step starts, stops or changes all at once
+            rate = min(1.0, CYCLE_S * c.gait_frequency_hz)
+            level = 1.0 if asks_to_move(self.velocity_command) else 0.0
+            self._gait_level += float(np.clip(level - self._gait_level, -rate, rate))
+            self._gait_command += (self.velocity_command - self._gait_command) * rate
+            lead = c.gait_lead_s * c.gait_frequency_hz  # in cycles
+            phase = (self._phase_acted + lead) % 1.0
+            reference = reference_gait_deg(c, phase, self._gait_command, self._gait_level)
             for name, value in reference.items():
                 k = self._gait_slots.get(name)
                 if k is not None:
