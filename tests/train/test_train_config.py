@@ -26,6 +26,27 @@ def test_ppo_defaults_are_the_papers():
     assert off["overlap_updates"] is False and off["n_steps"] == 64
 
 
+def test_a_task_can_need_other_hyperparameters_than_the_papers():
+    """Walk's reference policy was trained with small plain Gaussian noise: ``train walk`` gets
+    those settings over the paper's, the run's own ``algo_kwargs`` over them, and the config
+    file records the merge; other tasks and algorithms keep the paper's."""
+    walk = TrainConfig(task="walk").resolved_algo_kwargs()
+    assert walk["use_sde"] is False and walk["learning_rate"] == 3e-4
+    assert walk["batch_size"] == 256 and walk["n_steps"] == 64  # the rest is the paper's
+    assert walk["policy_kwargs"]["log_std_init"] == -2.0
+    assert walk["policy_kwargs"]["net_arch"] == [256, 256]
+    by_id = TrainConfig(task="RobocupGym/Walk-v0").resolved_algo_kwargs()
+    assert by_id == walk
+    mine = TrainConfig(
+        task="walk", algo_kwargs={"use_sde": True, "policy_kwargs": {"log_std_init": -1.0}}
+    ).resolved_algo_kwargs()
+    assert mine["use_sde"] is True and mine["policy_kwargs"]["log_std_init"] == -1.0
+    assert mine["batch_size"] == 256 and mine["policy_kwargs"]["net_arch"] == [256, 256]
+    assert TrainConfig(task="velocity-kick").resolved_algo_kwargs()["use_sde"] is True
+    assert TrainConfig(task="walk", algo="sac").resolved_algo_kwargs() == {}
+    assert TrainConfig(task="no-such-task").resolved_algo_kwargs()["use_sde"] is True
+
+
 def test_sac_defaults_are_sb3s():
     assert algo_defaults("sac") == {}
     assert TrainConfig(algo="sac").resolved_algo_kwargs() == {}
