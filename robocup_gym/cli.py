@@ -8,6 +8,7 @@ the learner starts.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -511,12 +512,28 @@ if typer is not None:
             ),
         ] = 2,
         seed: Annotated[int, typer.Option(help="Seed of the first episode (as eval).")] = 100_000,
+        env: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--env",
+                help="Environment option KEY=VALUE over the policy's own (repeatable; not one "
+                "that changes the observation), e.g. --env max_episode_steps=1000.",
+            ),
+        ] = None,
+        command: Annotated[
+            str | None,
+            typer.Option(
+                "--command",
+                help="A Walk policy's velocity command, 'FORWARD,LEFT,TURN' in m/s, m/s and "
+                "deg/s (CCW positive), held for the whole episode, e.g. --command 0.5,0,0.",
+            ),
+        ] = None,
     ) -> None:
         """Drive a robot with an exported policy over the rcssserver3d protocol.
 
         With --monitor-port the episodes start as in training and ground truth comes from the
         monitor stream (the policy sees what it sees in `eval`); without it, from the See
-        extensions of a server started with ground truth."""
+        extensions of a server started with ground truth. A walk goes where --command says."""
         from robocup_gym.train.agent import run_onnx_agent
 
         console = _console()
@@ -532,11 +549,39 @@ if typer is not None:
             except ValueError as exc:
                 _fail(str(exc))
 
+        overrides = _parse_assignments(env, "--env")
+        reset_options: dict[str, Any] = {}
+        if command is not None:
+            parts = command.split(",")
+            try:
+                velocity = [float(p) for p in parts]
+            except ValueError:
+                velocity = []
+            if len(velocity) != 3 or not all(math.isfinite(v) for v in velocity):
+                raise _usage_error(
+                    f"--command expects FORWARD,LEFT,TURN (m/s, m/s, deg/s), got {command!r}"
+                )
+            from robocup_gym.train.export import read_metadata
+            from robocup_gym.train.pretrained import recorded_env_options
+
+            try:
+                meta = read_metadata(onnx)
+            except (OSError, ValueError) as exc:
+                _fail(str(exc))
+            if "command_change_steps" not in recorded_env_options(meta):
+                _fail(
+                    f"--command gives a Walk policy its velocity_command; {onnx} is a "
+                    f"{meta.get('env_id')} policy, which takes none"
+                )
+            reset_options["velocity_command"] = tuple(velocity)
+            overrides.setdefault("command_change_steps", 0)
+
         def report(rep) -> None:
-            d = rep.ball_displacement
+            d, t = rep.ball_displacement, rep.torso_displacement
             console.print(
                 f"episode: {rep.steps} steps, fallen={rep.fallen}, ball displacement "
                 + ("–" if d is None else f"({d[0]:+.2f}, {d[1]:+.2f}) m")
+                + ("" if t is None else f", torso moved ({t[0]:+.2f}, {t[1]:+.2f}) m")
             )
 
         try:
@@ -552,6 +597,8 @@ if typer is not None:
                 monitor_interval=monitor_interval,
                 seed=seed,
                 on_episode=report,
+                env_overrides=overrides,
+                reset_options=reset_options,
             )
         except (OSError, RuntimeError, ValueError) as exc:
             _fail(str(exc))

@@ -303,6 +303,9 @@ class EpisodeReport:
     steps: int
     ball_displacement: list[float] | None
     fallen: bool
+    torso_displacement: list[float] | None = None
+    """How far the torso moved over the episode (x, y, z in the field frame, m), where the
+    environment knows it."""
 
 
 def run_onnx_agent(
@@ -318,10 +321,15 @@ def run_onnx_agent(
     monitor_interval: int = 2,
     seed: int = 100_000,
     on_episode=None,
+    env_overrides: dict[str, Any] | None = None,
+    reset_options: dict[str, Any] | None = None,
 ) -> list[EpisodeReport]:
     """Connect to a server and run ``episodes`` episodes of the exported policy.
 
-    The task, its configuration and the robot type come from the ONNX file's metadata.
+    The task, its configuration and the robot type come from the ONNX file's metadata;
+    ``env_overrides`` replace some of those options (they may not change the observation), and
+    every episode is reset with ``reset_options`` (a Walk's ``{"velocity_command": (forward
+    m/s, left m/s, turn deg/s)}``, say).
 
     With a ``monitor_port`` the robot runs on
     :class:`~robocup_gym.backends.rcssserver3d_backend.Rcssserver3dBackend` in connect mode:
@@ -350,7 +358,7 @@ def run_onnx_agent(
             raise ValueError(f"{what} {p} is not a port number (1-65535)")
     policy = OnnxPolicy(onnx_path)
     meta = policy.metadata
-    env_kwargs = recorded_env_options(meta)
+    env_kwargs = {**recorded_env_options(meta), **(env_overrides or {})}
     robot_type = int(env_kwargs.get("robot_type", 0))
     backend: Backend
     if monitor_port is not None:
@@ -373,18 +381,29 @@ def run_onnx_agent(
     try:
         env = make_env(meta["env_id"], backend=backend, env_kwargs=env_kwargs)
         try:
+            want = int(meta["input"]["shape"][1])
+            if env.observation_space.shape != (want,):
+                raise ValueError(
+                    f"with the options {env_overrides!r} the environment's observations have "
+                    f"shape {env.observation_space.shape}; the policy takes ({want},)"
+                )
             for k in range(episodes):
-                obs, _ = env.reset(seed=seed + k)
+                obs, _ = env.reset(seed=seed + k, options=dict(reset_options or {}))
+                start = _torso_position(env)
                 done, steps, info = False, 0, {}
                 while not done:
                     obs, _, terminated, truncated, info = env.step(policy(obs))
                     steps += 1
                     done = terminated or truncated
                 disp = info.get("ball_displacement")
+                end = _torso_position(env)
                 rep = EpisodeReport(
                     steps=steps,
                     ball_displacement=None if disp is None else [float(x) for x in disp],
                     fallen=bool(info.get("fallen", False)),
+                    torso_displacement=(
+                        None if start is None or end is None else [float(x) for x in end - start]
+                    ),
                 )
                 reports.append(rep)
                 if on_episode is not None:
@@ -394,3 +413,10 @@ def run_onnx_agent(
     finally:
         backend.close()
     return reports
+
+
+def _torso_position(env) -> np.ndarray | None:
+    """The torso's position now (m), if the environment's ground truth has it."""
+    gt = getattr(env.unwrapped, "ground_truth", None)
+    pos = None if gt is None else gt.torso_pos
+    return None if pos is None else np.array(pos, dtype=float)

@@ -127,3 +127,36 @@ def _yaw(env) -> float:
     """The torso's heading, rad (counter-clockwise from +x)."""
     w, x, y, z = env.ground_truth.torso_quat
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
+def test_the_agent_walks_the_shipped_walk_where_it_is_told_on_serve():
+    """``robocup-gym agent --pretrained walk --command 0.5,0,0`` over the rcssserver3d protocol
+    (the embedded server): the command holds for the episode and the robot walks forward;
+    a malformed command, or one for a policy that takes none, is a clear error."""
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+    from robocup_gym.server import SimServer
+
+    server = SimServer(
+        0, 0, "127.0.0.1", sync=True, real_time=False, ground_truth=True, vision_noise=False
+    )
+    agent_port, monitor_port = server.start_in_thread()
+    runner = CliRunner()
+    try:
+        base = ["agent", "--pretrained", "walk", "--port", str(agent_port)]
+        base += ["--monitor-port", str(monitor_port), "--env", "max_episode_steps=100"]
+        result = runner.invoke(app, [*base, "--command", "0.5,0,0"])
+        assert result.exit_code == 0, result.output
+        assert "episode: 100 steps, fallen=False" in result.output
+        moved = result.output.split("torso moved (")[1].split(")")[0].split(",")
+        assert float(moved[0]) > 0.5 and abs(float(moved[1])) < 0.4, result.output
+        bad = runner.invoke(app, [*base, "--command", "0.5,fast"])
+        assert bad.exit_code == 2 and "FORWARD,LEFT,TURN" in bad.output
+        kick = ["agent", "--pretrained", "get-up-front", "--port", str(agent_port)]
+        kick += ["--monitor-port", str(monitor_port), "--command", "0.5,0,0"]
+        wrong = runner.invoke(app, kick)
+        assert wrong.exit_code == 1 and "velocity_command" in wrong.output, wrong.output
+    finally:
+        server.stop()
