@@ -348,8 +348,7 @@ def run_onnx_agent(
     Episode ``k`` is reset with seed ``seed + k`` (as ``robocup-gym eval``).
     """
     from robocup_gym.train.export import OnnxPolicy
-    from robocup_gym.train.pretrained import recorded_env_options
-    from robocup_gym.train.tasks import make_env
+    from robocup_gym.train.pretrained import pretrained_env, recorded_env_options
 
     if int(episodes) < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
@@ -379,14 +378,8 @@ def run_onnx_agent(
         )
     reports = []
     try:
-        env = make_env(meta["env_id"], backend=backend, env_kwargs=env_kwargs)
+        env = pretrained_env(policy, backend, env_overrides)
         try:
-            want = int(meta["input"]["shape"][1])
-            if env.observation_space.shape != (want,):
-                raise ValueError(
-                    f"with the options {env_overrides!r} the environment's observations have "
-                    f"shape {env.observation_space.shape}; the policy takes ({want},)"
-                )
             for k in range(episodes):
                 obs, _ = env.reset(seed=seed + k, options=dict(reset_options or {}))
                 start = _torso_position(env)

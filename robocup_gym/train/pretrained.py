@@ -12,11 +12,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from robocup_gym.backends import DEFAULT_ENGINE
+
+if TYPE_CHECKING:
+    from robocup_gym.backends.base import Backend
 
 __all__ = [
     "POLICY_DIR",
@@ -73,10 +76,13 @@ def recorded_env_options(meta: dict[str, Any]) -> dict[str, Any]:
     return {**recorded, **(meta.get("env_kwargs") or {})}
 
 
-def pretrained_env(policy, backend: str | None = None, env_overrides: dict[str, Any] | None = None):
+def pretrained_env(
+    policy, backend: str | Backend | None = None, env_overrides: dict[str, Any] | None = None
+):
     """The environment an exported ``policy`` (an :class:`~robocup_gym.train.export.OnnxPolicy`)
     is meant for: its task with its recorded options (:func:`recorded_env_options`;
-    ``env_overrides`` over them) on ``backend`` (default: the engine it was trained on).
+    ``env_overrides`` over them) on ``backend`` (a backend's name or a built backend, such as
+    the agent's connection to a server; default: the engine it was trained on).
 
     Raises:
         ValueError: the overrides give observations of another size than the policy takes.

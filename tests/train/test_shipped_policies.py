@@ -10,6 +10,7 @@ import pytest
 
 pytest.importorskip("onnxruntime")
 
+from robocup_gym.envs.observations import heading_frame
 from robocup_gym.sim.engines.ode import available
 from robocup_gym.train.pretrained import (
     describe,
@@ -125,8 +126,8 @@ def test_the_walk_goes_where_it_is_told_and_stands_when_told():
 
 def _yaw(env) -> float:
     """The torso's heading, rad (counter-clockwise from +x)."""
-    w, x, y, z = env.ground_truth.torso_quat
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    cos, sin = heading_frame(env.ground_truth.torso_quat)
+    return math.atan2(sin, cos)
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
