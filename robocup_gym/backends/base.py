@@ -112,6 +112,12 @@ class Backend(abc.ABC):
     name: ClassVar[str] = "abstract"
     """Registry name of the backend (``"mujoco"``, ``"rcssserver3d"``, …)."""
 
+    deterministic: ClassVar[bool] = True
+    """Whether the same commands from the same :meth:`reset_episode` give the same perceptions
+    every time. The in-process worlds do; a real server does not (its solver carries warm
+    starts and contacts from one episode to the next, its noise has its own seed), and
+    environments on it say so (``env.spec.nondeterministic``)."""
+
     def __init__(self, *, robot_type: int = 0, seed: int | None = None, vision: bool = False):
         self.robot_type = int(robot_type)
         self.seed = seed

@@ -515,6 +515,7 @@ class Rcssserver3dBackend(Backend):
     """
 
     name = "rcssserver3d"
+    deterministic = False
 
     def __init__(
         self,

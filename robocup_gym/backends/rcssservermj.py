@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import shutil
 import signal
 import socket
@@ -35,6 +36,13 @@ __all__ = ["LeagueAgentLink", "RcssServerMJProcess", "format_pd_commands"]
 LOOP_GRACE_S = 0.2
 """Seconds between the server's "simulation update loop" log line and a player's join, when no
 monitor connection confirms the first step (its loop steps within milliseconds)."""
+
+_FULL_SCENE = re.compile(rb"\(sg 1 0\)\s*full")
+_FULL_SCENE_WITHIN = 4096
+"""Bytes of a monitor message searched for its scene kind (it follows the time and game state)."""
+_SCENE_FRAMES_KEPT = 1000
+"""Most deltas kept after a full scene (the server sends a full one every 250 cycles, so at
+most 125 deltas come between)."""
 
 
 class RcssServerMJProcess(ChildProcess):
@@ -63,6 +71,7 @@ class RcssServerMJProcess(ChildProcess):
         self.folder = tempfile.mkdtemp(prefix="robocup_gym_rcssservermj_")
         self.proc: subprocess.Popen | None = None
         self._monitor: tuple[socket.socket, FrameDecoder] | None = None
+        self._scene: list[bytes] = []
         self._taken: socket.socket | None = None
         self.agent_port = self.monitor_port = 0
         last = ""
@@ -101,12 +110,13 @@ class RcssServerMJProcess(ChildProcess):
                 continue
             decoder = FrameDecoder()
             try:
-                recv_frame(s, decoder, max(0.5, deadline - time.monotonic()))
+                first = recv_frame(s, decoder, max(0.5, deadline - time.monotonic()))
             except (OSError, ConnectionError, TimeoutError):
                 s.close()
                 time.sleep(0.05)
                 continue
             self._monitor = (s, decoder)
+            self._scene = [first]
             self._drain_stop = threading.Event()
             self._drainer = threading.Thread(target=self._drain, daemon=True)
             self._drainer.start()
@@ -128,8 +138,10 @@ class RcssServerMJProcess(ChildProcess):
         return False
 
     def _drain(self) -> None:
-        """Read and drop the monitor stream until :meth:`take_monitor` or :meth:`stop` (so the
-        server never blocks on a full socket)."""
+        """Read the monitor stream until :meth:`take_monitor` or :meth:`stop` (so the server
+        never blocks on a full socket), keeping the newest full scene and the deltas after it
+        (whoever takes the monitor needs them: the server sends the next full one only every
+        250 cycles)."""
         s, decoder = self._monitor
         s.settimeout(0.05)
         while not self._drain_stop.is_set():
@@ -141,12 +153,20 @@ class RcssServerMJProcess(ChildProcess):
                 return
             if data == b"":
                 return
-            decoder.feed(data)  # whole frames are dropped, a partial one is kept
+            for frame in decoder.feed(data):  # a partial frame stays in the decoder
+                self._keep(frame)
 
-    def take_monitor(self) -> tuple[socket.socket, FrameDecoder]:
-        """The open monitor connection (from the start-up check) and its frame decoder (which
-        holds any partly received message), for the caller to read and to send monitor
-        commands on; the caller must keep it open while the server runs (see
+    def _keep(self, frame: bytes) -> None:
+        if _FULL_SCENE.search(frame[:_FULL_SCENE_WITHIN]):
+            self._scene = [frame]
+        elif self._scene and len(self._scene) < _SCENE_FRAMES_KEPT:
+            self._scene.append(frame)
+
+    def take_monitor(self) -> tuple[socket.socket, FrameDecoder, list[bytes]]:
+        """The open monitor connection (from the start-up check), its frame decoder (which
+        holds any partly received message) and the messages read so far that the scene needs
+        (the newest full scene and the deltas after it), for the caller to read and to send
+        monitor commands on; the caller must keep it open while the server runs (see
         :meth:`_wait_until_stepping`): :meth:`stop` closes it.
 
         Raises:
@@ -160,7 +180,8 @@ class RcssServerMJProcess(ChildProcess):
         self._monitor = None
         self._taken = s
         s.settimeout(None)
-        return s, decoder
+        scene, self._scene = self._scene, []
+        return s, decoder, scene
 
     def _spawn(self) -> None:
         log = open(os.path.join(self.folder, "server.out"), "wb")  # noqa: SIM115

@@ -15,13 +15,21 @@ What differs from the in-process backend (``"rcsssmj"``), both stepping the same
   other start angles are refused (the league robots' task defaults are all 0).
 * **Ground truth** comes from what the server sends: the torso's pose from the agent's
   ``pos``/``quat`` perceptors (3 decimals), its velocity by differences over one cycle, the
-  ball from the last monitor frame (at most one cycle old) and its velocity by differences
-  between frames. The in-process backend has the exact state.
-* **Reset timing**: a monitor command is applied after the physics of the first server step
-  after it arrives, and the perception after that still shows the sensors from before; the
-  reset places the robot 1 m higher first, then where asked, and returns the first perception
-  that shows it there: the state one limp 20 ms step after the placement, as the in-process
-  backend's reset (a few cycles in all).
+  ball from the monitor frame of the perception's cycle, or in a cycle without one (the server
+  sends one every second cycle) the cycle before, and its velocity by differences between
+  frames. Frames the server sent after the perception (it steps on as soon as it has the
+  answer) are never used, so what an episode sees does not depend on thread timing. The
+  in-process backend has the exact state.
+* **Reset timing**: a monitor command is applied after the physics of the second or third
+  server step after it is sent (the server's monitor thread reads it before or after its agent
+  thread reads the answer), and the perception after that still shows the sensors from
+  before; the reset places the robot 1 m higher first, then where asked (at a cycle chosen so
+  that the placement shows in a cycle with a monitor frame, again if the server took the
+  command a cycle late), and returns the first perception that shows it there: the state one
+  limp 20 ms step after the placement, as the in-process backend's reset (a few cycles).
+* **Repeatability**: the server's MuJoCo keeps its solver's warm start across placements, so
+  a reset does not repeat an episode bit for bit (the ball rests 0.1 mm higher or lower);
+  environments on this backend have ``spec.nondeterministic`` set.
 """
 
 from __future__ import annotations
@@ -30,6 +38,7 @@ import contextlib
 import math
 import socket
 import time
+from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
@@ -51,9 +60,17 @@ from robocup_gym.types import AgentCommand, GroundTruth, PDCommand, Perception
 __all__ = ["RcssServerMJBackend"]
 
 _CYCLE_S = 0.02
+_RESET_ATTEMPTS = 4
+_FRAMES_KEPT = 8
 _PLACE_TOLERANCE_M = 0.01
 """How close the perceived torso and the monitor's ball must be to the requested placement for
 the reset to count as done, m (one 20 ms limp step moves them by millimetres)."""
+
+
+def _perception_cycle(t: float) -> int:
+    """The server cycle of a perception's time: the server truncates it to 2 decimals, so a
+    cycle's time 1.44 s can print as 1.43 (cycles are 20 ms: an odd last digit is one below)."""
+    return round(t / _CYCLE_S + 0.25)
 
 
 class RcssServerMJBackend(Backend):
@@ -76,6 +93,7 @@ class RcssServerMJBackend(Backend):
     """
 
     name = "rcssservermj"
+    deterministic = False
 
     def __init__(
         self,
@@ -106,23 +124,28 @@ class RcssServerMJBackend(Backend):
         self.link = None
         self._monitor: socket.socket | None = None
         try:
+            self._reader = LeagueMonitorReader()
+            self._frames: deque[tuple[int, np.ndarray | None]] = deque(maxlen=_FRAMES_KEPT)
             if port is None:
                 self.server = RcssServerMJProcess()
                 port = self.server.agent_port
-                self._monitor, self._mdecoder = self.server.take_monitor()
+                self._monitor, self._mdecoder, scene = self.server.take_monitor()
+                for frame in scene:
+                    self._take_frame(frame)
             else:
                 self._monitor = socket.create_connection((host, int(monitor_port)), timeout=timeout)
                 self._mdecoder = FrameDecoder()
             self._monitor.setblocking(False)
-            self._reader = LeagueMonitorReader()
-            self._ball: tuple[float, np.ndarray] | None = None  # (time, position) of a frame
-            self._ball_vel = np.zeros(3)
             self.link = LeagueAgentLink(int(port), self.robot, self.team, 1, timeout=timeout)
             self._recv()  # the first perception, which the server waits an answer to
         except BaseException:
             self.close()
             raise
         self._last_pos: np.ndarray | None = None
+        self._place_delay = 2
+        """Cycles from the perception a placement was sent with to the first that shows it:
+        2 or 3, as the server's monitor thread reads the command before or after the agent's."""
+        self._limp = {n: PDCommand(0.0) for n in self._model.effector_names}
 
     @property
     def robot_model(self) -> Any:
@@ -160,13 +183,11 @@ class RcssServerMJBackend(Backend):
         finally:
             self._monitor.setblocking(False)
 
-    def _read_monitor(self, until_time: float | None = None) -> None:
-        """Take every monitor message that has arrived; with ``until_time``, wait (up to the
-        timeout) for one at least that recent. The server sends a frame after every second
-        step, before its next perceptions, so the newest frame is at most one cycle older than
-        the perception just received (callers ask for 1.5 cycles: both times are printed with
-        2 decimals); a stricter wait could only end when the server steps again, which it does
-        after the agent's answer."""
+    def _read_monitor(self, until_cycle: int | None = None) -> None:
+        """Take every monitor frame that has arrived; with ``until_cycle``, wait (up to the
+        timeout) for one of that cycle or later. The server sends a frame after every second
+        step (even cycles) before it makes the next perceptions, so the frame of a perception's
+        cycle or the one before has always been sent when the perception arrives."""
         deadline = time.monotonic() + self.timeout
         while True:
             try:
@@ -181,8 +202,7 @@ class RcssServerMJBackend(Backend):
                 for frame in self._mdecoder.feed(data):
                     self._take_frame(frame)
                 continue
-            have = self._reader.time
-            if until_time is None or (have is not None and have >= until_time - 1e-6):
+            if until_cycle is None or (self._frames and self._frames[-1][0] >= until_cycle):
                 return
             if time.monotonic() > deadline:
                 raise BackendError("no monitor message from rcssservermj in time")
@@ -193,13 +213,37 @@ class RcssServerMJBackend(Backend):
             self._reader.feed(frame)
         except ProtocolError:
             return  # a delta before the first full scene: wait for the next full one
-        ball = self._reader.ball_position()
         t = self._reader.time
-        if ball is None or t is None:
+        if t is None:
             return
-        if self._ball is not None and t > self._ball[0]:
-            self._ball_vel = (ball - self._ball[1]) / (t - self._ball[0])
-        self._ball = (t, ball)
+        cycle = round(t / _CYCLE_S)
+        if self._frames and cycle <= self._frames[-1][0]:
+            return
+        self._frames.append((cycle, self._reader.ball_position()))
+
+    def _frame_cycle(self, cycle: int) -> int:
+        """The newest cycle at or before ``cycle`` that has a monitor frame (every second one)."""
+        return cycle - (cycle - self._frame_parity) % 2
+
+    @property
+    def _frame_parity(self) -> int:
+        """Whether the monitor frames come in odd (1) or even (0) cycles (even in rcsssmj)."""
+        return self._frames[-1][0] % 2 if self._frames else 0
+
+    def _ball_at(self, cycle: int) -> tuple[np.ndarray, np.ndarray]:
+        """The ball's position (m) in the monitor frame of ``cycle`` (waiting for it), and its
+        velocity (m/s) by the difference from the frame before (zeros without one); NaN
+        before the monitor has shown a scene with the ball."""
+        self._read_monitor(until_cycle=cycle)
+        nan = np.full(3, np.nan)
+        newest = [(c, b) for c, b in self._frames if c <= cycle][-2:]
+        if not newest or newest[-1][0] != cycle or newest[-1][1] is None:
+            return nan, np.zeros(3)
+        (c1, b1) = newest[-1]
+        if len(newest) < 2 or newest[0][1] is None:
+            return b1.copy(), np.zeros(3)
+        c0, b0 = newest[0]
+        return b1.copy(), (b1 - b0) / ((c1 - c0) * _CYCLE_S)
 
     # ------------------------------------------------------------------ episode control
     def reset_episode(
@@ -242,19 +286,33 @@ class RcssServerMJBackend(Backend):
         # placement is the one made after exactly one limp step from it: the server applies a
         # monitor command after a step's physics, and its next perception still shows the
         # sensors from before the placement
-        self._place(f"{head}{z + 1.0!r} {tail}", np.array([pose.x, pose.y, z + 1.0]))
+        first = f"{head}{z + 1.0!r} {tail}"
         ball_cmd = f"(ball (pos {ball[0]!r} {ball[1]!r} {ball[2]!r}) "
         ball_cmd += f"(vel {bv[0]!r} {bv[1]!r} {bv[2]!r}))"
-        p = self._place(f"{head}{z!r} {tail}{ball_cmd}", np.array([pose.x, pose.y, z]))
+        second = f"{head}{z!r} {tail}{ball_cmd}"
+        above, want = np.array([pose.x, pose.y, z + 1.0]), np.array([pose.x, pose.y, z])
+        for _ in range(_RESET_ATTEMPTS):
+            answered = _perception_cycle(self._place(first, above).time)
+            if (answered + self._place_delay - self._frame_parity) % 2:
+                # so that the placement shows in a cycle with a monitor frame
+                answered = _perception_cycle(self._parse(self._send(self._limp)).time)
+            p = self._place(second, want)
+            shown = _perception_cycle(p.time)
+            self._place_delay = shown - answered
+            if self._frame_cycle(shown) == shown:
+                break
+            # the server took the command a cycle later (or sooner) than the time before, so
+            # no frame shows the ball when the perception does: place both again
+        else:
+            p = self._parse(self._send(self._limp))  # one more limp step brings a frame
         return self._with_ground_truth(p, fresh=True)
 
     def _place(self, monitor_text: str, want: np.ndarray) -> LeaguePerception:
         """Send a placement through the monitor; answer with limp joints until a perception
         shows the torso within :data:`_PLACE_TOLERANCE_M` of ``want``; return it (parsed)."""
-        limp = {n: PDCommand(0.0) for n in self._model.effector_names}
         self._monitor_command(monitor_text)
         for _ in range(self.reset_cycles):
-            p = self._parse(self._send(limp))
+            p = self._parse(self._send(self._limp))
             if (
                 p.raw_torso_pos is not None
                 and np.abs(p.raw_torso_pos - want).max() < _PLACE_TOLERANCE_M
@@ -284,7 +342,7 @@ class RcssServerMJBackend(Backend):
     ) -> LeaguePerception:
         """``p`` with its ground truth: the torso from its own perceptors, the ball from the
         monitor (waiting for a frame of the same cycle or the one before)."""
-        self._read_monitor(until_time=p.time - 1.5 * _CYCLE_S)
+        ball, ball_vel = self._ball_at(self._frame_cycle(_perception_cycle(p.time)))
         pos = p.raw_torso_pos if p.raw_torso_pos is not None else np.full(3, np.nan)
         vel = (
             np.zeros(3)
@@ -293,10 +351,9 @@ class RcssServerMJBackend(Backend):
         )
         self._last_pos = pos
         quat = p.raw_torso_quat if p.raw_torso_quat is not None else np.array([1.0, 0, 0, 0])
-        ball = self._ball[1].copy() if self._ball is not None else np.full(3, np.nan)
         p.ground_truth = GroundTruth(
             ball_pos=ball,
-            ball_vel=np.zeros(3) if fresh else self._ball_vel.copy(),
+            ball_vel=np.zeros(3) if fresh else ball_vel,
             torso_pos=pos,
             torso_quat=to_simspark_torso_quat(quat),
             torso_vel=vel,

@@ -15,6 +15,7 @@ they want, :meth:`~BaseEnv._is_terminated`, :meth:`~BaseEnv._is_truncated` and
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from collections.abc import Mapping
@@ -23,6 +24,7 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.envs.registration import EnvSpec
 
 from robocup_gym.backends import (
     Backend,
@@ -641,6 +643,22 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         if not np.isfinite(angles).all():
             raise ValueError("reset option joint_angles_deg must be finite (deg)")
         check_joint_ranges(self.robot_model, angles, "joint_angles_deg")
+
+    # ================================================================== registration
+    @property
+    def spec(self) -> EnvSpec | None:  # type: ignore[override]
+        """The registration this environment was made from (set by ``gymnasium.make``), with
+        ``nondeterministic`` true where the backend is a real server, which does not repeat an
+        episode exactly (:attr:`Backend.deterministic`)."""
+        spec = self.__dict__.get("_spec")
+        backend = self.__dict__.get("backend")
+        if spec is not None and backend is not None and not backend.deterministic:
+            return dataclasses.replace(spec, nondeterministic=True)
+        return spec
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        self.__dict__["_spec"] = value
 
     # ================================================================== state for tasks
     @property
