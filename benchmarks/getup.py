@@ -6,13 +6,13 @@ less than 30°, for 1 s (the task's definition); ``cycles_to_up`` counts the age
 the robot got up for good (the target: ≥ 90 % within 80 cycles; the reference team takes ~66
 from the front and ~55 from the back on rcssserver3d).
 
-``zero`` runs a zero-action policy (a baseline that never gets up, and a smoke test);
-``pretrained:get-up`` the policy shipped with the package. The environment is deterministic: with
-one lying pose per side every episode of a side repeats the first. ``--lying-poses 8`` starts
-each episode from one of 8 drops per side (tilt and joints varied ±10°), which measures how
-well a policy copes with other ways of lying; ``--robot-type N`` another Nao type. A policy
-meant for one side (``start_side`` ``front`` or ``back`` in its options, as the shipped
-``get-up-front``) is measured on that side only.
+``zero`` runs a zero-action policy (on the Nao: the scripted get-up alone, GetUp's
+``reference_motion``); ``pretrained:get-up`` the policy shipped with the package. The environment
+is deterministic: an episode from the same lying pose repeats. Each episode starts from one of
+the run's ``lying_poses`` drops per side (tilt and joints varied ±10°; ``--lying-poses N``
+another number), or with ``--pose-from N`` from pose N + k (``--pose-from 32``: poses a run
+trained on up to 32 never met); ``--robot-type N`` another Nao type. A policy meant for one side
+(``start_side`` ``front`` or ``back`` in its options) is measured on that side only.
 Prints one line per side and, as the last line, one JSON object (``success_rate``,
 ``cycles_to_up_median``, per side the same).
 
@@ -27,11 +27,16 @@ import json
 import numpy as np
 
 
-def run(env, act, side: str, episodes: int, seed: int, within: int) -> dict:
+def run(
+    env, act, side: str, episodes: int, seed: int, within: int, pose_from: int | None = None
+) -> dict:
     ups = []
     successes = 0
     for k in range(episodes):
-        obs, _ = env.reset(seed=seed + k, options={"start_side": side})
+        options: dict = {"start_side": side}
+        if pose_from is not None:
+            options["lying_pose"] = (pose_from + k) % 64
+        obs, _ = env.reset(seed=seed + k, options=options)
         done = False
         info: dict = {}
         while not done:
@@ -72,6 +77,14 @@ def main(argv: list[str] | None = None) -> dict:
         "lying_poses; default: the run's own, 1 = the one drop pose)",
     )
     parser.add_argument(
+        "--pose-from",
+        type=int,
+        default=None,
+        help="episode k starts from lying pose N + k (GetUp's lying_pose reset option; "
+        "default: drawn among the run's lying_poses); 32 measures poses that training with "
+        "lying_poses <= 32 never met",
+    )
+    parser.add_argument(
         "--robot-type", type=int, default=None, help="Nao type 0-4 (default: the run's own)"
     )
     args = parser.parse_args(argv)
@@ -86,9 +99,11 @@ def main(argv: list[str] | None = None) -> dict:
     fixed = getattr(env.unwrapped.config, "start_side", "random")
     sides = (fixed,) if fixed in ("front", "back") else ("front", "back")
     out: dict = {"policy": args.policy, "within_cycles": args.within, **overrides}
+    if args.pose_from is not None:
+        out["pose_from"] = args.pose_from
     try:
         for side in sides:
-            res = run(env, act, side, args.episodes, args.seed, args.within)
+            res = run(env, act, side, args.episodes, args.seed, args.within, args.pose_from)
             out[side] = res
             print(
                 f"{side:5s}: success {res['success_rate']:.0%} within {args.within} cycles, "

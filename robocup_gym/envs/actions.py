@@ -77,6 +77,13 @@ class ActionMapper:
         clip to the joint's range: a task's reference motion (Walk's gait), set each step."""
         self._command = np.zeros(len(model.joints))
 
+    def set_window(self, centre_deg: float | np.ndarray, half_deg: float | np.ndarray) -> None:
+        """Let an action of ±1 span ``centre_deg`` ± ``half_deg`` (deg, per controlled joint or
+        one for all; still shifted by :attr:`target_offset_deg` and clipped to the ranges): a
+        task whose reference motion sets the offsets (GetUp's script) centres the window on 0."""
+        self.angle_mid = np.broadcast_to(np.asarray(centre_deg, float), (self.n_joints,)).copy()
+        self.angle_half = np.broadcast_to(np.asarray(half_deg, float), (self.n_joints,)).copy()
+
     def expand(self, action: np.ndarray) -> np.ndarray:
         """The action over every controlled joint (with mirrored actions: the right joints'
         values made from their left partners'; otherwise ``action`` itself)."""

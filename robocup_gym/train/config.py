@@ -69,6 +69,13 @@ TASK_ALGO_DEFAULTS: dict[tuple[str, str], dict[str, Any]] = {
         "use_sde": False,
         "policy_kwargs": {"log_std_init": -2.0},
     },
+    ("RobocupGym/GetUp-v0", "ppo"): {
+        # the same for a residual over the scripted get-up (session 16)
+        "learning_rate": 3e-4,
+        "batch_size": 256,
+        "use_sde": False,
+        "policy_kwargs": {"log_std_init": -2.0},
+    },
 }
 """Hyperparameters a task's reference policy was trained with where they differ from the
 paper's, by (Gymnasium id, algorithm): :meth:`TrainConfig.resolved_algo_kwargs` puts them

@@ -73,7 +73,18 @@ def recorded_env_options(meta: dict[str, Any]) -> dict[str, Any]:
     ``env_kwargs`` over them. ``backend_options`` (objects, written as text) are left out."""
     recorded = dict(meta.get("env_config") or {})
     recorded.pop("backend_options", None)
+    if recorded:
+        # options a task gained after the policy was exported: what it ran without them
+        for key, value in OPTIONS_ADDED.get(meta.get("env_id", ""), {}).items():
+            recorded.setdefault(key, value)
     return {**recorded, **(meta.get("env_kwargs") or {})}
+
+
+OPTIONS_ADDED: dict[str, dict[str, Any]] = {
+    "RobocupGym/GetUp-v0": {"reference_motion": False},
+}
+"""Per task, options added since policies were first exported, with the value that gives the
+environment those policies ran in (a recorded ``env_config`` without the option predates it)."""
 
 
 def pretrained_env(

@@ -22,7 +22,14 @@ from robocup_gym.envs.config import BALL_REST_Z, ActionMode, EnvConfig, EnvConfi
 from robocup_gym.envs.observations import up_z
 from robocup_gym.types import AgentCommand
 
-__all__ = ["GETUP_OBSERVATIONS", "GetUp", "GetUpConfig"]
+__all__ = [
+    "GETUP_KEYFRAMES",
+    "GETUP_OBSERVATIONS",
+    "GetUp",
+    "GetUpConfig",
+    "reference_targets",
+    "scripted_target",
+]
 
 GETUP_OBSERVATIONS = (
     "joint_pos",
@@ -33,10 +40,33 @@ GETUP_OBSERVATIONS = (
     "torso_orientation",
     "torso_height",
     "last_action",
+    "time",
 )
-"""What a get-up policy sees by default: its body and the torso's pose."""
+"""What a get-up policy sees by default: its body, the torso's pose, and the episode's step
+(where the scripted get-up is)."""
 
 SIDES = ("front", "back")
+
+_KEYFRAME_JOINTS = ("lae1", "lae2", "lae3", "lae4", "lle1", "lle2", "lle3", "lle4", "lle5", "lle6")
+GETUP_KEYFRAMES: dict[str, tuple[tuple[float, tuple[float, ...]], ...]] = {
+    "front": (
+        (19, (-119.5, 15.6, 116.8, 0.5, -61.2, 21.0, 96.2, -123.9, 75.0, -22.6)),
+        (33, (-102.8, 6.2, 118.1, -0.1, -89.9, 22.1, 99.0, -42.1, -44.0, 24.3)),
+        (30, (102.2, 0.1, 93.7, -2.7, -6.4, 44.2, -24.8, -7.1, -41.9, -23.8)),
+        (26, (-119.9, 3.8, -92.1, 1.0, -16.6, 44.9, -24.7, -12.9, 6.6, 22.0)),
+    ),
+    "back": (
+        (17, (-68.3, 94.5, -118.8, -74.6, -65.1, -24.9, 91.8, 0.9, 74.8, -41.0)),
+        (11, (-112.9, -0.5, -113.9, -37.5, -2.4, 43.7, -20.8, -22.6, -44.8, 17.3)),
+        (29, (119.6, 0.2, -118.0, 0.4, -86.8, -5.5, 99.2, -4.9, -43.4, 24.7)),
+        (22, (-110.2, -0.9, -113.5, 0.2, -16.5, 44.5, 5.2, -5.5, -10.3, 14.9)),
+    ),
+}
+"""The Nao's scripted get-ups (``GetUpConfig.reference_motion``), per side: keyframes of
+(cycles held, target angles in deg of ``lae1 lae2 lae3 lae4 lle1 lle2 lle3 lle4 lle5 lle6``; the
+right joints mirror them); the last is held to the episode's end. Found by an open-loop search
+(CMA-ES) on the ODE engine, Nao type 0, over lying poses 0–7 of each side, from the first
+trained policies' motions (docs/training.md, *A scripted get-up*)."""
 DROP_CYCLES = 100
 """Cycles a dropped robot is given to come to rest (2 s)."""
 
@@ -59,12 +89,22 @@ class GetUpConfig(EnvConfig):
     """The robot starts on the ground: lying is not an end here."""
     start_side: str = "random"
     """``"front"``, ``"back"`` or ``"random"`` (each episode one of the two)."""
-    lying_poses: int = 1
+    lying_poses: int = 16
     """Distinct lying poses per side; each episode starts from one drawn at random. Pose 0 is
     the drop from 80° with every joint at 0; poses 1… come from drops with the tilt and every
     joint angle drawn within ± ``lying_pose_spread_deg`` of that (a fixed draw per pose, the
     same in every environment), so that a policy meets, and a benchmark measures, more than
     one way of lying."""
+    reference_motion: bool = True
+    """The Nao: zero actions play a scripted get-up (:data:`GETUP_KEYFRAMES`, one per side:
+    target angles held for a number of cycles, the right side mirroring the left) and the
+    action corrects it, ± ``reference_reach_deg`` around each target (a residual policy, as
+    Walk's over its reference gait). ``False``, or the ``velocity`` action mode: the action
+    alone sets the targets (velocities), over the window of ``target_around_start_deg`` (by
+    default each joint's whole range)."""
+    reference_reach_deg: float = 40.0
+    """With ``reference_motion``: how far an action of ±1 moves a target from the scripted
+    one, deg (clipped to the joint's range)."""
     lying_pose_spread_deg: float = 10.0
     """How far poses 1… are drawn from pose 0: tilt and joint angles, ± deg (joint angles
     kept in range)."""
@@ -103,6 +143,15 @@ class GetUpConfig(EnvConfig):
             math.isfinite(self.lying_pose_spread_deg) and 0.0 <= self.lying_pose_spread_deg <= 45.0
         ):
             raise EnvConfigError("lying_pose_spread_deg must be between 0 and 45 deg")
+        if not (math.isfinite(self.reference_reach_deg) and self.reference_reach_deg > 0.0):
+            raise EnvConfigError(
+                f"reference_reach_deg must be > 0 deg, got {self.reference_reach_deg!r}"
+            )
+        if self.reference_motion and self.robot != "nao":
+            raise EnvConfigError(
+                f"reference_motion is a scripted get-up for the Nao, not the {self.robot}; pass "
+                "reference_motion=False"
+            )
         if not (math.isfinite(self.height_cap) and self.height_cap > 0.0):
             raise EnvConfigError(f"height_cap must be > 0 m, got {self.height_cap!r}")
         if not (0.0 < self.success_height < 1.5):
@@ -139,7 +188,8 @@ class GetUp(BaseEnv):
 
     Actions are target angles of mirrored left/right joint pairs (10 values on the Nao:
     ``action_mode="target_angle"``, ``mirror_actions=True``). ``reset(options={"start_side":
-    "back"})`` picks the side of one episode; ``lying_poses`` > 1 varies the lying pose. Works on
+    "back", "lying_pose": 3})`` picks the side (and the lying pose, any of 0–63 whatever
+    ``lying_poses`` is) of one episode; ``lying_poses`` > 1 varies the lying pose. Works on
     every Nao type, on both in-process engines, on the league's robots, and on a real
     rcssserver3d whose trainer turns robots (the SPL fork's ``rot``; the lying poses are then
     dropped on the ODE engine). ``TorsoAssist`` (``robocup-gym train get-up --assist-force …``)
@@ -163,11 +213,12 @@ class GetUp(BaseEnv):
         out["success_height"] = round(0.73 * r.standing_torso_height, 3)
         out["height_cap"] = round(1.04 * r.standing_torso_height, 3)
         out["mirror_actions"] = False  # the Nao's option
+        out["reference_motion"] = False  # a script for the Nao
         out["ball_start_pos"] = (x + 2.0, y, r.ball_radius)
         return out
 
     config: GetUpConfig
-    task_reset_options = frozenset({"start_side"})
+    task_reset_options = frozenset({"start_side", "lying_pose"})
 
     IN_PROCESS = ("ode", "mujoco", "rcsssmj")
     """Backends whose worlds the lying poses are dropped in; for a real server they are dropped
@@ -175,6 +226,13 @@ class GetUp(BaseEnv):
 
     def __init__(self, config: GetUpConfig | None = None, **kwargs: Any) -> None:
         super().__init__(config, **kwargs)
+        self._script: dict[str, list[tuple[float, np.ndarray]]] | None = None
+        if self.config.reference_motion and self._actions.mode is not ActionMode.VELOCITY:
+            self._script = {
+                side: reference_targets(self.robot_model, self._actions.joints, side)
+                for side in SIDES
+            }
+            self._actions.set_window(0.0, self.config.reference_reach_deg)
         if not self.backend.places_any_orientation:
             name = self.backend.name
             self.close()
@@ -258,6 +316,11 @@ class GetUp(BaseEnv):
         start = super()._initial_state(options)
         n_poses = self.config.lying_poses
         k = int(self.np_random.integers(n_poses)) if n_poses > 1 else 0
+        if options.get("lying_pose") is not None:
+            k = options["lying_pose"]
+            if not (isinstance(k, int | np.integer) and 0 <= k < 64):
+                raise ValueError(f"reset option lying_pose must be an integer in 0..63, got {k!r}")
+            k = int(k)
         z, quat, angles = self.lying_pose(side, k)
         self.side = side
         self.pose_index = k
@@ -271,6 +334,13 @@ class GetUp(BaseEnv):
             start.pose.x, start.pose.y, joint_angles_deg=angles.copy(), z=z, quat=quat.copy()
         )
         return start
+
+    def step(self, action: Any):
+        if self._script is not None:
+            self._actions.target_offset_deg[:] = scripted_target(
+                self._script[self.side], self.episode_step
+            )
+        return super().step(action)
 
     def _is_up(self) -> bool:
         gt = self.ground_truth
@@ -324,6 +394,39 @@ class GetUp(BaseEnv):
         if self.reward_terms:
             info["reward_terms"] = dict(self.reward_terms)
         return info
+
+
+def reference_targets(model: Any, joints: np.ndarray, side: str) -> list[tuple[float, np.ndarray]]:
+    """:data:`GETUP_KEYFRAMES` for ``side`` as ``(end cycle, target deg per controlled joint)``
+    (``joints``: canonical indices in action order; a right joint mirrors its left one's target
+    by :attr:`~robocup_gym.robot.nao.NaoModel.mirror_pairs`; joints the script does not name,
+    the head, get 0)."""
+    index = {n: i for i, n in enumerate(model.effector_names)}
+    sign = {left: (right, sg) for left, right, sg in model.mirror_pairs}
+    where = {int(j): k for k, j in enumerate(joints)}
+    out: list[tuple[float, np.ndarray]] = []
+    end = 0.0
+    for cycles, angles in GETUP_KEYFRAMES[side]:
+        targets = np.zeros(len(joints))
+        for name, deg in zip(_KEYFRAME_JOINTS, angles, strict=True):
+            left = index[name]
+            if left in where:
+                targets[where[left]] = deg
+            right, sg = sign[left]
+            if right in where:
+                targets[where[right]] = sg * deg
+        end += float(cycles)
+        out.append((end, targets))
+    return out
+
+
+def scripted_target(script: list[tuple[float, np.ndarray]], step: int) -> np.ndarray:
+    """The script's target angles (deg) at episode step ``step``: the keyframe whose cycles it
+    falls in, or the last."""
+    for end, targets in script:
+        if step < end:
+            return targets
+    return script[-1][1]
 
 
 def _quat_about(axis, angle: float) -> np.ndarray:
