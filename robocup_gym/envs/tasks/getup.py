@@ -5,6 +5,10 @@ first reset for each side the environment lets the robot fall from a tilted pose
 (or back) with its joints held still (a league robot: from flat, limp) and records where it
 comes to rest (torso position and orientation, joint angles); every episode then starts from
 that pose, placed instantly. So no part starts inside the ground, on any engine.
+
+On the Nao the actions correct a scripted get-up (:data:`GETUP_KEYFRAMES`), as Walk's correct its
+reference gait: the script alone already gets the robot up from most lying poses on the default
+engine, and a policy learns what it misses.
 """
 
 from __future__ import annotations
@@ -50,23 +54,24 @@ SIDES = ("front", "back")
 _KEYFRAME_JOINTS = ("lae1", "lae2", "lae3", "lae4", "lle1", "lle2", "lle3", "lle4", "lle5", "lle6")
 GETUP_KEYFRAMES: dict[str, tuple[tuple[float, tuple[float, ...]], ...]] = {
     "front": (
-        (19, (-119.5, 15.6, 116.8, 0.5, -61.2, 21.0, 96.2, -123.9, 75.0, -22.6)),
-        (33, (-102.8, 6.2, 118.1, -0.1, -89.9, 22.1, 99.0, -42.1, -44.0, 24.3)),
-        (30, (102.2, 0.1, 93.7, -2.7, -6.4, 44.2, -24.8, -7.1, -41.9, -23.8)),
-        (26, (-119.9, 3.8, -92.1, 1.0, -16.6, 44.9, -24.7, -12.9, 6.6, 22.0)),
+        (17, (-118.2, 4.6, 116.5, 0.0, -63.2, 29.7, 94.5, -126.7, 75.0, -37.5)),
+        (29, (-109.1, 11.0, 118.4, 0.1, -89.9, 29.3, 99.1, -22.2, -44.8, 24.3)),
+        (18, (115.1, -0.3, 71.6, -4.9, -8.0, 44.8, -24.9, -1.0, -41.7, -15.7)),
+        (23, (-119.8, 1.8, -54.7, 1.0, -11.1, 45.0, -24.5, -9.5, 3.2, 20.9)),
     ),
     "back": (
-        (17, (-68.3, 94.5, -118.8, -74.6, -65.1, -24.9, 91.8, 0.9, 74.8, -41.0)),
-        (11, (-112.9, -0.5, -113.9, -37.5, -2.4, 43.7, -20.8, -22.6, -44.8, 17.3)),
-        (29, (119.6, 0.2, -118.0, 0.4, -86.8, -5.5, 99.2, -4.9, -43.4, 24.7)),
-        (22, (-110.2, -0.9, -113.5, 0.2, -16.5, 44.5, 5.2, -5.5, -10.3, 14.9)),
+        (15, (-86.5, 94.4, -118.9, -77.0, -72.5, -25.0, 96.2, 1.0, 74.7, -43.6)),
+        (11, (-94.9, 0.1, -116.5, -11.9, -4.1, 41.0, -19.6, -25.3, -44.9, 20.3)),
+        (27, (119.5, -0.7, -116.7, 0.2, -86.4, -1.4, 99.5, -6.7, -43.7, 24.6)),
+        (19, (-65.0, -0.6, -114.0, 0.3, -3.0, 44.8, 8.1, -22.2, 18.1, 20.6)),
     ),
 }
 """The Nao's scripted get-ups (``GetUpConfig.reference_motion``), per side: keyframes of
 (cycles held, target angles in deg of ``lae1 lae2 lae3 lae4 lle1 lle2 lle3 lle4 lle5 lle6``; the
 right joints mirror them); the last is held to the episode's end. Found by an open-loop search
-(CMA-ES) on the ODE engine, Nao type 0, over lying poses 0–7 of each side, from the first
-trained policies' motions (docs/training.md, *A scripted get-up*)."""
+(CMA-ES) on the ODE engine, Nao type 0, from the first trained policies' motions: over lying
+poses 0–15, then 0–13 each played clean and with 1.5° of noise on every target, so that the
+script stands a policy's exploration (docs/training.md, *A scripted get-up*)."""
 DROP_CYCLES = 100
 """Cycles a dropped robot is given to come to rest (2 s)."""
 
@@ -102,7 +107,7 @@ class GetUpConfig(EnvConfig):
     Walk's over its reference gait). ``False``, or the ``velocity`` action mode: the action
     alone sets the targets (velocities), over the window of ``target_around_start_deg`` (by
     default each joint's whole range)."""
-    reference_reach_deg: float = 40.0
+    reference_reach_deg: float = 20.0
     """With ``reference_motion``: how far an action of ±1 moves a target from the scripted
     one, deg (clipped to the joint's range)."""
     lying_pose_spread_deg: float = 10.0
@@ -187,7 +192,9 @@ class GetUp(BaseEnv):
     ===================  =========  ===========================================================
 
     Actions are target angles of mirrored left/right joint pairs (10 values on the Nao:
-    ``action_mode="target_angle"``, ``mirror_actions=True``). ``reset(options={"start_side":
+    ``action_mode="target_angle"``, ``mirror_actions=True``); on the Nao they correct a scripted
+    get-up (``reference_motion``: a zero action plays :data:`GETUP_KEYFRAMES`, ±1 moves each
+    target ``reference_reach_deg`` from it). ``reset(options={"start_side":
     "back", "lying_pose": 3})`` picks the side (and the lying pose, any of 0–63 whatever
     ``lying_poses`` is) of one episode; ``lying_poses`` > 1 varies the lying pose. Works on
     every Nao type, on both in-process engines, on the league's robots, and on a real
