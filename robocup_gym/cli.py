@@ -300,7 +300,7 @@ if typer is not None:
             typer.Option(
                 "--pretrained",
                 help="Evaluate a policy shipped with the package instead of a run (e.g. "
-                "get-up-front; `robocup-gym tasks` lists them).",
+                "get-up; `robocup-gym tasks` lists them).",
             ),
         ] = None,
         episodes: Annotated[int, typer.Option(help="Episodes to run (>= 1).")] = 10,
@@ -491,7 +491,7 @@ if typer is not None:
         pretrained: Annotated[
             str | None,
             typer.Option(
-                "--pretrained", help="Run a policy shipped with the package (e.g. get-up-back)."
+                "--pretrained", help="Run a policy shipped with the package (e.g. get-up)."
             ),
         ] = None,
         host: Annotated[str, typer.Option(help="Server address.")] = "127.0.0.1",

@@ -43,8 +43,8 @@ def pretrained_names() -> list[str]:
 
 
 def pretrained_path(name: str) -> Path:
-    """The ONNX file of the shipped policy ``name`` (``get-up-front``; ``Get_Up_Front`` and
-    ``getupfront`` too).
+    """The ONNX file of the shipped policy ``name`` (``get-up``; ``Get_Up`` and ``getup``
+    too).
 
     Raises:
         ValueError: no such policy (the message lists the shipped ones).

@@ -465,7 +465,7 @@ def test_getup_actions_are_corrections_around_the_scripted_get_up():
     """With ``reference_motion`` (the Nao's default) a zero action targets the script's angles
     and ±1 moves them ``reference_reach_deg`` (clipped to the ranges); without it the action
     spans each joint's whole range, as before; a league robot has no script."""
-    env = GetUp(start_side="front")
+    env = GetUp(start_side="front", reference_reach_deg=20.0)
     env.reset(seed=0)
     script = env._script["front"]
     lo, hi = env.robot_model.ranges_deg[env._actions.joints].T
