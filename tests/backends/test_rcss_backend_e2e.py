@@ -344,8 +344,8 @@ def test_getup_over_the_wire_lies_where_it_lies_in_process(make_server):
         assert wire.backend.places_any_orientation  # found out by turning the robot once
         for side in ("back", "front"):
             states = []
-            for env in (local, wire):
-                env.reset(seed=0, options={"start_side": side})
+            for env in (local, wire):  # the plain drop (pose 0), as the real-server test
+                env.reset(seed=0, options={"start_side": side, "lying_pose": 0})
                 for _ in range(5):
                     env.step(np.zeros(env.action_space.shape))
                 states.append((env.torso_pos.copy(), np.array(env.ground_truth.torso_quat)))

@@ -308,7 +308,7 @@ def test_getup_lies_on_the_real_server_as_in_process(real_binary, side):
             assert "(rot" in str(exc)
             pytest.skip("this rcssserver3d does not turn robots (not the SPL fork)")
         try:
-            env.reset(seed=0, options={"start_side": side})
+            env.reset(seed=0, options={"start_side": side, "lying_pose": 0})  # the plain drop
             for _ in range(10):
                 env.step(np.zeros(env.action_space.shape))
             gt = env.unwrapped.ground_truth
