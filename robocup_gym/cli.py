@@ -582,6 +582,8 @@ if typer is not None:
                 f"episode: {rep.steps} steps, fallen={rep.fallen}, ball displacement "
                 + ("–" if d is None else f"({d[0]:+.2f}, {d[1]:+.2f}) m")
                 + ("" if t is None else f", torso moved ({t[0]:+.2f}, {t[1]:+.2f}) m")
+                + ("" if rep.success is None else f", success={rep.success}")
+                + ("" if rep.steps_to_up is None else f" (up at step {rep.steps_to_up})")
             )
 
         try:

@@ -306,6 +306,11 @@ class EpisodeReport:
     torso_displacement: list[float] | None = None
     """How far the torso moved over the episode (x, y, z in the field frame, m), where the
     environment knows it."""
+    success: bool | None = None
+    """Whether the episode ended in the task's success (GetUp: up and held 1 s), for tasks that
+    report one (``info["success"]``); ``None`` for the others."""
+    steps_to_up: int | None = None
+    """GetUp: the step at which the robot got up for good (``info["steps_to_up"]``)."""
 
 
 def run_onnx_agent(
@@ -396,6 +401,10 @@ def run_onnx_agent(
                     fallen=bool(info.get("fallen", False)),
                     torso_displacement=(
                         None if start is None or end is None else [float(x) for x in end - start]
+                    ),
+                    success=None if "success" not in info else bool(info["success"]),
+                    steps_to_up=(
+                        None if info.get("steps_to_up") is None else int(info["steps_to_up"])
                     ),
                 )
                 reports.append(rep)
