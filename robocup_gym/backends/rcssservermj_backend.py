@@ -222,13 +222,10 @@ class RcssServerMJBackend(Backend):
         self._frames.append((cycle, self._reader.ball_position()))
 
     def _frame_cycle(self, cycle: int) -> int:
-        """The newest cycle at or before ``cycle`` that has a monitor frame (every second one)."""
-        return cycle - (cycle - self._frame_parity) % 2
-
-    @property
-    def _frame_parity(self) -> int:
-        """Whether the monitor frames come in odd (1) or even (0) cycles (even in rcsssmj)."""
-        return self._frames[-1][0] % 2 if self._frames else 0
+        """The newest cycle at or before ``cycle`` that has a monitor frame (every second one:
+        even cycles in rcsssmj, odd ones if the frames seen so far say so)."""
+        parity = self._frames[-1][0] % 2 if self._frames else 0
+        return cycle - (cycle - parity) % 2
 
     def _ball_at(self, cycle: int) -> tuple[np.ndarray, np.ndarray]:
         """The ball's position (m) in the monitor frame of ``cycle`` (waiting for it), and its
@@ -293,7 +290,8 @@ class RcssServerMJBackend(Backend):
         above, want = np.array([pose.x, pose.y, z + 1.0]), np.array([pose.x, pose.y, z])
         for _ in range(_RESET_ATTEMPTS):
             answered = _perception_cycle(self._place(first, above).time)
-            if (answered + self._place_delay - self._frame_parity) % 2:
+            expected = answered + self._place_delay
+            if self._frame_cycle(expected) != expected:
                 # so that the placement shows in a cycle with a monitor frame
                 answered = _perception_cycle(self._parse(self._send(self._limp)).time)
             p = self._place(second, want)

@@ -133,42 +133,47 @@ def _yaw(env) -> float:
     return math.atan2(sin, cos)
 
 
+SERVE_ODE = pytest.mark.parametrize("make_server", ["ode"], indirect=True)
+"""The shipped policies were trained on ODE: ``serve`` on that engine only (tests/conftest.py)."""
+
+
+def _serve(make_server):
+    """An embedded ``robocup-gym serve`` with ground truth and no vision noise: its ports."""
+    server = make_server(ground_truth=True, vision_noise=False)
+    return server.agent_port, server.monitor_port
+
+
 @pytest.mark.skipif(not available(), reason="no libode")
-def test_the_agent_walks_the_shipped_walk_where_it_is_told_on_serve():
+@SERVE_ODE
+def test_the_agent_walks_the_shipped_walk_where_it_is_told_on_serve(make_server):
     """``robocup-gym agent --pretrained walk --command 0.5,0,0`` over the rcssserver3d protocol
     (the embedded server): the command holds for the episode and the robot walks forward;
     a malformed command, or one for a policy that takes none, is a clear error."""
     from typer.testing import CliRunner
 
     from robocup_gym.cli import app
-    from robocup_gym.server import SimServer
 
-    server = SimServer(
-        0, 0, "127.0.0.1", sync=True, real_time=False, ground_truth=True, vision_noise=False
-    )
-    agent_port, monitor_port = server.start_in_thread()
+    agent_port, monitor_port = _serve(make_server)
     runner = CliRunner()
-    try:
-        base = ["agent", "--pretrained", "walk", "--port", str(agent_port)]
-        base += ["--monitor-port", str(monitor_port), "--env", "max_episode_steps=100"]
-        result = runner.invoke(app, [*base, "--command", "0.5,0,0"])
-        assert result.exit_code == 0, result.output
-        assert "episode: 100 steps, fallen=False" in result.output
-        moved = result.output.split("torso moved (")[1].split(")")[0].split(",")
-        assert float(moved[0]) > 0.5 and abs(float(moved[1])) < 0.4, result.output
-        assert "success=" not in result.output  # Walk reports no success
-        bad = runner.invoke(app, [*base, "--command", "0.5,fast"])
-        assert bad.exit_code == 2 and "FORWARD,LEFT,TURN" in bad.output
-        kick = ["agent", "--pretrained", "get-up", "--port", str(agent_port)]
-        kick += ["--monitor-port", str(monitor_port), "--command", "0.5,0,0"]
-        wrong = runner.invoke(app, kick)
-        assert wrong.exit_code == 1 and "velocity_command" in wrong.output, wrong.output
-    finally:
-        server.stop()
+    base = ["agent", "--pretrained", "walk", "--port", str(agent_port)]
+    base += ["--monitor-port", str(monitor_port), "--env", "max_episode_steps=100"]
+    result = runner.invoke(app, [*base, "--command", "0.5,0,0"])
+    assert result.exit_code == 0, result.output
+    assert "episode: 100 steps, fallen=False" in result.output
+    moved = result.output.split("torso moved (")[1].split(")")[0].split(",")
+    assert float(moved[0]) > 0.5 and abs(float(moved[1])) < 0.4, result.output
+    assert "success=" not in result.output  # Walk reports no success
+    bad = runner.invoke(app, [*base, "--command", "0.5,fast"])
+    assert bad.exit_code == 2 and "FORWARD,LEFT,TURN" in bad.output
+    kick = ["agent", "--pretrained", "get-up", "--port", str(agent_port)]
+    kick += ["--monitor-port", str(monitor_port), "--command", "0.5,0,0"]
+    wrong = runner.invoke(app, kick)
+    assert wrong.exit_code == 1 and "velocity_command" in wrong.output, wrong.output
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
-def test_the_agent_gets_up_with_the_shipped_get_up_on_serve():
+@SERVE_ODE
+def test_the_agent_gets_up_with_the_shipped_get_up_on_serve(make_server):
     """``robocup-gym agent --pretrained get-up`` over the rcssserver3d protocol (the embedded
     server, which turns robots as the SPL fork's trainer does) gets up and says so. Not every
     time: through the wire the robot starts within millimetres and the policy sees 2-decimal
@@ -179,19 +184,12 @@ def test_the_agent_gets_up_with_the_shipped_get_up_on_serve():
     from typer.testing import CliRunner
 
     from robocup_gym.cli import app
-    from robocup_gym.server import SimServer
 
-    server = SimServer(
-        0, 0, "127.0.0.1", sync=True, real_time=False, ground_truth=True, vision_noise=False
-    )
-    agent_port, monitor_port = server.start_in_thread()
-    try:
-        args = ["agent", "--pretrained", "get-up", "--port", str(agent_port), "--episodes", "6"]
-        args += ["--monitor-port", str(monitor_port), "--env", "lying_poses=1"]
-        result = CliRunner().invoke(app, args)
-        assert result.exit_code == 0, result.output
-        ups = [int(n) for n in re.findall(r"success=True \(up at step (\d+)\)", result.output)]
-        assert result.output.count("success=") == 6
-        assert len(ups) >= 3 and max(ups) <= 80, result.output
-    finally:
-        server.stop()
+    agent_port, monitor_port = _serve(make_server)
+    args = ["agent", "--pretrained", "get-up", "--port", str(agent_port), "--episodes", "6"]
+    args += ["--monitor-port", str(monitor_port), "--env", "lying_poses=1"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    ups = [int(n) for n in re.findall(r"success=True \(up at step (\d+)\)", result.output)]
+    assert result.output.count("success=") == 6
+    assert len(ups) >= 3 and max(ups) <= 80, result.output
