@@ -268,9 +268,14 @@ def _flail_reference(compiled, types, cycles=400):
         w.step(cmds)
         if c % 60 == 59:
             w.place_robot(0, -1.0, 0.0)
-        frp = [np.r_[f.force, f.point] for _, f in sorted(w.force_sensors(0).items())]
+            if c % 120 == 59:
+                w.sense_contacts()  # a full step, undone
+        if c % 50 == 25 and len(types) > 1:  # robot 1 moved out and back, as serve does
+            w.import_robot_state(1, w.export_robot_state(1))
+        sensors = w.force_sensors(0)
+        frp = [np.r_[f.force, f.point] for _, f in sorted(sensors.items())]
         state = [w.joint_angles_deg(0), w.torso_position(0), w.ball_position(), w.accelerometer(0)]
-        out.append(np.concatenate(state + frp))
+        out.append((np.concatenate(state + frp), tuple(sensors)))
     return w, out
 
 
@@ -287,8 +292,34 @@ def test_compiled_reference_loops_are_bit_equal(types):
     wc, fast = _flail_reference(True, types)
     assert (wp.stepper, wc.stepper) == ("python", "compiled")
     assert len(python) == len(fast)
-    for c, (a, b) in enumerate(zip(python, fast, strict=True)):
+    for c, ((a, names_a), (b, names_b)) in enumerate(zip(python, fast, strict=True)):
         assert np.array_equal(a, b), f"first difference in cycle {c}"
+        assert names_a == names_b, f"foot sensors in another order in cycle {c}"
+    assert sum(len(names) > 1 for _, names in fast) > 10  # the order was checked
+
+
+@needs_ode
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_body_thrown_out_of_the_world_is_a_divergence(compiled):
+    """A body 1 km or more from the origin (or at NaN) ends the step with a clear error naming
+    it, with the compiled loops and without; placing again recovers."""
+    from robocup_gym.sim import SimulationDivergedError
+    from robocup_gym.sim import compiled as compiled_step
+    from robocup_gym.sim.engines.ode import OdeWorld
+
+    if compiled and not compiled_step.available():
+        pytest.skip("no C compiler here (apt-get install gcc, or set CC)")
+    w = OdeWorld([0], compiled=compiled)
+    w.step()
+    shin = w.robots[0].bodies[w.robots[0].body_index["lshank"]]
+    w._lib.dBodySetPosition(shin, 0.0, 2000.0, 0.3)
+    with pytest.raises(
+        SimulationDivergedError, match=r"robot 0's lshank is at \(\S+, 1\d{3}\.\d+, \S+\) m"
+    ):
+        w.step()
+    w.place_robot(0, -1.0, 0.0)
+    w.step()
+    assert w.torso_position(0)[2] > 0.3
 
 
 @needs_ode

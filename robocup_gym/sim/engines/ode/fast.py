@@ -39,6 +39,14 @@ FUNCTIONS = (
     "dBodyGetPosition",
     "dBodyGetRotation",
     "dJointGetHingeAngleRate",
+    "dBodyGetQuaternion",
+    "dBodyIsEnabled",
+    "dBodySetPosition",
+    "dBodySetQuaternion",
+    "dBodySetLinearVel",
+    "dBodySetAngularVel",
+    "dBodyDisable",
+    "dBodySetRotation",
 )
 """The ODE functions ``ode_step.c`` calls, in the order of its ``ode_fns`` struct."""
 
@@ -75,8 +83,15 @@ def _configure(lib: ctypes.CDLL) -> None:
     lib.ode_collide.argtypes = [_p, _p, _p, ctypes.c_int, _p, _p, _p, ctypes.c_int, _p, _p]
     lib.ode_collide.argtypes += [_p, _p, ctypes.c_int, _p, _p, _p, _p, ctypes.c_int]
     lib.ode_collide.restype = ctypes.c_int
-    lib.ode_read.argtypes = [_p, ctypes.c_int, _p, _p, ctypes.c_int, _p, _p, _p]
-    lib.ode_read.restype = None
+    lib.ode_read.argtypes = [_p, ctypes.c_int, _p, _p, ctypes.c_int, _p, _p, _p, ctypes.c_double]
+    lib.ode_read.restype = ctypes.c_int
+    lib.ode_frp.argtypes = [ctypes.c_int, _p, _p, _p, _p, ctypes.c_int, _p]
+    lib.ode_frp.restype = None
+    lib.ode_bodies.argtypes = [_p, ctypes.c_int, _p, _p, ctypes.c_int]
+    lib.ode_bodies.restype = None
+    lib.ode_place.argtypes = [_p, ctypes.c_int, _p, _p, _p, ctypes.c_int, ctypes.c_int, _p]
+    lib.ode_place.argtypes += [ctypes.c_int]
+    lib.ode_place.restype = None
 
 
 class FastLoops:
@@ -85,8 +100,8 @@ class FastLoops:
     Args:
         ode_lib: The world's ctypes ODE binding (its function pointers are passed to C).
         bodies: Every body that feels drag, with its ``(linear, angular)`` drag coefficients.
-        robots: Per robot ``(joint handles, child body handles, (n, 2) limits rad, max speeds
-            rad/s)``.
+        robots: Per robot ``(body handles, joint handles, child body handles, (n, 2) limits
+            rad, max speeds rad/s)``.
         world, group: The ODE world and its contact joint group.
         pairs: The world's collision pairs ``(g1, g2, b1, b2, surface, frp1, frp2)``.
         feedback: The world's ``dJointFeedback`` slots (one per sensed contact).
@@ -99,6 +114,10 @@ class FastLoops:
             for the sensed contacts (the world's own arrays).
         hit: ``int32`` array, one entry per pair: :meth:`collide` writes its ``stamp`` into the
             entry of every pair that made a contact (the world's own array).
+        frp: ``(side slots (n_pairs, 2) int32, sums (n_sensors, 8))``: the force sensor of each
+            pair's two bodies (-1: none) and the array :meth:`frp` fills (the world's own).
+        bound: A body whose position is this far (m) from the origin in a coordinate is not
+            sane (:meth:`read` reports it).
     """
 
     def __init__(
@@ -116,6 +135,8 @@ class FastLoops:
         state,
         sensed_out,
         hit,
+        frp,
+        bound,
     ):
         self._lib = load()
         self._fns = OdeFunctions(
@@ -134,12 +155,17 @@ class FastLoops:
         )
         self._keep = []  # the arrays the per-robot arguments point into
         self._realise_args = []
-        for joints, child, limits, vmax in robots:
+        self._place_args = []
+        for bodies_r, joints, child, limits, vmax in robots:
+            b = (_p * len(bodies_r))(*bodies_r)
             j = (_p * len(joints))(*joints)
             c = (_p * len(child))(*child)
             lim = np.ascontiguousarray(limits, dtype=float)
             vm = np.ascontiguousarray(vmax, dtype=float)
-            self._keep.append((j, c, lim, vm))
+            self._keep.append((b, j, c, lim, vm))
+            self._place_args.append(
+                (fns, len(bodies_r), ctypes.addressof(b), len(joints), ctypes.addressof(j))
+            )
             self._realise_args.append(
                 (
                     fns,
@@ -172,6 +198,17 @@ class FastLoops:
             ctypes.addressof(self._read_joints),
             compiled.address(angles),
             compiled.address(rates),
+            float(bound),
+        )
+        side_slot, sums = frp
+        self._side_slot = np.ascontiguousarray(side_slot, dtype=np.int32)
+        self._frp_args = (
+            ctypes.addressof(feedback),
+            compiled.address(self._out_pair),
+            compiled.address(self._out_pos),
+            compiled.address(self._side_slot),
+            len(sums),
+            compiled.address(sums),
         )
         self._collide_args = (
             fns,
@@ -194,9 +231,51 @@ class FastLoops:
         )
         self._hit = hit
 
-    def read(self) -> None:
-        """Fill the world's state snapshot (``OdeWorld._read_state``)."""
-        self._lib.ode_read(*self._read_args)
+    def read(self) -> int:
+        """Fill the world's state snapshot (``OdeWorld._read_state``); returns the index of the
+        first body that is not sane (position NaN or beyond ``bound``), else -1."""
+        return self._lib.ode_read(*self._read_args)
+
+    def save_bodies(self) -> np.ndarray:
+        """The complete dynamic state of every body the state snapshot covers (position,
+        quaternion, velocities, enabled; 14 numbers per body), for :meth:`restore_bodies`."""
+        fns, nb, bodies = self._read_args[:3]
+        saved = np.empty((nb, 14))
+        self._lib.ode_bodies(fns, nb, bodies, compiled.address(saved), 1)
+        return saved
+
+    def restore_bodies(self, saved: np.ndarray) -> None:
+        """Put back the state :meth:`save_bodies` returned (the same ODE calls as
+        ``OdeWorld.sense_contacts``'s Python loop)."""
+        fns, nb, bodies = self._read_args[:3]
+        self._lib.ode_bodies(fns, nb, bodies, compiled.address(saved), 0)
+
+    def place(self, robot: int, positions: np.ndarray, rotations: np.ndarray, asleep: bool) -> None:
+        """Teleport robot ``robot`` (``OdeWorld.place_robot``): its bodies to ``positions``
+        ``(n, 3)`` m with ``rotations`` ``(n, 3, 3)``, at rest, disabled if ``asleep``; every
+        hinge's target velocity 0."""
+        fns, nb, bodies, nj, joints = self._place_args[robot]
+        pos = np.ascontiguousarray(positions, dtype=float)
+        rot = np.ascontiguousarray(rotations, dtype=float)
+        if pos.shape != (nb, 3) or rot.shape != (nb, 3, 3):
+            raise ValueError(f"placement needs ({nb}, 3) positions and ({nb}, 3, 3) rotations")
+        self._lib.ode_place(
+            fns,
+            nb,
+            bodies,
+            compiled.address(pos),
+            compiled.address(rot),
+            int(asleep),
+            nj,
+            joints,
+            ode.PARAM_VEL,
+        )
+
+    def frp(self, m: int) -> None:
+        """Sum the ``m`` sensed contacts' feedback per force sensor into the world's sums
+        array (``OdeWorld._read_feedback``)."""
+        fb, pair, pos, side, n, sums = self._frp_args
+        self._lib.ode_frp(m, fb, pair, pos, side, n, sums)
 
     def drag(self) -> int:
         """Drag on every body (``OdeWorld._apply_drag``); returns the index of a body whose

@@ -1,5 +1,6 @@
 /* The Python-side loops of robocup_gym.sim.engines.ode.world.OdeWorld.step in C: drag on every body,
- * the hinge effector's rules for a command, and contact generation. They make ~200 ctypes
+ * the hinge effector's rules for a command, contact generation, reading the state and summing
+ * the foot sensors' contact forces. They make ~200 ctypes
  * calls a cycle in Python, as long as ODE's own dWorldStep.
  *
  * ODE is called through the function pointers Python's ctypes binding already holds
@@ -53,6 +54,14 @@ typedef struct {
   const dReal* (*dBodyGetPosition)(dID);
   const dReal* (*dBodyGetRotation)(dID);
   dReal (*dJointGetHingeAngleRate)(dID);
+  const dReal* (*dBodyGetQuaternion)(dID);
+  int (*dBodyIsEnabled)(dID);
+  void (*dBodySetPosition)(dID, dReal, dReal, dReal);
+  void (*dBodySetQuaternion)(dID, const dReal*);
+  void (*dBodySetLinearVel)(dID, dReal, dReal, dReal);
+  void (*dBodySetAngularVel)(dID, dReal, dReal, dReal);
+  void (*dBodyDisable)(dID);
+  void (*dBodySetRotation)(dID, const dReal*);
 } ode_fns;
 
 int ode_sizeof_contact(void) { return (int)sizeof(dContact); }
@@ -144,9 +153,12 @@ int ode_collide(const ode_fns* f, dID world, dID group, int npairs, dID* pairs,
 
 /* The state every perception reads, in one call: per body its position, rotation (3x3, row
  * major: ODE's 3x4 without the padding column), linear and angular velocity (18 numbers per
- * body, world frame), and every hinge's angle and rate. */
-void ode_read(const ode_fns* f, int nb, dID* bodies, double* out, int nj, dID* joints,
-              double* angles, double* rates) {
+ * body, world frame), and every hinge's angle and rate. Returns the index of the first body
+ * whose position is not finite or `bound` (m) or more from the origin in a coordinate (the
+ * world's sanity check), else -1. */
+int ode_read(const ode_fns* f, int nb, dID* bodies, double* out, int nj, dID* joints,
+             double* angles, double* rates, double bound) {
+  int bad = -1;
   for (int i = 0; i < nb; i++) {
     double* o = out + 18 * i;
     const dReal* p = f->dBodyGetPosition(bodies[i]);
@@ -160,10 +172,96 @@ void ode_read(const ode_fns* f, int nb, dID* bodies, double* out, int nj, dID* j
       o[9 + j] = r[8 + j];
       o[12 + j] = v[j];
       o[15 + j] = w[j];
+      if (bad < 0 && !(fabs(p[j]) < bound)) bad = i;  /* NaN fails too */
     }
   }
   for (int k = 0; k < nj; k++) {
     angles[k] = f->dJointGetHingeAngle(joints[k]);
     rates[k] = f->dJointGetHingeAngleRate(joints[k]);
   }
+  return bad;
+}
+
+/* SimSpark's force resistance perceptors from the step's contact feedback, summed per sensor:
+ * contact k (of m) has feedback slot k, pair out_pair[k] and position out_pos[3k..3k+2]; the
+ * sensor of the pair's first body is side_slot[2p], of its second side_slot[2p+1] (-1: none).
+ * Per sensor s, sums[8s..8s+7] = total force (3), sum of |force| * position (3), sum of
+ * |force|, and the number of its contacts. The same additions in the same order as world.py's
+ * Python loop (bit-equal). */
+void ode_frp(int m, const dJointFeedback* fb, const int* out_pair, const double* out_pos,
+             const int* side_slot, int nslots, double* sums) {
+  for (int s = 0; s < 8 * nslots; s++) sums[s] = 0.0;
+  for (int k = 0; k < m; k++) {
+    int p = out_pair[k];
+    for (int side = 0; side < 2; side++) {
+      int s = side_slot[2 * p + side];
+      if (s < 0) continue;
+      const dReal* f = side ? fb[k].f2 : fb[k].f1;
+      double fx = f[0], fy = f[1], fz = f[2];
+      double* a = sums + 8 * s;
+      double magnitude = sqrt(fx * fx + fy * fy + fz * fz);
+      a[0] += fx;
+      a[1] += fy;
+      a[2] += fz;
+      a[3] += magnitude * out_pos[3 * k];
+      a[4] += magnitude * out_pos[3 * k + 1];
+      a[5] += magnitude * out_pos[3 * k + 2];
+      a[6] += magnitude;
+      a[7] += 1.0;
+    }
+  }
+}
+
+/* Save (save != 0) or restore the bodies' complete dynamic state: per body its position (3),
+ * quaternion (4), linear and angular velocity (3 + 3) and whether it is enabled (1): 14 numbers
+ * in out[14i..]. Restoring makes the same ODE calls as world.py's Python loop (bit-equal). */
+void ode_bodies(const ode_fns* f, int nb, dID* bodies, double* out, int save) {
+  for (int i = 0; i < nb; i++) {
+    dID b = bodies[i];
+    double* o = out + 14 * i;
+    if (save) {
+      const dReal* p = f->dBodyGetPosition(b);
+      const dReal* q = f->dBodyGetQuaternion(b);
+      const dReal* v = f->dBodyGetLinearVel(b);
+      const dReal* w = f->dBodyGetAngularVel(b);
+      for (int j = 0; j < 3; j++) {
+        o[j] = p[j];
+        o[7 + j] = v[j];
+        o[10 + j] = w[j];
+      }
+      for (int j = 0; j < 4; j++) o[3 + j] = q[j];
+      o[13] = f->dBodyIsEnabled(b);
+    } else {
+      f->dBodySetPosition(b, o[0], o[1], o[2]);
+      f->dBodySetQuaternion(b, o + 3);
+      f->dBodySetLinearVel(b, o[7], o[8], o[9]);
+      f->dBodySetAngularVel(b, o[10], o[11], o[12]);
+      if (o[13] != 0.0)
+        f->dBodyEnable(b);
+      else
+        f->dBodyDisable(b);
+    }
+  }
+}
+
+/* Teleport one robot (OdeWorld.place_robot): body i to position pos[3i..3i+2] with rotation
+ * rot[9i..9i+8] (3x3, row major), at rest, enabled unless `asleep`; every hinge's target
+ * velocity (parameter param_vel) to 0. The same ODE calls in the same order as the Python
+ * loop. */
+void ode_place(const ode_fns* f, int nb, dID* bodies, const double* pos, const double* rot,
+               int asleep, int nj, dID* joints, int param_vel) {
+  for (int i = 0; i < nb; i++) {
+    dID b = bodies[i];
+    const double* r = rot + 9 * i;
+    dReal m[12] = {r[0], r[1], r[2], 0.0, r[3], r[4], r[5], 0.0, r[6], r[7], r[8], 0.0};
+    f->dBodySetPosition(b, pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+    f->dBodySetRotation(b, m);
+    f->dBodySetLinearVel(b, 0.0, 0.0, 0.0);
+    f->dBodySetAngularVel(b, 0.0, 0.0, 0.0);
+    if (asleep)
+      f->dBodyDisable(b);
+    else
+      f->dBodyEnable(b);
+  }
+  for (int k = 0; k < nj; k++) f->dJointSetHingeParam(joints[k], param_vel, 0.0);
 }

@@ -60,6 +60,8 @@ HINGE_FUDGE_FACTOR = 1e-5
 HINGE_STOP_BOUNCE = 1.0
 MAX_CONTACTS = 4
 """Contact points per geom pair (spec §7.3)."""
+SANE_POSITION = 1e3
+"""A body this far (m) from the origin in a coordinate, or at NaN, means the world diverged."""
 
 
 @dataclass(frozen=True)
@@ -155,11 +157,35 @@ def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
 
 
 def _mat3(r: np.ndarray) -> ode.Mat3:
-    m = ode.Mat3()
-    for i in range(3):
-        for j in range(3):
-            m[4 * i + j] = float(r[i, j])
-    return m
+    """ODE's 3×4 rotation layout of a 3×3 matrix (the padding column 0)."""
+    (a, b, c), (d, e, f), (g, h, i) = r.tolist()
+    return ode.Mat3(a, b, c, 0.0, d, e, f, 0.0, g, h, i, 0.0)
+
+
+_KINEMATICS: dict[int, tuple] = {}
+"""Per robot model (by ``id``, the model kept alive in the entry): what
+:meth:`OdeWorld._forward_kinematics` needs of it, as arrays, computed once."""
+
+
+def _kinematics(model: NaoModel) -> tuple:
+    """``(model, links)`` of ``model`` (cached): per body in order, ``(parent's index, joint
+    index, unit joint axis, joint anchor, zero-pose centre)`` (-1, -1, None, None for the
+    torso)."""
+    entry = _KINEMATICS.get(id(model))
+    if entry is None or entry[0] is not model:
+        index = {b.name: i for i, b in enumerate(model.bodies)}
+        joint_of = {j.child: j for j in model.joints}
+        k_of = {j.child: k for k, j in enumerate(model.joints)}
+        links = []
+        for b in model.bodies:
+            if b.parent is None:
+                links.append((-1, -1, None, None, np.array(b.pos)))
+                continue
+            j = joint_of[b.name]
+            axis = np.array(j.axis, float) / np.linalg.norm(j.axis)
+            links.append((index[b.parent], k_of[b.name], axis, np.array(j.anchor), np.array(b.pos)))
+        entry = _KINEMATICS[id(model)] = (model, links)
+    return entry
 
 
 @dataclass(kw_only=True)
@@ -298,6 +324,18 @@ class OdeWorld(Senses):
         self._out_pos = np.zeros((len(self._feedback), 3))
         self._pair_frp = [(p[5], p[6]) for p in self._pairs]
         """Per pair, the force perceptors ``(robot, name)`` of its two bodies (or ``None``)."""
+        self._frp_slots = list(dict.fromkeys(f for pair in self._pair_frp for f in pair if f))
+        """Every force perceptor ``(robot, name)`` that a pair can touch (the compiled sums'
+        rows)."""
+        slot_of = {f: k for k, f in enumerate(self._frp_slots)}
+        self._pair_frp_slot = np.array(
+            [[-1 if f is None else slot_of[f] for f in pair] for pair in self._pair_frp],
+            dtype=np.int32,
+        ).reshape(-1, 2)
+        self._frp_sums = np.zeros((max(len(self._frp_slots), 1), 8))
+        self._frp_pending = False
+        """Whether the robots' ``frp`` are still to be made from the sums (:meth:`_sync_frp`)."""
+        """Per force perceptor, the compiled loop's sums of the last step (``ode_frp``)."""
         # the state snapshot every reading comes from (one C call per step, see _read_state)
         self._state_bodies = self._drag_bodies()
         self._row = {b: k for k, b in enumerate(self._state_bodies)}
@@ -436,7 +474,9 @@ class OdeWorld(Senses):
         lin, ang = phys.BODY_LINEAR_DRAG, phys.BODY_ANGULAR_DRAG
         ball = (phys.BALL_LINEAR_DRAG, phys.BALL_ANGULAR_DRAG)
         bodies = [(b, ball if b == self._ball else (lin, ang)) for b in self._drag_bodies()]
-        robots = [(r.joints, r.child_body, r.limits, r.model.max_speeds) for r in self.robots]
+        robots = [
+            (r.bodies, r.joints, r.child_body, r.limits, r.model.max_speeds) for r in self.robots
+        ]
         return FastLoops(
             self._lib,
             bodies,
@@ -451,6 +491,8 @@ class OdeWorld(Senses):
             (self._state_bodies, self._state, self._all_joints, self._angles, self._rates),
             (self._out_pair, self._out_pos),
             self._hit,
+            (self._pair_frp_slot, self._frp_sums),
+            SANE_POSITION,
         )
 
     @property
@@ -491,7 +533,8 @@ class OdeWorld(Senses):
             else joint_angles_array(model, joint_angles_deg)
         )
         rot, trans = self._forward_kinematics(model, np.radians(angles), q)
-        centres = [rot[i] @ np.array(b.pos) + trans[i] for i, b in enumerate(model.bodies)]
+        links = _kinematics(model)[1]
+        centres = [rot[i] @ link[4] + trans[i] for i, link in enumerate(links)]
         if z is None:
             shift = -phys.SURFACE_LAYER - min(
                 _lowest(b, rot[i], c)
@@ -500,19 +543,27 @@ class OdeWorld(Senses):
             )
         else:
             shift = z - centres[0][2]
-        for i, body in enumerate(r.bodies):
-            c = centres[i]
-            lib.dBodySetPosition(body, x + c[0], y + c[1], c[2] + shift)
-            lib.dBodySetRotation(body, _mat3(rot[i]))
-            lib.dBodySetLinearVel(body, 0.0, 0.0, 0.0)
-            lib.dBodySetAngularVel(body, 0.0, 0.0, 0.0)
-            (lib.dBodyDisable if asleep else lib.dBodyEnable)(body)
-        for h in r.joints:
-            lib.dJointSetHingeParam(h, ode.PARAM_VEL, 0.0)
+        if self._fast is not None:
+            pos = np.array(centres)
+            pos[:, 0] += x
+            pos[:, 1] += y
+            pos[:, 2] += shift
+            self._fast.place(index, pos, np.array(rot), asleep)
+        else:  # the same ODE calls in Python
+            for i, body in enumerate(r.bodies):
+                c = centres[i]
+                lib.dBodySetPosition(body, x + c[0], y + c[1], c[2] + shift)
+                lib.dBodySetRotation(body, _mat3(rot[i]))
+                lib.dBodySetLinearVel(body, 0.0, 0.0, 0.0)
+                lib.dBodySetAngularVel(body, 0.0, 0.0, 0.0)
+                (lib.dBodyDisable if asleep else lib.dBodyEnable)(body)
+            for h in r.joints:
+                lib.dJointSetHingeParam(h, ode.PARAM_VEL, 0.0)
         r.pending.clear()
         self._queued.pop(index, None)
         r.prev_vel[:] = 0.0
         r.accel[:] = (0.0, 0.0, phys.GRAVITY)
+        self._sync_frp()  # the sums of the last step must not overwrite this later
         r.frp = {}
         r.last_frp = {}
         self._fresh = False
@@ -525,18 +576,14 @@ class OdeWorld(Senses):
         world points (relative to the torso's x, y; torso centre at height 0) for a torso with
         orientation ``quat``."""
         root = _rotation(quat)
-        index = {b.name: i for i, b in enumerate(model.bodies)}
-        joint_of = {j.child: (k, j) for k, j in enumerate(model.joints)}
-        rot: list = [None] * len(model.bodies)
-        trans: list = [None] * len(model.bodies)
-        for i, b in enumerate(model.bodies):  # parents come before their children
-            if b.parent is None:
+        links = _kinematics(model)[1]
+        rot: list = [None] * len(links)
+        trans: list = [None] * len(links)
+        for i, (p, k, axis, a, _) in enumerate(links):  # parents come before their children
+            if p < 0:
                 rot[i], trans[i] = root, np.zeros(3)
                 continue
-            p = index[b.parent]
-            k, j = joint_of[b.name]
-            turn = _axis_rotation(np.array(j.axis, float) / np.linalg.norm(j.axis), angles[k])
-            a = np.array(j.anchor)
+            turn = _axis_rotation(axis, angles[k])
             rot[i] = rot[p] @ turn
             trans[i] = rot[p] @ (a - turn @ a) + trans[p]
         return rot, trans
@@ -649,17 +696,23 @@ class OdeWorld(Senses):
             self._pushes.pop(index, None)
 
     def _check_sane(self) -> None:
-        """Raise :class:`~robocup_gym.sim.SimulationDivergedError` (as the
-        MuJoCo world
-        does) when a body left the finite, plausible range (NaN/inf, or 1 km away): ODE blew up.
-        Re-placing the ball and every robot recovers."""
-        positions = self._read_state()[:, 0:3]  # the snapshot the next perception reads anyway
-        if not np.abs(positions).max() < 1e3:  # NaN fails too
-            k = int(np.argmax(~(np.abs(positions) < 1e3).all(axis=1)))
+        """Raise :class:`~robocup_gym.sim.SimulationDivergedError` (as the MuJoCo world does)
+        when a body left the finite, plausible range (NaN/inf, or ``SANE_POSITION`` = 1 km
+        away): ODE blew up. Re-placing the ball and every robot recovers. Reads the state
+        snapshot that the next perception reads anyway."""
+        if self._fast is not None:
+            k = self._fast.read()
+            self._fresh = True
+        else:
+            positions = self._read_state()[:, 0:3]
+            ok = (np.abs(positions) < SANE_POSITION).all(axis=1)  # NaN fails too
+            k = -1 if ok.all() else int(np.argmin(ok))
+        if k >= 0:
+            positions = self._state[:, 0:3]
             raise SimulationDivergedError(
                 f"the ODE world diverged at cycle {self.cycle} (t = {self.time:.2f} s): "
-                f"{self._body_name(k)} is at {tuple(positions[k])}; place the ball and robots "
-                "again"
+                f"{self._body_name(k)} is at ({', '.join(f'{v:.3f}' for v in positions[k])}) m; "
+                "place the ball and robots again"
             )
 
     def sense_contacts(self) -> None:
@@ -668,6 +721,12 @@ class OdeWorld(Senses):
         world at a placement), so that the perception of a freshly placed robot shows its feet
         loaded, as every later one does. The state is put back exactly; nothing else changes
         (ODE's big-matrix step keeps no warm start, and placing re-arms auto-disable)."""
+        if self._fast is not None:
+            state = self._fast.save_bodies()
+            self._collide_and_step()
+            self._fast.restore_bodies(state)
+            self._fresh = False
+            return
         lib = self._lib
         bodies = [self._ball, *(b for r in self.robots for b in r.bodies)]
         saved = [
@@ -759,6 +818,10 @@ class OdeWorld(Senses):
         magnitude of each contact's force, world frame. ``m`` sensed contacts: contact ``k``
         has feedback slot ``k``, pair ``self._out_pair[k]`` and position ``self._out_pos[k]``
         (written alike by the compiled and the Python contact loops)."""
+        if self._fast is not None:
+            self._fast.frp(m)
+            self._frp_pending = True  # the robots' frp are made from the sums when read
+            return
         sums: dict[tuple[int, str], list] = {}
         fb = self._feedback_view
         for k in range(m):
@@ -781,10 +844,31 @@ class OdeWorld(Senses):
                 acc[6] += magnitude
         for r in self.robots:
             r.frp = {}
-        for (i, name), a in sums.items():
+        for key in self._frp_slots:  # in a fixed order, as the compiled sums come
+            a = sums.get(key)
+            if a is None:
+                continue
+            i, name = key
             total = a[6]
             centre = np.array(a[3:6]) / total if total > 0.0 else None
             self.robots[i].frp[name] = (np.array(a[0:3]), centre)
+
+    def _sync_frp(self) -> None:
+        """Make every robot's ``frp`` from the compiled loop's sums of the last step, if not
+        done yet (what :meth:`_read_feedback`'s Python loop makes at once; the arrays are only
+        built for a step whose perception is read)."""
+        if not self._frp_pending:
+            return
+        self._frp_pending = False
+        for r in self.robots:
+            r.frp = {}
+        sums = self._frp_sums
+        for k in np.flatnonzero(sums[:, 7]).tolist():  # in _frp_slots order
+            i, name = self._frp_slots[k]
+            a = sums[k]
+            total = a[6]
+            centre = a[3:6] / total if total > 0.0 else None
+            self.robots[i].frp[name] = (a[0:3].copy(), centre)
 
     def _command_array(self, r: OdeRobot, cmd: Mapping[str, float] | np.ndarray) -> np.ndarray:
         """Targets in canonical order, rad/s; NaN marks a joint the command leaves alone.
@@ -794,6 +878,12 @@ class OdeWorld(Senses):
             ValueError: a NaN/inf velocity (naming the joint) or an array of the wrong shape.
         """
         names = r.model.effector_names
+        if isinstance(cmd, np.ndarray) and cmd.shape == (len(names),):  # the common case
+            out = cmd.astype(float)  # a copy: the queue keeps it
+            if not np.isfinite(out).all():
+                k = int(np.argmin(np.isfinite(out)))
+                raise ValueError(f"velocity command for joint {names[k]} is {out[k]}")
+            return out
         out = np.full(len(names), np.nan)
         if isinstance(cmd, Mapping):
             given = np.zeros(len(names), dtype=bool)
@@ -952,6 +1042,7 @@ class OdeWorld(Senses):
         contact
         is omitted; one whose contacts carry no force repeats its last reading)."""
         r = self.robots[index]
+        self._sync_frp()
         out: dict[str, ForceResistance] = {}
         for name, (force, centre) in r.frp.items():
             if centre is None:
@@ -1059,6 +1150,7 @@ class OdeWorld(Senses):
         world (the ``serve`` server rebuilds its world when robots join or leave)."""
         lib = self._lib
         r = self.robot(index)
+        self._sync_frp()
         bodies = [
             (
                 self._vec(lib.dBodyGetPosition(b)),
@@ -1111,6 +1203,7 @@ class OdeWorld(Senses):
             self._queued[index] = state["queued"].copy()
         r.prev_vel[:] = state["prev_vel"]
         r.accel[:] = state["accel"]
+        self._sync_frp()  # the sums of the last step must not overwrite this later
         r.frp = copy.deepcopy(state["frp"])
         r.last_frp = copy.deepcopy(state["last_frp"])
         for name, value in state["agent"].items():
