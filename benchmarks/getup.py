@@ -11,7 +11,8 @@ from the front and ~55 from the back on rcssserver3d).
 is deterministic: an episode from the same lying pose repeats. Each episode starts from one of
 the run's ``lying_poses`` drops per side (tilt and joints varied ±10°; ``--lying-poses N``
 another number), or with ``--pose-from N`` from pose N + k (``--pose-from 32``: poses a run
-trained on up to 32 never met); ``--robot-type N`` another Nao type. A policy meant for one side
+trained on up to 32 never met); ``--robot-type N`` another Nao type (``--script-robot-type N``:
+under another type's scripted get-up). A policy meant for one side
 (``start_side`` ``front`` or ``back`` in its options) is measured on that side only.
 Prints one line per side and, as the last line, one JSON object (``success_rate``,
 ``cycles_to_up_median``, per side the same).
@@ -87,6 +88,13 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument(
         "--robot-type", type=int, default=None, help="Nao type 0-4 (default: the run's own)"
     )
+    parser.add_argument(
+        "--script-robot-type",
+        type=int,
+        default=None,
+        help="play this Nao type's scripted get-up under the policy (GetUpConfig."
+        "script_robot_type; default: the run's own, for 'zero' the robot's type's)",
+    )
     args = parser.parse_args(argv)
     from robocup_gym.train.evaluate import policy_and_env
 
@@ -95,6 +103,8 @@ def main(argv: list[str] | None = None) -> dict:
         overrides["lying_poses"] = args.lying_poses
     if args.robot_type is not None:
         overrides["robot_type"] = args.robot_type
+    if args.script_robot_type is not None:
+        overrides["script_robot_type"] = args.script_robot_type
     env, act = policy_and_env(args.policy, "RobocupGym/GetUp-v0", args.engine, overrides)
     fixed = getattr(env.unwrapped.config, "start_side", "random")
     sides = (fixed,) if fixed in ("front", "back") else ("front", "back")

@@ -435,14 +435,14 @@ def test_the_scripted_get_up_mirrors_its_keyframes_and_holds_the_last():
     """``reference_targets``: every named left joint gets its keyframe angle, its right partner
     the mirror image (``mirror_pairs``' sign), unnamed joints (head, toes) 0; the keyframes
     end at their cumulative cycles and the last is held."""
-    from robocup_gym.envs.tasks.getup import GETUP_KEYFRAMES, reference_targets, scripted_target
+    from robocup_gym.envs.tasks.getup import getup_keyframes, reference_targets, scripted_target
 
     env = GetUp(robot_type=4, reference_motion=False)  # type 4: toes the script leaves at 0
     m, joints = env.robot_model, env._actions.joints
     names = [m.effector_names[j] for j in joints]
     for side in ("front", "back"):
         script = reference_targets(m, joints, side)
-        frames = GETUP_KEYFRAMES[side]
+        frames = getup_keyframes(4)[side]
         assert len(script) == len(frames) >= 2
         assert [end for end, _ in script] == list(np.cumsum([c for c, _ in frames]))
         for (_, targets), (_, angles) in zip(script, frames, strict=True):
@@ -487,20 +487,59 @@ def test_getup_actions_are_corrections_around_the_scripted_get_up():
     plain.close()
 
 
+def test_each_nao_type_plays_its_own_script_unless_told_another():
+    """``script_robot_type``: by default a Nao type with a script of its own
+    (``GETUP_KEYFRAMES_BY_TYPE``) plays it, any other type 0's; a number picks a type's script;
+    anything but a type 0–4 or ``None`` is refused."""
+    from robocup_gym.envs.tasks.getup import GETUP_KEYFRAMES_BY_TYPE, getup_keyframes
+
+    assert set(GETUP_KEYFRAMES_BY_TYPE) == {0, 1, 2, 3, 4}
+    for t in range(5):
+        frames = getup_keyframes(t)
+        assert frames is GETUP_KEYFRAMES_BY_TYPE.get(t, GETUP_KEYFRAMES_BY_TYPE[0])
+
+    def first_targets(**kw):
+        env = GetUp(engine="mujoco", **kw)
+        out = {side: env._script[side][0][1].copy() for side in ("front", "back")}
+        env.close()
+        return out
+
+    own, zero = first_targets(robot_type=1), first_targets(robot_type=1, script_robot_type=0)
+    plain = first_targets(robot_type=0)
+    assert first_targets(robot_type=0, script_robot_type=1)["back"] == pytest.approx(own["back"])
+    assert zero["back"] == pytest.approx(plain["back"])
+    assert not np.allclose(own["back"], plain["back"])
+    for bad in (5, -1, 1.0, "1"):
+        with pytest.raises(EnvConfigError, match="script_robot_type"):
+            GetUp(engine="mujoco", script_robot_type=bad)
+
+
 @pytest.mark.skipif(not available(), reason="no libode")
-@pytest.mark.parametrize("side", ["front", "back"])
-def test_zero_actions_get_up_on_the_scripted_reference(side):
-    """The default engine and Nao type 0: the script alone stands the robot up within 80
-    cycles (issue 21's target), from the plain drop pose and from varied ones it was not
-    searched on (poses 8 and up)."""
-    env = GetUp(start_side=side)
+@pytest.mark.parametrize(
+    ("robot_type", "side", "poses"),
+    [
+        (0, "front", (0, 9, 17)),
+        (0, "back", (0, 9, 17)),
+        (1, "front", (0, 9, 18)),
+        (1, "back", (0, 9, 17)),
+        (3, "front", (0, 9, 17)),
+        (3, "back", (0, 9, 17)),
+        (2, "front", (0, 9, 17)),
+        (4, "front", (0, 9, 17)),
+    ],
+)
+def test_zero_actions_get_up_on_the_scripted_reference(robot_type, side, poses):
+    """The default engine: each Nao type's script alone stands the robot up within 80 cycles
+    (issue 21's target), from the plain drop pose and from varied ones it was not searched on
+    (type 0: poses 14 and up; the other types' own scripts: 12 and up)."""
+    env = GetUp(start_side=side, robot_type=robot_type)
     try:
-        for pose in (0, 9, 17):
+        for pose in poses:
             env.reset(seed=0, options={"lying_pose": pose})
-            assert env.torso_pos[2] < 0.2
+            assert env.torso_pos[2] < 0.25  # lying (up: above 0.28 m)
             done, info = False, {}
             while not done:
-                _, _, terminated, truncated, info = env.step(np.zeros(10))
+                _, _, terminated, truncated, info = env.step(np.zeros(env.action_space.shape))
                 done = terminated or truncated
             assert info["success"] and info["steps_to_up"] <= 80, (pose, info["steps_to_up"])
             assert info["lying_pose"] == pose

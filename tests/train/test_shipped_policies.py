@@ -11,6 +11,7 @@ import pytest
 pytest.importorskip("onnxruntime")
 
 from robocup_gym.envs.observations import heading_frame
+from robocup_gym.envs.tasks.getup import GetUp
 from robocup_gym.sim.engines.ode import available
 from robocup_gym.train.pretrained import (
     describe,
@@ -77,6 +78,21 @@ def test_a_shipped_policy_runs_in_the_environment_it_was_exported_with():
     # an export from before GetUp had its script ran without it, and still does
     old = {k: v for k, v in meta["env_config"].items() if k != "reference_motion"}
     assert recorded_env_options({**meta, "env_config": old})["reference_motion"] is False
+    # the shipped get-up learnt over type 0's script, before types 1 and 3 had their own; on
+    # them it plays theirs (it gets up far more often so), unless told another
+    assert "script_robot_type" not in recorded_env_options(meta)
+    targets = {}
+    for name, kw in (("shipped", {}), ("pinned", {"script_robot_type": 0})):
+        env = pretrained_env(pretrained_policy("get-up"), "mujoco", {"robot_type": 3, **kw})
+        targets[name] = [t for _, t in env.unwrapped._script["back"]]
+        env.close()
+    for name, kw in (("own", {}), ("zero", {"script_robot_type": 0})):
+        env = GetUp(robot_type=3, engine="mujoco", **kw)
+        targets[name] = [t for _, t in env._script["back"]]
+        env.close()
+    for a, b in (("shipped", "own"), ("pinned", "zero")):
+        assert all(np.array_equal(x, y) for x, y in zip(targets[a], targets[b], strict=True))
+    assert not np.array_equal(targets["own"][0], targets["zero"][0])
     env = make_env(meta["env_id"], backend="mujoco", env_kwargs=options)
     assert env.unwrapped.config.w_height == 2.0
     env.close()

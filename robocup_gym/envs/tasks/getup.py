@@ -14,6 +14,7 @@ engine, and a policy learns what it misses.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,9 +29,11 @@ from robocup_gym.types import AgentCommand
 
 __all__ = [
     "GETUP_KEYFRAMES",
+    "GETUP_KEYFRAMES_BY_TYPE",
     "GETUP_OBSERVATIONS",
     "GetUp",
     "GetUpConfig",
+    "getup_keyframes",
     "reference_targets",
     "scripted_target",
 ]
@@ -72,6 +75,70 @@ right joints mirror them); the last is held to the episode's end. Found by an op
 (CMA-ES) on the ODE engine, Nao type 0, from the first trained policies' motions: over lying
 poses 0–15, then 0–13 each played clean and with 1.5° of noise on every target, so that the
 script stands a policy's exploration (docs/training.md, *A scripted get-up*)."""
+GETUP_KEYFRAMES_BY_TYPE: dict[int, dict[str, tuple[tuple[float, tuple[float, ...]], ...]]] = {
+    0: GETUP_KEYFRAMES,
+    1: {
+        "front": (
+            (23, (-71.0, 10.2, 120.0, 1.0, -62.9, 15.3, 74.3, -130.0, 60.4, -45.0)),
+            (28, (-103.6, 36.5, 120.0, -29.2, -90.0, 12.5, 100.0, -36.4, -38.1, 23.8)),
+            (20, (120.0, -1.0, 83.8, -16.3, -16.8, 40.7, -8.4, -16.3, -29.8, -11.7)),
+            (21, (-108.7, 5.6, -70.1, -15.6, 1.0, 42.3, -10.6, -6.7, 7.0, -8.7)),
+        ),
+        "back": (
+            (19, (-101.7, 95.0, -91.1, -52.5, -90.0, -25.0, 100.0, -26.9, 66.4, -3.4)),
+            (13, (-97.5, 32.2, -120.0, -15.4, -22.6, 25.0, -25.0, -8.9, -38.2, 25.0)),
+            (32, (81.4, -1.0, -94.6, -6.0, -64.5, 25.8, 96.3, -24.7, -43.3, -9.0)),
+            (14, (-40.1, 4.8, -120.0, 1.0, -4.1, 45.0, 22.3, -42.4, 18.8, -8.3)),
+        ),
+    },
+    3: {
+        "front": (
+            (17, (-109.5, 26.3, 120.0, -50.1, -67.6, 16.2, 84.2, -130.0, 75.0, -39.2)),
+            (29, (-120.0, 49.9, 120.0, 1.0, -90.0, 31.6, 95.4, -31.2, -37.3, 21.5)),
+            (19, (120.0, 8.4, 65.6, -17.3, -26.4, 45.0, -22.0, -2.7, -45.0, -13.5)),
+            (18, (-114.5, 29.5, -61.9, 1.0, -1.7, 45.0, -23.1, -16.6, 11.0, 25.0)),
+        ),
+        "back": (
+            (20, (-95.5, 95.0, -87.5, -53.9, -90.0, 7.0, 100.0, -20.6, 75.0, -45.0)),
+            (13, (-104.0, 9.8, -120.0, -16.5, -15.5, 45.0, -10.8, 1.0, -32.0, 4.0)),
+            (30, (95.4, 23.0, -120.0, 1.0, -87.1, 3.5, 100.0, -24.5, -45.0, 25.0)),
+            (12, (-45.2, -1.0, -116.3, 1.0, -9.0, 45.0, 11.7, -29.3, 2.4, 23.6)),
+        ),
+    },
+    2: {
+        "front": (
+            (19, (-113.8, 11.9, 120.0, 0.5, -70.1, 39.0, 97.9, -130.0, 72.9, -20.1)),
+            (29, (-109.1, 13.5, 114.2, 1.0, -90.0, 25.8, 100.0, -18.8, -45.0, 25.0)),
+            (16, (116.5, -1.0, 65.3, -14.7, 1.0, 45.0, -25.0, 1.0, -31.8, -7.5)),
+            (25, (-107.7, 5.6, -53.5, 1.0, -11.8, 38.8, -12.5, -5.9, -2.2, 0.8)),
+        ),
+        "back": GETUP_KEYFRAMES["back"],
+    },
+    4: {
+        "front": (
+            (22, (-117.5, 2.9, 114.7, -0.4, -76.5, 31.8, 86.9, -127.2, 72.4, -37.1)),
+            (27, (-107.8, 25.5, 115.2, 1.0, -90.0, 27.9, 100.0, -19.7, -45.0, 17.4)),
+            (18, (116.7, 12.3, 70.9, -3.1, 1.0, 43.5, -25.0, -0.1, -40.6, -23.3)),
+            (23, (-109.3, 3.3, -63.2, -13.8, 1.0, 45.0, -25.0, -10.8, 5.8, 24.7)),
+        ),
+        "back": GETUP_KEYFRAMES["back"],
+    },
+}
+"""The scripted get-up of every Nao type (same layout as :data:`GETUP_KEYFRAMES`, type 0's;
+angles within the joints' ranges; type 4's toes stay at 0). Types 1 and 3 (longer legs: type
+0's script gets them up from the back from none of 16 lying poses) have their own for both
+sides, types 2 and 4 from the front; their backs are type 0's, which gets them up from 61 and
+62 of 64 lying poses. Found in session 17 by the same open-loop CMA-ES on the ODE engine as
+type 0's, started from type 0's script: over lying poses 0–11, each played clean and with 1.5°
+of target noise, for the task's return and then for getting up within 80 cycles
+(docs/training.md, *Scripts per Nao type*)."""
+
+
+def getup_keyframes(robot_type: int) -> dict[str, tuple[tuple[float, tuple[float, ...]], ...]]:
+    """The scripted get-up (keyframes per side) that Nao type ``robot_type`` plays."""
+    return GETUP_KEYFRAMES_BY_TYPE.get(int(robot_type), GETUP_KEYFRAMES)
+
+
 DROP_CYCLES = 100
 """Cycles a dropped robot is given to come to rest (2 s)."""
 
@@ -107,6 +174,12 @@ class GetUpConfig(EnvConfig):
     Walk's over its reference gait). ``False``, or the ``velocity`` action mode: the action
     alone sets the targets (velocities), over the window of ``target_around_start_deg`` (by
     default each joint's whole range)."""
+    script_robot_type: int | None = None
+    """With ``reference_motion``: which Nao type's scripted get-up plays
+    (:data:`GETUP_KEYFRAMES_BY_TYPE`; ``None``: the robot's own type's, type 0's where it has
+    none). The shipped ``get-up``, a small residual learnt over type 0's script, does better on
+    types 1 and 3 over their own scripts than over type 0's (docs/training.md, *Scripts per
+    Nao type*), so ``None`` serves it too; a number pins one script."""
     reference_reach_deg: float = 5.0
     """With ``reference_motion``: how far an action of ±1 moves a target from the scripted
     one, deg (clipped to the joint's range). Small: the script stands random noise of 1–2°
@@ -153,6 +226,13 @@ class GetUpConfig(EnvConfig):
         if not (math.isfinite(self.reference_reach_deg) and self.reference_reach_deg > 0.0):
             raise EnvConfigError(
                 f"reference_reach_deg must be > 0 deg, got {self.reference_reach_deg!r}"
+            )
+        if self.script_robot_type is not None and not (
+            isinstance(self.script_robot_type, int | np.integer)
+            and 0 <= self.script_robot_type <= 4
+        ):
+            raise EnvConfigError(
+                f"script_robot_type must be a Nao type 0..4 or None, got {self.script_robot_type!r}"
             )
         if self.reference_motion and self.robot != "nao":
             raise EnvConfigError(
@@ -237,8 +317,12 @@ class GetUp(BaseEnv):
         super().__init__(config, **kwargs)
         self._script: dict[str, list[tuple[float, np.ndarray]]] | None = None
         if self.config.reference_motion and self._actions.mode is not ActionMode.VELOCITY:
+            script_type = self.config.script_robot_type
+            keyframes = getup_keyframes(
+                self.config.robot_type if script_type is None else script_type
+            )
             self._script = {
-                side: reference_targets(self.robot_model, self._actions.joints, side)
+                side: reference_targets(self.robot_model, self._actions.joints, side, keyframes)
                 for side in SIDES
             }
             self._actions.set_window(0.0, self.config.reference_reach_deg)
@@ -405,17 +489,22 @@ class GetUp(BaseEnv):
         return info
 
 
-def reference_targets(model: Any, joints: np.ndarray, side: str) -> list[tuple[float, np.ndarray]]:
-    """:data:`GETUP_KEYFRAMES` for ``side`` as ``(end cycle, target deg per controlled joint)``
+def reference_targets(
+    model: Any, joints: np.ndarray, side: str, keyframes: Mapping[str, Any] | None = None
+) -> list[tuple[float, np.ndarray]]:
+    """The scripted get-up for ``side`` as ``(end cycle, target deg per controlled joint)``
     (``joints``: canonical indices in action order; a right joint mirrors its left one's target
     by :attr:`~robocup_gym.robot.nao.NaoModel.mirror_pairs`; joints the script does not name,
-    the head, get 0)."""
+    the head, get 0). ``keyframes``: a table like :data:`GETUP_KEYFRAMES` (default: the
+    model's robot type's, :func:`getup_keyframes`)."""
+    if keyframes is None:
+        keyframes = getup_keyframes(model.robot_type.index)
     index = {n: i for i, n in enumerate(model.effector_names)}
     sign = {left: (right, sg) for left, right, sg in model.mirror_pairs}
     where = {int(j): k for k, j in enumerate(joints)}
     out: list[tuple[float, np.ndarray]] = []
     end = 0.0
-    for cycles, angles in GETUP_KEYFRAMES[side]:
+    for cycles, angles in keyframes[side]:
         targets = np.zeros(len(joints))
         for name, deg in zip(_KEYFRAME_JOINTS, angles, strict=True):
             left = index[name]
