@@ -333,9 +333,9 @@ class OdeWorld(Senses):
             dtype=np.int32,
         ).reshape(-1, 2)
         self._frp_sums = np.zeros((max(len(self._frp_slots), 1), 8))
+        """Per force perceptor, the compiled loop's sums of the last step (``ode_frp``)."""
         self._frp_pending = False
         """Whether the robots' ``frp`` are still to be made from the sums (:meth:`_sync_frp`)."""
-        """Per force perceptor, the compiled loop's sums of the last step (``ode_frp``)."""
         # the state snapshot every reading comes from (one C call per step, see _read_state)
         self._state_bodies = self._drag_bodies()
         self._row = {b: k for k, b in enumerate(self._state_bodies)}
