@@ -1,4 +1,5 @@
-"""The ODE world's per-cycle loops in C (``ode_step.c``): drag, commands, contact generation.
+"""The ODE world's per-cycle loops in C (``ode_step.c``): drag, commands, contact generation,
+reading the state, the foot sensors' sums, saving and restoring bodies, placing a robot.
 
 In Python they make ~200 ctypes calls a cycle, which take as long as ODE's own ``dWorldStep``.
 ``ode_step.c`` makes the same ODE calls, with the same arguments in the same order, through

@@ -1,7 +1,8 @@
-/* The Python-side loops of robocup_gym.sim.engines.ode.world.OdeWorld.step in C: drag on every body,
- * the hinge effector's rules for a command, contact generation, reading the state and summing
- * the foot sensors' contact forces. They make ~200 ctypes
- * calls a cycle in Python, as long as ODE's own dWorldStep.
+/* The Python-side loops of robocup_gym.sim.engines.ode.world.OdeWorld in C: drag on every body,
+ * the hinge effector's rules for a command, contact generation, reading the state (with its
+ * sanity check), summing the foot sensors' contact forces, saving and restoring the bodies, and
+ * a placement's ODE calls. In Python they make ~200 ctypes calls a cycle, as long as ODE's own
+ * dWorldStep.
  *
  * ODE is called through the function pointers Python's ctypes binding already holds
  * (robocup_gym/sim/engines/ode/lib.py), so this file needs neither ODE's headers nor linking. The
