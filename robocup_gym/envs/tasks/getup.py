@@ -168,9 +168,9 @@ class GetUpConfig(EnvConfig):
     same in every environment), so that a policy meets, and a benchmark measures, more than
     one way of lying."""
     reference_motion: bool = True
-    """The Nao: zero actions play a scripted get-up (:data:`GETUP_KEYFRAMES`, one per side:
-    target angles held for a number of cycles, the right side mirroring the left) and the
-    action corrects it, ± ``reference_reach_deg`` around each target (a residual policy, as
+    """The Nao: zero actions play a scripted get-up (:data:`GETUP_KEYFRAMES_BY_TYPE`, one per
+    type and side: target angles held for a number of cycles, the right side mirroring the
+    left) and the action corrects it, ± ``reference_reach_deg`` around each target (a residual policy, as
     Walk's over its reference gait). ``False``, or the ``velocity`` action mode: the action
     alone sets the targets (velocities), over the window of ``target_around_start_deg`` (by
     default each joint's whole range)."""
@@ -275,8 +275,9 @@ class GetUp(BaseEnv):
 
     Actions are target angles of mirrored left/right joint pairs (10 values on the Nao:
     ``action_mode="target_angle"``, ``mirror_actions=True``); on the Nao they correct a scripted
-    get-up (``reference_motion``: a zero action plays :data:`GETUP_KEYFRAMES`, ±1 moves each
-    target ``reference_reach_deg`` from it). ``reset(options={"start_side":
+    get-up (``reference_motion``: a zero action plays the robot type's script,
+    :data:`GETUP_KEYFRAMES_BY_TYPE`, or ``script_robot_type``'s; ±1 moves each target
+    ``reference_reach_deg`` from it). ``reset(options={"start_side":
     "back", "lying_pose": 3})`` picks the side (and the lying pose, any of 0–63 whatever
     ``lying_poses`` is) of one episode; ``lying_poses`` > 1 varies the lying pose. Works on
     every Nao type, on both in-process engines, on the league's robots, and on a real
