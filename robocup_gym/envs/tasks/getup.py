@@ -6,9 +6,10 @@ first reset for each side the environment lets the robot fall from a tilted pose
 comes to rest (torso position and orientation, joint angles); every episode then starts from
 that pose, placed instantly. So no part starts inside the ground, on any engine.
 
-On the Nao the actions correct a scripted get-up (:data:`GETUP_KEYFRAMES`), as Walk's correct its
-reference gait: the script alone already gets the robot up from most lying poses on the default
-engine, and a policy learns what it misses.
+On the Nao the actions correct a scripted get-up (:data:`GETUP_KEYFRAMES_BY_TYPE`: type 0's
+:data:`GETUP_KEYFRAMES` and the other types' own), as Walk's correct its reference gait: the
+script alone already gets the robot up from most lying poses on the default engine, and a
+policy learns what it misses.
 """
 
 from __future__ import annotations
