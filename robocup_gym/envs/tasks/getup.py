@@ -171,10 +171,10 @@ class GetUpConfig(EnvConfig):
     reference_motion: bool = True
     """The Nao: zero actions play a scripted get-up (:data:`GETUP_KEYFRAMES_BY_TYPE`, one per
     type and side: target angles held for a number of cycles, the right side mirroring the
-    left) and the action corrects it, ± ``reference_reach_deg`` around each target (a residual policy, as
-    Walk's over its reference gait). ``False``, or the ``velocity`` action mode: the action
-    alone sets the targets (velocities), over the window of ``target_around_start_deg`` (by
-    default each joint's whole range)."""
+    left) and the action corrects it, ± ``reference_reach_deg`` around each target (a residual
+    policy, as Walk's over its reference gait). ``False``, or the ``velocity`` action mode: the
+    action alone sets the targets (velocities), over the window of ``target_around_start_deg``
+    (by default each joint's whole range)."""
     script_robot_type: int | None = None
     """With ``reference_motion``: which Nao type's scripted get-up plays
     (:data:`GETUP_KEYFRAMES_BY_TYPE`; ``None``: the robot's own type's, type 0's where it has
