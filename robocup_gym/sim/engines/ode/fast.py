@@ -201,6 +201,7 @@ class FastLoops:
             compiled.address(rates),
             float(bound),
         )
+        self._bodies_args = (fns, len(bodies_all), ctypes.addressof(self._read_bodies))
         side_slot, sums = frp
         self._side_slot = np.ascontiguousarray(side_slot, dtype=np.int32)
         self._frp_args = (
@@ -240,7 +241,7 @@ class FastLoops:
     def save_bodies(self) -> np.ndarray:
         """The complete dynamic state of every body the state snapshot covers (position,
         quaternion, velocities, enabled; 14 numbers per body), for :meth:`restore_bodies`."""
-        fns, nb, bodies = self._read_args[:3]
+        fns, nb, bodies = self._bodies_args
         saved = np.empty((nb, 14))
         self._lib.ode_bodies(fns, nb, bodies, compiled.address(saved), 1)
         return saved
@@ -248,7 +249,7 @@ class FastLoops:
     def restore_bodies(self, saved: np.ndarray) -> None:
         """Put back the state :meth:`save_bodies` returned (the same ODE calls as
         ``OdeWorld.sense_contacts``'s Python loop)."""
-        fns, nb, bodies = self._read_args[:3]
+        fns, nb, bodies = self._bodies_args
         self._lib.ode_bodies(fns, nb, bodies, compiled.address(saved), 0)
 
     def place(self, robot: int, positions: np.ndarray, rotations: np.ndarray, asleep: bool) -> None:

@@ -322,18 +322,18 @@ class OdeWorld(Senses):
         """Robot index → the external force on its torso (:meth:`set_torso_force`)."""
         self._out_pair = np.zeros(len(self._feedback), dtype=np.int32)
         self._out_pos = np.zeros((len(self._feedback), 3))
-        self._pair_frp = [(p[5], p[6]) for p in self._pairs]
-        """Per pair, the force perceptors ``(robot, name)`` of its two bodies (or ``None``)."""
-        self._frp_slots = list(dict.fromkeys(f for pair in self._pair_frp for f in pair if f))
-        """Every force perceptor ``(robot, name)`` that a pair can touch (the compiled sums'
-        rows)."""
+        pair_frp = [(p[5], p[6]) for p in self._pairs]  # each body's (robot, name) or None
+        self._frp_slots = list(dict.fromkeys(f for pair in pair_frp for f in pair if f))
+        """Every force perceptor ``(robot, name)`` that a pair can touch: the rows of
+        ``_frp_sums``."""
         slot_of = {f: k for k, f in enumerate(self._frp_slots)}
         self._pair_frp_slot = np.array(
-            [[-1 if f is None else slot_of[f] for f in pair] for pair in self._pair_frp],
+            [[-1 if f is None else slot_of[f] for f in pair] for pair in pair_frp],
             dtype=np.int32,
         ).reshape(-1, 2)
+        """Per pair, the ``_frp_slots`` row of its two bodies' force perceptors (-1: none)."""
         self._frp_sums = np.zeros((max(len(self._frp_slots), 1), 8))
-        """Per force perceptor, the compiled loop's sums of the last step (``ode_frp``)."""
+        """Per force perceptor, the last step's sums (:meth:`_read_feedback`)."""
         self._frp_pending = False
         """Whether the robots' ``frp`` are still to be made from the sums (:meth:`_sync_frp`)."""
         # the state snapshot every reading comes from (one C call per step, see _read_state)
@@ -817,23 +817,26 @@ class OdeWorld(Senses):
         per foot/toe the total contact force on it and the contacts' centre weighted by the
         magnitude of each contact's force, world frame. ``m`` sensed contacts: contact ``k``
         has feedback slot ``k``, pair ``self._out_pair[k]`` and position ``self._out_pos[k]``
-        (written alike by the compiled and the Python contact loops)."""
+        (written alike by the compiled and the Python contact loops). Both sum into
+        ``_frp_sums`` (the compiled ``ode_frp``, or this Python loop: the same additions in
+        the same order); :meth:`_sync_frp` makes the readings when they are read."""
+        self._frp_pending = True
         if self._fast is not None:
             self._fast.frp(m)
-            self._frp_pending = True  # the robots' frp are made from the sums when read
             return
-        sums: dict[tuple[int, str], list] = {}
+        sums: dict[int, list[float]] = {}
         fb = self._feedback_view
         for k in range(m):
             p = int(self._out_pair[k])
             pos = self._out_pos[k]
-            for frp, f in ((self._pair_frp[p][0], fb[k, 0:3]), (self._pair_frp[p][1], fb[k, 8:11])):
-                if frp is None:
+            for slot, f in (
+                (self._pair_frp_slot[p, 0], fb[k, 0:3]),
+                (self._pair_frp_slot[p, 1], fb[k, 8:11]),
+            ):
+                if slot < 0:
                     continue
                 fx, fy, fz = float(f[0]), float(f[1]), float(f[2])
-                acc = sums.get(frp)
-                if acc is None:
-                    acc = sums[frp] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+                acc = sums.setdefault(int(slot), [0.0] * 8)
                 magnitude = math.sqrt(fx * fx + fy * fy + fz * fz)
                 acc[0] += fx
                 acc[1] += fy
@@ -842,21 +845,14 @@ class OdeWorld(Senses):
                 acc[4] += magnitude * float(pos[1])
                 acc[5] += magnitude * float(pos[2])
                 acc[6] += magnitude
-        for r in self.robots:
-            r.frp = {}
-        for key in self._frp_slots:  # in a fixed order, as the compiled sums come
-            a = sums.get(key)
-            if a is None:
-                continue
-            i, name = key
-            total = a[6]
-            centre = np.array(a[3:6]) / total if total > 0.0 else None
-            self.robots[i].frp[name] = (np.array(a[0:3]), centre)
+                acc[7] += 1.0
+        self._frp_sums[:] = 0.0
+        for slot, acc in sums.items():
+            self._frp_sums[slot] = acc
 
     def _sync_frp(self) -> None:
-        """Make every robot's ``frp`` from the compiled loop's sums of the last step, if not
-        done yet (what :meth:`_read_feedback`'s Python loop makes at once; the arrays are only
-        built for a step whose perception is read)."""
+        """Make every robot's ``frp`` from the last step's sums (:meth:`_read_feedback`), if not
+        done yet: the arrays are only built for a step whose perception is read."""
         if not self._frp_pending:
             return
         self._frp_pending = False
