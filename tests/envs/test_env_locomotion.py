@@ -495,8 +495,9 @@ def test_each_nao_type_plays_its_own_script_unless_told_another():
 
     assert set(GETUP_KEYFRAMES_BY_TYPE) == {0, 1, 2, 3, 4}
     for t in range(5):
-        frames = getup_keyframes(t)
-        assert frames is GETUP_KEYFRAMES_BY_TYPE.get(t, GETUP_KEYFRAMES_BY_TYPE[0])
+        assert getup_keyframes(t) is GETUP_KEYFRAMES_BY_TYPE[t]
+    with pytest.raises(ValueError, match="Nao types are 0-4, got 5"):
+        getup_keyframes(5)
 
     def first_targets(**kw):
         env = GetUp(engine="mujoco", **kw)
@@ -509,7 +510,7 @@ def test_each_nao_type_plays_its_own_script_unless_told_another():
     assert first_targets(robot_type=0, script_robot_type=1)["back"] == pytest.approx(own["back"])
     assert zero["back"] == pytest.approx(plain["back"])
     assert not np.allclose(own["back"], plain["back"])
-    for bad in (5, -1, 1.0, "1"):
+    for bad in (5, -1, 1.0, "1", True):
         with pytest.raises(EnvConfigError, match="script_robot_type"):
             GetUp(engine="mujoco", script_robot_type=bad)
 

@@ -92,6 +92,15 @@ GETUP_KEYFRAMES_BY_TYPE: dict[int, dict[str, tuple[tuple[float, tuple[float, ...
             (14, (-40.1, 4.8, -120.0, 1.0, -4.1, 45.0, 22.3, -42.4, 18.8, -8.3)),
         ),
     },
+    2: {
+        "front": (
+            (19, (-113.8, 11.9, 120.0, 0.5, -70.1, 39.0, 97.9, -130.0, 72.9, -20.1)),
+            (29, (-109.1, 13.5, 114.2, 1.0, -90.0, 25.8, 100.0, -18.8, -45.0, 25.0)),
+            (16, (116.5, -1.0, 65.3, -14.7, 1.0, 45.0, -25.0, 1.0, -31.8, -7.5)),
+            (25, (-107.7, 5.6, -53.5, 1.0, -11.8, 38.8, -12.5, -5.9, -2.2, 0.8)),
+        ),
+        "back": GETUP_KEYFRAMES["back"],
+    },
     3: {
         "front": (
             (17, (-109.5, 26.3, 120.0, -50.1, -67.6, 16.2, 84.2, -130.0, 75.0, -39.2)),
@@ -105,15 +114,6 @@ GETUP_KEYFRAMES_BY_TYPE: dict[int, dict[str, tuple[tuple[float, tuple[float, ...
             (30, (95.4, 23.0, -120.0, 1.0, -87.1, 3.5, 100.0, -24.5, -45.0, 25.0)),
             (12, (-45.2, -1.0, -116.3, 1.0, -9.0, 45.0, 11.7, -29.3, 2.4, 23.6)),
         ),
-    },
-    2: {
-        "front": (
-            (19, (-113.8, 11.9, 120.0, 0.5, -70.1, 39.0, 97.9, -130.0, 72.9, -20.1)),
-            (29, (-109.1, 13.5, 114.2, 1.0, -90.0, 25.8, 100.0, -18.8, -45.0, 25.0)),
-            (16, (116.5, -1.0, 65.3, -14.7, 1.0, 45.0, -25.0, 1.0, -31.8, -7.5)),
-            (25, (-107.7, 5.6, -53.5, 1.0, -11.8, 38.8, -12.5, -5.9, -2.2, 0.8)),
-        ),
-        "back": GETUP_KEYFRAMES["back"],
     },
     4: {
         "front": (
@@ -136,8 +136,15 @@ of target noise, for the task's return and then for getting up within 80 cycles
 
 
 def getup_keyframes(robot_type: int) -> dict[str, tuple[tuple[float, tuple[float, ...]], ...]]:
-    """The scripted get-up (keyframes per side) that Nao type ``robot_type`` plays."""
-    return GETUP_KEYFRAMES_BY_TYPE.get(int(robot_type), GETUP_KEYFRAMES)
+    """The scripted get-up (keyframes per side) that Nao type ``robot_type`` (0–4) plays.
+
+    Raises:
+        ValueError: for another number.
+    """
+    frames = GETUP_KEYFRAMES_BY_TYPE.get(robot_type)
+    if frames is None:
+        raise ValueError(f"Nao types are 0-4, got {robot_type!r}")
+    return frames
 
 
 DROP_CYCLES = 100
@@ -177,10 +184,10 @@ class GetUpConfig(EnvConfig):
     (by default each joint's whole range)."""
     script_robot_type: int | None = None
     """With ``reference_motion``: which Nao type's scripted get-up plays
-    (:data:`GETUP_KEYFRAMES_BY_TYPE`; ``None``: the robot's own type's, type 0's where it has
-    none). The shipped ``get-up``, a small residual learnt over type 0's script, does better on
-    types 1 and 3 over their own scripts than over type 0's (docs/training.md, *Scripts per
-    Nao type*), so ``None`` serves it too; a number pins one script."""
+    (:data:`GETUP_KEYFRAMES_BY_TYPE`; ``None``: the robot's own type's). The shipped ``get-up``,
+    a small residual learnt over type 0's script, does better on types 1 and 3 over their own
+    scripts than over type 0's (docs/training.md, *Scripts per Nao type*), so ``None`` serves it
+    too; a number pins one script."""
     reference_reach_deg: float = 5.0
     """With ``reference_motion``: how far an action of ±1 moves a target from the scripted
     one, deg (clipped to the joint's range). Small: the script stands random noise of 1–2°
@@ -228,12 +235,12 @@ class GetUpConfig(EnvConfig):
             raise EnvConfigError(
                 f"reference_reach_deg must be > 0 deg, got {self.reference_reach_deg!r}"
             )
-        if self.script_robot_type is not None and not (
-            isinstance(self.script_robot_type, int | np.integer)
-            and 0 <= self.script_robot_type <= 4
-        ):
+        st = self.script_robot_type
+        if st is not None and not (
+            isinstance(st, int | np.integer) and not isinstance(st, bool) and st in (0, 1, 2, 3, 4)
+        ):  # as EnvConfig checks robot_type
             raise EnvConfigError(
-                f"script_robot_type must be a Nao type 0..4 or None, got {self.script_robot_type!r}"
+                f"script_robot_type must be one of the integers 0, 1, 2, 3, 4 or None, got {st!r}"
             )
         if self.reference_motion and self.robot != "nao":
             raise EnvConfigError(
