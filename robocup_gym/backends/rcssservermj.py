@@ -29,6 +29,7 @@ from robocup_gym.backends.base import BackendError
 from robocup_gym.backends.process import ChildProcess, _death_signal_preexec, free_ports
 from robocup_gym.protocol.framing import FrameDecoder, encode_frame, recv_frame
 from robocup_gym.protocol.league import format_pd_commands
+from robocup_gym.sim.engines.rcsssmj.join import SERVER_ENVIRONMENT
 
 __all__ = ["LeagueAgentLink", "RcssServerMJProcess", "format_pd_commands"]
 
@@ -192,6 +193,7 @@ class RcssServerMJProcess(ChildProcess):
             self.proc = subprocess.Popen(
                 cmd,
                 cwd=self.folder,
+                env={**os.environ, **SERVER_ENVIRONMENT},  # a join the same in every process
                 stdin=subprocess.DEVNULL,
                 stdout=log,
                 stderr=subprocess.STDOUT,

@@ -54,6 +54,42 @@ def test_without_rcsssmj_the_error_says_how_to_install_it(monkeypatch):
         league_robot_names()
 
 
+_JOIN_PROBE = """
+import hashlib, sys
+import numpy as np
+from robocup_gym.sim.engines.rcsssmj import LeagueWorld
+junk = [bytearray(np.random.default_rng().bytes(4096 + 997 * k)) for k in range(200)]
+del junk[::2]  # freed garbage of many sizes for the next allocations
+w = LeagueWorld([("K1", "A", 1), ("T1", "B", 1)], idle_cycles=3)
+ctrl = w.sim.mj_data.ctrl
+assert np.isfinite(ctrl).all() and np.abs(ctrl).max() < 1e3, ctrl
+p = w.cycle()
+print(hashlib.sha256(ctrl.tobytes() + b"".join(p)).hexdigest())
+"""
+
+
+@pytest.mark.skipif(
+    not __import__("robocup_gym.sim.engines.rcsssmj.join", fromlist=["x"]).zero_fill_available(),
+    reason="zero-filled joins need glibc's mallopt (Linux)",
+)
+def test_a_join_is_the_same_whatever_the_heap_held():
+    """MuJoCo's recompile reads a joining robot's first controls partly from uninitialised
+    memory; with the join's allocations zero-filled, processes whose heaps hold different garbage
+    (glibc's perturbation bytes 1 and 170 everywhere else, a long environment) start the same."""
+    import os
+    import subprocess
+
+    digests = set()
+    for extra in ({"MALLOC_PERTURB_": "1"}, {"MALLOC_PERTURB_": "170"}, {"PAD": "x" * 5000}):
+        env = {**os.environ, **extra}
+        out = subprocess.run(
+            [sys.executable, "-c", _JOIN_PROBE], env=env, capture_output=True, text=True
+        )
+        assert out.returncode == 0, out.stderr[-2000:]
+        digests.add(out.stdout.split()[-1])
+    assert len(digests) == 1, digests
+
+
 @pytest.mark.parametrize(("robot", "cycles"), [("T1", 500), ("K1", 200)])
 def test_the_in_process_world_is_the_real_server(robot, cycles):
     """500 cycles of random PD targets on every joint of a T1 (200 for a K1): every perception

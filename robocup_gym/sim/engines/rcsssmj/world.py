@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 
 from robocup_gym.robot.league import RcsssmjUnavailableError, clearance, league_robot
+from robocup_gym.sim.engines.rcsssmj.join import zero_filled_allocations
 from robocup_gym.sim.physics import finite_force
 from robocup_gym.types import PDCommand
 
@@ -113,13 +114,14 @@ class LeagueWorld:
             self.sim.generate_perceptions()
             self.sim.step([])
         params = [_Player(str(m), str(t), int(n)) for m, t, n in players]
-        self.agents = self.sim.add_players(params)
-        # rcsssmj recompiles the model when players join, and the new actuators' controls are
-        # left as MuJoCo's recompile leaves them: not always zero (rcssservermj itself then
-        # sometimes warns "Nan, Inf or huge value in CTRL"). Here they start at zero, as they
-        # are on the server whenever its join is reproducible at all.
-        self.sim.mj_data.ctrl[:] = 0.0
-        mujoco.mj_forward(self.sim.mj_model, self.sim.mj_data)
+        # rcsssmj recompiles the model when players join, and MuJoCo's recompile gives the new
+        # actuators controls read partly from uninitialised memory (see .join): zero-filled here,
+        # as on a server started by RcssServerMJProcess, the join is the same in every process.
+        with zero_filled_allocations() as zero_filled:
+            self.agents = self.sim.add_players(params)
+        if not zero_filled:  # no glibc: deterministic, but not the server's start to the byte
+            self.sim.mj_data.ctrl[:] = 0.0
+            mujoco.mj_forward(self.sim.mj_model, self.sim.mj_data)
         bad = [p for p, a in zip(params, self.agents, strict=True) if a is None]
         if bad:
             raise ValueError(
