@@ -213,7 +213,9 @@ class Referee:
         self.half = 1
         self.mode_cycles = 0
         self.kickoffs_this_half = 0
-        self.last_touch: tuple[str, int] | None = None
+        self.last_touch: Player | None = None
+        """The player who touched the ball last (forgotten when that player leaves the game,
+        as rcssserver3d no longer finds the agent then)."""
         self.touched_in_mode = False
         self.spot: np.ndarray | None = None
         self.last_inside_x = 0.0
@@ -327,7 +329,9 @@ class Referee:
             by_index = {p.index: p for p in players}
             toucher = next((by_index[i] for i in sorted(touching) if i in by_index), None)
         if toucher is not None:
-            self.last_touch = (toucher.side, toucher.unum)
+            self.last_touch = toucher
+        elif self.last_touch is not None and all(p.key != self.last_touch.key for p in players):
+            self.last_touch = None
             self.touched_in_mode = True
         if not self.rules:
             return
@@ -393,9 +397,13 @@ class Referee:
             log.info("goal for the %s team: %d:%d", scorer, g.score_left, g.score_right)
             self.set_play_mode("Goal_Left" if scorer == "left" else "Goal_Right")
             return
-        last = self.last_touch[0] if self.last_touch else None
+        if self.last_touch is None:
+            # rcssserver3d awards nothing for a ball off the field that no player touched (a
+            # trainer put it there): it lies where it is until it is moved or played
+            return
+        last = self.last_touch.side
         if abs(y) >= FIELD_HALF_WIDTH + BALL_RADIUS + 0.001:
-            side = other(last) if last else ("left" if y > 0 else "right")
+            side = other(last)
             spot_x = max(-FIELD_HALF_LENGTH, min(FIELD_HALF_LENGTH, self.last_inside_x))
             spot = np.array([spot_x, math.copysign(FIELD_HALF_WIDTH - BALL_RADIUS, y), BALL_RADIUS])
             self.set_play_mode("KickIn_Left" if side == "left" else "KickIn_Right", spot=spot)

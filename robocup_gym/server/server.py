@@ -644,7 +644,7 @@ class SimServer:
                     conn.warn("agent move %r ignored: not finite", cmd.move)
             if cmd.rot is not None:  # the SPL fork's: turn about the torso centre
                 if all(math.isfinite(v) for v in cmd.rot):
-                    host.teleport(i, host.world.torso_position(i), quat=tc.quat_from_rot(cmd.rot))
+                    host.teleport(i, rot_deg=cmd.rot)
                 else:
                     conn.warn("agent rot %r ignored: not finite", cmd.rot)
         elif kind is tc.PlayModeCmd:

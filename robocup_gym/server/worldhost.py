@@ -203,31 +203,24 @@ class WorldHost:
     def teleport(
         self,
         index: int,
-        pos: Sequence[float],
+        pos: Sequence[float] | None = None,
         *,
         heading_deg: float | None = None,
-        quat: Sequence[float] | None = None,
+        rot_deg: Sequence[float] | None = None,
     ) -> None:
-        """Move robot ``index`` rigidly: torso centre to ``pos`` (x, y, z), orientation kept
-        (or upright with ``heading_deg``, or ``quat``), joint angles and motor targets kept,
-        every velocity zeroed (SimSpark's ``MoveAgent`` / ``MoveAndRotateAgent``).
-
-        A robot whose motors are all at rest (every target 0) is left asleep where it was put,
-        as on rcssserver3d: ODE's auto-disable keeps a resting robot's bodies disabled through
-        a move, so it hangs there (e.g. 2 mm above the floor: accelerometer 9.81, gyro 0, no
-        foot contact) until its first non-zero joint velocity (fixtures README)."""
-        w = self.world
-        x, y, z = (float(v) for v in pos)
-        if not all(math.isfinite(v) for v in (x, y, z)):
-            return
-        targets = w.motor_targets(index)
-        asleep = not np.any(targets)
+        """Move robot ``index`` rigidly as rcssserver3d moves an agent: torso centre to ``pos``
+        (x, y, z) with the orientation kept (``MoveAgent``), or turned upright to face
+        ``heading_deg`` (``MoveAndRotateAgent``), or turned about the torso centre to the
+        orientation ``rot_deg`` (``RotateAgent``); every velocity zeroed, joint angles and
+        motor targets kept, and a robot that was asleep (ODE's auto-disable: resting) stays
+        asleep where it is put, hanging there until its first non-zero joint velocity
+        (the world's ``move_robot``). A value that is not finite changes nothing."""
+        values = [*(pos or ()), *(rot_deg or ())]
         if heading_deg is not None:
-            w.place_robot(index, x, y, z=z, heading_deg=heading_deg, asleep=asleep)
-        else:
-            q = w.torso_quat(index) if quat is None else np.asarray(quat, float)
-            w.place_robot(index, x, y, z=z, quat=q, asleep=asleep)
-        w.set_motor_targets(index, targets)
+            values.append(heading_deg)
+        if not all(math.isfinite(float(v)) for v in values):
+            return
+        self.world.move_robot(index, pos, heading_deg=heading_deg, rot_deg=rot_deg)
 
     def shift(self, index: int, dx: float, dy: float) -> None:
         """Translate robot ``index`` by (dx, dy), keeping its height and orientation."""

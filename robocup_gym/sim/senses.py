@@ -179,9 +179,7 @@ class Senses:
         pose = self._beam_pose(index, x, y, rot_deg)
         if pose is None:
             return False
-        targets = self.motor_targets(index)
-        self.place_robot(index, pose[0], pose[1], z=self.BEAM_HEIGHT_M, heading_deg=pose[2])
-        self.set_motor_targets(index, targets)
+        self.move_robot(index, (pose[0], pose[1], self.BEAM_HEIGHT_M), heading_deg=pose[2])
         return True
 
     # ------------------------------------------------------------------ hear / say

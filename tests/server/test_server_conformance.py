@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 
 from robocup_gym.protocol.perceptors import parse_perception
+from robocup_gym.server import SimServer
 from robocup_gym.server.client import AgentClient, MonitorClient
 
+from . import kick_procedure
 from .conftest import HOST
 
 SCENE = "(scene rsg/agent/nao/nao_hetero.rsg 0)"
@@ -168,14 +170,17 @@ def test_serve_reads_a_config_file_and_flags_win(tmp_path, monkeypatch, capsys):
 
 
 def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
-    """rcssserver3d (fixtures README): after a trainer move the resting robot hangs where it was
-    put, ~2 mm above the floor (accelerometer 9.81, gyro 0, no foot contact), until its first
-    non-zero joint velocity; then it lands."""
+    """rcssserver3d (fixtures README): after a trainer move a resting robot (ODE's auto-disable
+    has put it to sleep) hangs where it was put (accelerometer 9.81, gyro 0, no foot contact),
+    until its first non-zero joint velocity; then it lands."""
     with (
         AgentClient(HOST, server.agent_port, timeout=3.0) as c,
         MonitorClient(HOST, server.monitor_port, timeout=3.0) as m,
     ):
         c.handshake("Hover", 1)
+        for _ in range(40):  # it lands and comes to rest
+            c.send("(syn)")
+            _answer(c)
         m.send("(playMode PlayOn)(agent (unum 1) (team Left) (move -1.0 0.0 0.386 -90.0))")
         time.sleep(0.05)
         percepts = []
@@ -183,7 +188,7 @@ def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
             c.send("(syn)")
             percepts.append(parse_perception(_answer(c)))
         i = server.world_host.index(server.agents[0].key)
-        assert server.world.torso_position(i)[2] == pytest.approx(0.386, abs=1e-9)
+        assert server.world.torso_position(i)[2] == pytest.approx(0.386, abs=1e-7)
         last = percepts[-1]
         assert not last.force_sensors  # no foot contact
         np.testing.assert_allclose(last.accel, [0.0, 0.0, 9.81], atol=0.01)
@@ -194,6 +199,25 @@ def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
             c.send("(syn)")
         _answer(c)
         assert server.world.torso_position(i)[2] < 0.385  # landed
+
+
+def test_a_robot_moved_while_it_moves_falls_where_it_is_put(make_server):
+    """A robot that is not at rest (here: just created, falling to its start) is awake when the
+    trainer moves it: it falls from where it was put and lands two cycles later, as on
+    rcssserver3d."""
+    server = make_server()
+    with (
+        AgentClient(HOST, server.agent_port, timeout=3.0) as c,
+        MonitorClient(HOST, server.monitor_port, timeout=3.0) as m,
+    ):
+        c.handshake("Drop", 1)
+        m.send("(playMode PlayOn)(agent (unum 1) (team Left) (move -1.0 0.0 0.386 -90.0))")
+        time.sleep(0.05)
+        feet = []
+        for _ in range(5):
+            c.send("(syn)")
+            feet.append(bool(parse_perception(_answer(c)).force_sensors))
+        assert feet == [False, False, True, True, True]
 
 
 def test_the_forks_rot_turns_the_robot_about_its_torso(make_server):
@@ -219,3 +243,60 @@ def test_the_forks_rot_turns_the_robot_about_its_torso(make_server):
         assert min(np.abs(q - want).max(), np.abs(q + want).max()) < 0.02  # one cycle falling
         np.testing.assert_allclose(server.world.torso_position(0)[:2], (-2.0, 1.0), atol=0.01)
         np.testing.assert_allclose(server.world.joint_angles_deg(0), joints, atol=0.5)
+
+
+@pytest.mark.parametrize("trainer_first", [True, False], ids=["trainer-first", "agent-first"])
+def test_the_real_servers_kick_procedure_gives_its_result(trainer_first):
+    """The client of the real server's scripted kick (``kick_D.json``'s procedure, its messages
+    byte for byte; ``kick_procedure.py``) against ``serve`` on SimSpark's physics: the resting
+    robot moved by the trainer hangs without foot contact until its first motor command, the ball
+    first moves in cycle 64 ± 1 and travels the real server's 2.307 m (to 1 mm), in either order
+    of trainer and agent messages."""
+    server = SimServer(0, 0, HOST, sync=True, real_time=False, seed=1, engine="ode")
+    server.start_in_thread()
+    try:
+        run = kick_procedure.run(
+            HOST, server.agent_port, server.monitor_port, trainer_first=trainer_first
+        )
+    finally:
+        server.stop()
+    fixture = kick_procedure.FIXTURE
+    for accel in run.accel_before:  # asleep: no gravity felt, no contact
+        np.testing.assert_allclose(accel, [0.0, 0.0, 9.81], atol=1e-9)
+    still = fixture["command_sequence"][0]["cycles"]
+    assert not any(run.feet[: still + 1]), "foot contact while the moved robot should hang"
+    assert run.feet[still + 2] == {"lf", "rf"}  # it lands two cycles after the first command
+    assert abs(run.first_ball_movement() - fixture["ball_first_moves_at_cycle"]) <= 1
+    assert run.ball_travel() == pytest.approx(fixture["ball_displacement_xy_m"], abs=1e-3)
+
+
+def test_the_kick_procedure_on_a_real_server_equals_serve():
+    """Where a real rcssserver3d is installed: the same client against it and against ``serve``
+    sees the same foot contacts in every cycle until the kick (none while the robot hangs, then
+    its landing) and the same ball travel (to 0.5 mm: the real server repeats its own result
+    only to ~0.3 mm, and single foot contacts in the kick and the fall that follows flip from
+    run to run)."""
+    from robocup_gym.backends.process import RcssServerNotFoundError, ServerProcess, find_binary
+
+    try:
+        binary = find_binary()
+    except RcssServerNotFoundError as exc:
+        pytest.skip(f"no real rcssserver3d here: {str(exc).split('. ')[0]}")
+    with open(binary, "rb") as f:
+        if f.read(2) == b"#!":
+            pytest.skip(f"{binary} is a script, not a real rcssserver3d")
+    real = ServerProcess(binary, monitor_step=0.04)
+    agent_port, monitor_port = real.start()
+    try:
+        real_run = kick_procedure.run(HOST, agent_port, monitor_port)
+    finally:
+        real.stop()
+    server = SimServer(0, 0, HOST, sync=True, real_time=False, seed=1, engine="ode")
+    server.start_in_thread()
+    try:
+        served = kick_procedure.run(HOST, server.agent_port, server.monitor_port)
+    finally:
+        server.stop()
+    kick = kick_procedure.FIXTURE["ball_first_moves_at_cycle"]
+    assert served.feet[: kick - 5] == real_run.feet[: kick - 5]
+    assert served.ball_travel() == pytest.approx(real_run.ball_travel(), abs=5e-4)

@@ -168,7 +168,7 @@ def test_goal_scores_and_restarts_with_kickoff(game):
 def test_ball_out_gives_kick_in_and_goal_kick(game):
     host, ref, players = game
     ref.set_play_mode("PlayOn")
-    ref.last_touch = ("left", 1)
+    ref.last_touch = players[0]
     host.set_ball((3.0, -10.2, 0.042), (0, 0, 0))
     _settle(host, ref, players, 1)
     assert ref.play_mode == "KickIn_Right"
@@ -176,17 +176,34 @@ def test_ball_out_gives_kick_in_and_goal_kick(game):
     p = host.ball_state()[0]
     assert abs(p[1] + 9.958) < 1e-3
     ref.set_play_mode("PlayOn")
-    ref.last_touch = ("left", 1)  # over its own goal line: corner for the attackers
+    ref.last_touch = players[0]  # over its own goal line: corner for the attackers
     host.set_ball((-15.2, 4.0, 0.042), (0, 0, 0))
     _settle(host, ref, players, 1)
     assert ref.play_mode == "corner_kick_right"
     _settle(host, ref, players, 60)
     np.testing.assert_allclose(host.ball_state()[0][:2], [-14.958, 5.483], atol=1e-3)
     ref.set_play_mode("PlayOn")
-    ref.last_touch = ("left", 1)
+    ref.last_touch = players[0]
     host.set_ball((15.2, 4.0, 0.042), (0, 0, 0))
     _settle(host, ref, players, 1)
     assert ref.play_mode == "goal_kick_right"
+
+
+def test_a_ball_off_the_field_that_nobody_touched_stays_in_play(game):
+    """rcssserver3d awards no set piece for a ball that left the field without a toucher (a
+    trainer parked it there), nor for one last touched by a player who has left the game."""
+    host, ref, players = game
+    ref.set_play_mode("PlayOn")
+    host.set_ball((20.0, 10.0, 0.042), (0, 0, 0))
+    _settle(host, ref, players, 5)
+    assert ref.play_mode == "PlayOn"
+    np.testing.assert_allclose(host.ball_state()[0][:2], [20.0, 10.0], atol=1e-6)
+    ref.last_touch = players[0]
+    _settle(host, ref, players[1:], 1)  # the toucher left
+    assert ref.last_touch is None and ref.play_mode == "PlayOn"
+    ref.last_touch = players[1]
+    _settle(host, ref, players, 1)
+    assert ref.play_mode == "corner_kick_left"  # the right team put it over its own goal line
 
 
 def test_before_kickoff_and_half_time(game):

@@ -46,7 +46,7 @@ from robocup_gym.sim.engines.mujoco.scene import (
 )
 from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
-from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat
+from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat, rigid_move
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import (
@@ -88,6 +88,10 @@ def _contiguous(ids: np.ndarray) -> slice | None:
         return slice(int(ids[0]), int(ids[0]) + n)
     return None
 
+
+_AUTO_DISABLE_SPEED = 0.01
+"""ODE's default auto-disable thresholds (linear m/s, angular rad/s) that SimSpark keeps: a body
+slower than both is resting (spec §7.1)."""
 
 @dataclass(kw_only=True)
 class RobotState(AgentState):
@@ -764,6 +768,51 @@ class World(Senses):
         self._update_sleepers()
         if forward:
             self.forward()
+
+    def move_robot(
+        self,
+        index: int,
+        pos: Sequence[float] | None = None,
+        *,
+        heading_deg: float | None = None,
+        rot_deg: Sequence[float] | None = None,
+    ) -> None:
+        """Move robot ``index`` rigidly as rcssserver3d moves an agent (the trainer's ``move``,
+        ``pos`` and ``rot``, ``beam``, the referee; see
+        :meth:`robocup_gym.sim.engines.ode.world.OdeWorld.move_robot`): the torso to its new
+        pose (:func:`robocup_gym.sim.pose.rigid_move`), joint angles, motor targets, pending
+        commands and sensor memory kept, every velocity zero. This world has no auto-disable:
+        a robot that is still (no motor target, every velocity under ODE's auto-disable
+        thresholds, 0.01 m/s and 0.01 rad/s) is taken to be resting and left asleep, as ODE's
+        auto-disable leaves a resting robot; one that moves falls from where it is put."""
+        for name, value in (("pos", pos), ("rot_deg", rot_deg)):
+            if value is not None and not np.all(np.isfinite(np.asarray(value, float))):
+                raise ValueError(f"robot move {name} must be finite, got {value!r}")
+        if heading_deg is not None and not math.isfinite(heading_deg):
+            raise ValueError(f"robot move heading_deg must be finite, got {heading_deg}")
+        r = self.robot(index)
+        d = self.data
+        still = not np.any(r.targets) and (
+            np.abs(d.qvel[r.qvel_root : r.qvel_root + 6]).max() < _AUTO_DISABLE_SPEED
+            and np.abs(d.qvel[r.qvel_joints]).max(initial=0.0) < _AUTO_DISABLE_SPEED
+        )
+        positions, rotations = self.body_frames(index)
+        new_pos, new_rot = rigid_move(
+            positions[:1], rotations[:1], pos, heading_deg=heading_deg, rot_deg=rot_deg
+        )
+        a = r.qpos_root
+        d.qpos[a : a + 3] = new_pos[0]
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, new_rot[0].ravel())
+        d.qpos[a + 3 : a + 7] = quat
+        d.qvel[r.qvel_root : r.qvel_root + 6] = 0.0
+        d.qvel[r.qvel_joints] = 0.0
+        d.qacc_warmstart[:] = 0.0
+        r.asleep = r.asleep or still
+        if r.asleep:
+            r.sleep_qpos = np.concatenate((d.qpos[a : a + 7], d.qpos[r.qpos_joints]))
+        self._update_sleepers()
+        self.forward()
 
     def _update_sleepers(self) -> None:
         self._sleepers = [r for r in self.robots if r.asleep]

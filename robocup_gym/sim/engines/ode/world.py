@@ -46,7 +46,7 @@ from robocup_gym.sim.engines.ode import lib as ode
 from robocup_gym.sim.engines.ode.fast import SANE_SPEED, FastLoops
 from robocup_gym.sim.engines.ode.fast import load as load_fast
 from robocup_gym.sim.field import GOAL_BOXES, WALLS
-from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat
+from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat, rigid_move
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import AgentCommand, ForceResistance, GameState, GroundTruth
@@ -566,6 +566,45 @@ class OdeWorld(Senses):
         self._sync_frp()  # the sums of the last step must not overwrite this later
         r.frp = {}
         r.last_frp = {}
+        self._fresh = False
+
+    def move_robot(
+        self,
+        index: int,
+        pos: Sequence[float] | None = None,
+        *,
+        heading_deg: float | None = None,
+        rot_deg: Sequence[float] | None = None,
+    ) -> None:
+        """Move robot ``index`` rigidly as rcssserver3d moves an agent (the trainer's ``move``,
+        ``pos`` and ``rot``, ``beam``, the referee): every body keeps its place relative to the
+        torso as the physics left it (:func:`robocup_gym.sim.pose.rigid_move`, in SimSpark's
+        single precision), all velocities become zero, and nothing else changes: joint motor
+        targets, pending commands, the sensors' memory, and whether ODE's auto-disable has the
+        bodies asleep (a robot that was resting hangs where it was put until a motor or a
+        moving body wakes it, as on the real server).
+
+        Raises:
+            ValueError: a position or angle that is not finite.
+        """
+        for name, value in (("pos", pos), ("rot_deg", rot_deg)):
+            if value is not None and not np.all(np.isfinite(np.asarray(value, float))):
+                raise ValueError(f"robot move {name} must be finite, got {value!r}")
+        if heading_deg is not None and not math.isfinite(heading_deg):
+            raise ValueError(f"robot move heading_deg must be finite, got {heading_deg}")
+        lib = self._lib
+        bodies = self.robots[index].bodies
+        positions, rotations = self.body_frames(index)
+        new_pos, new_rot = rigid_move(
+            positions, rotations, pos, heading_deg=heading_deg, rot_deg=rot_deg
+        )
+        turned = heading_deg is not None or rot_deg is not None
+        for k, body in enumerate(bodies):
+            lib.dBodySetPosition(body, *new_pos[k].tolist())
+            if turned:
+                lib.dBodySetRotation(body, _mat3(new_rot[k]))
+            lib.dBodySetLinearVel(body, 0.0, 0.0, 0.0)
+            lib.dBodySetAngularVel(body, 0.0, 0.0, 0.0)
         self._fresh = False
 
     @staticmethod
