@@ -1,5 +1,6 @@
-"""The measurement procedure of the real server's scripted kick (``robocup_gym/data/kick_D.json``), message for message,
-as an independent client runs it against any server that speaks rcssserver3d's protocol.
+"""The measurement procedure of the real server's scripted kick (``robocup_gym/data/kick_D.json``),
+message for message, as an independent client runs it against any server that speaks
+rcssserver3d's protocol.
 
 The fixture's ``procedure``: connect a type-0 Nao (sync mode), ``beam -1 0 0``, 20 cycles of
 zero joint velocities, attach a monitor; one trainer message with the ``move`` of

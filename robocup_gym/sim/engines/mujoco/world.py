@@ -93,6 +93,7 @@ _AUTO_DISABLE_SPEED = 0.01
 """ODE's default auto-disable thresholds (linear m/s, angular rad/s) that SimSpark keeps: a body
 slower than both is resting (spec §7.1)."""
 
+
 @dataclass(kw_only=True)
 class RobotState(AgentState):
     """Book-keeping of one robot in the world: ids into the MuJoCo model, motor state, and (from
