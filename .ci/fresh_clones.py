@@ -51,7 +51,7 @@ def summary_line(output: str) -> str:
     return lines[-1] if lines else ""
 
 
-def run_clone(path: Path, pytest_args: str, log_dir: Path) -> dict:
+def run_clone(path: Path, pytest_args: str, log_dir: Path, name: str) -> dict:
     path.parent.mkdir(parents=True, exist_ok=True)
     subprocess.run(["git", "clone", "-q", str(REPO), str(path)], check=True)
     env = {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "PYTHONPATH")}
@@ -66,7 +66,7 @@ def run_clone(path: Path, pytest_args: str, log_dir: Path) -> dict:
     done = subprocess.run(command, cwd=path, env=env, capture_output=True, text=True)
     seconds = time.monotonic() - t0
     output = done.stdout + done.stderr
-    log = log_dir / (path.parts[-2] + ".log")
+    log = log_dir / f"{name}.log"
     log.write_text(output)
     return {
         "path": str(path),
@@ -90,7 +90,7 @@ def main() -> int:
     results = []
     try:
         for path in clone_paths(root, args.paths):
-            r = run_clone(path, args.pytest_args, log_dir)
+            r = run_clone(path, args.pytest_args, log_dir, path.relative_to(root).parts[0])
             results.append(r)
             status = "ok  " if r["returncode"] == 0 else "FAIL"
             print(f"{status} {r['seconds']:7.1f} s  {r['path']}  {r['summary']}", flush=True)

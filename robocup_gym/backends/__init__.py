@@ -45,9 +45,9 @@ __all__ = [
 ]
 
 _REGISTRY: dict[str, str | Callable[..., Backend]] = {
-    "mujoco": "robocup_gym.backends.mujoco_backend:MujocoBackend",
+    "mujoco": "robocup_gym.backends.in_process:MujocoBackend",
     "rcssserver3d": "robocup_gym.backends.rcssserver3d_backend:Rcssserver3dBackend",
-    "ode": "robocup_gym.backends.ode_backend:OdeBackend",
+    "ode": "robocup_gym.backends.in_process:OdeBackend",
     "rcsssmj": "robocup_gym.backends.league_backend:LeagueBackend",
     "rcssservermj": "robocup_gym.backends.rcssservermj_backend:RcssServerMJBackend",
 }

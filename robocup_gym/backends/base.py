@@ -151,6 +151,7 @@ class Backend(abc.ABC):
         *,
         play_mode: str = "PlayOn",
         seed: int | None = None,
+        settle_cycles: int = 0,
     ) -> Perception:
         """Start an episode: teleport the robot (joint angles included) and the ball, set the play
         mode and restart the game clock, zero all velocities and joint targets. Runs no
@@ -162,9 +163,17 @@ class Backend(abc.ABC):
             ball_vel: Ball linear velocity in m/s (world frame).
             play_mode: Play mode to set (wire name).
             seed: Re-seed the backend's randomness (``None`` continues the current stream).
+            settle_cycles: Cycles the placed robot then spends under :meth:`hold_command` (a
+                Nao: every joint velocity 0) before the episode starts, e.g. to come to rest
+                after being dropped. A real server needs cycles of its own after a placement
+                and counts them in; the in-process worlds simulate a start's settling once and
+                restore the result afterwards. The game clock starts at the placement.
 
         Returns:
             The perception of the start state (the first observation of the episode).
+
+        Raises:
+            ValueError: ``settle_cycles`` is not a whole number >= 0.
         """
 
     @abc.abstractmethod
@@ -174,6 +183,19 @@ class Backend(abc.ABC):
         Raises:
             BackendDivergedError: the simulation blew up; call :meth:`reset_episode`.
         """
+
+    def hold_command(self) -> AgentCommand:
+        """The command that holds the robot still while a start settles: every joint velocity
+        0 (a league robot's PD backends keep the reset's targets instead)."""
+        return AgentCommand(np.zeros(len(self.robot_model.joints)))
+
+    @staticmethod
+    def _check_settle(settle_cycles: int) -> int:
+        if isinstance(settle_cycles, bool) or not isinstance(settle_cycles, int | np.integer):
+            raise ValueError(f"settle_cycles must be a whole number >= 0, got {settle_cycles!r}")
+        if settle_cycles < 0:
+            raise ValueError(f"settle_cycles must be a whole number >= 0, got {settle_cycles}")
+        return int(settle_cycles)
 
     def advance(self, cycles: int, command: AgentCommand | None = None) -> Perception:
         """Run ``cycles`` cycles (``command`` in the first, nothing new after: targets are sticky)

@@ -265,11 +265,13 @@ class LeagueBackend(Backend):
         *,
         play_mode: str = "PlayOn",
         seed: int | None = None,
+        settle_cycles: int = 0,
     ) -> Perception:
         """Place the robot (joint angles included) and the ball, at rest, with no joint torque
         until the first command, and run one such limp 20 ms step (as a reset on the real
-        server does); ``play_mode`` is not settable on RCSSServerMJ (see the module docstring)
-        and ``seed`` has nothing to seed."""
+        server does; it counts as the first of ``settle_cycles``); ``play_mode`` is not
+        settable on RCSSServerMJ (see the module docstring) and ``seed`` has nothing to seed."""
+        settle_cycles = self._check_settle(settle_cycles)
         w = self.world
         angles = np.radians(league_pose(self._model, pose.joint_angles_deg))
         quat = _model_quat(pose)
@@ -283,7 +285,13 @@ class LeagueBackend(Backend):
         # one limp 20 ms step, as on the real server (whose placement shows in its perceptions
         # only a step later): the episode starts from what the robot then perceives
         self.advance(1)
+        if settle_cycles > 1:
+            self.advance(settle_cycles - 1, self.hold_command())
         return self._perceive()
+
+    def hold_command(self) -> AgentCommand:
+        """No command: the joints stay limp, as the reset left them."""
+        return AgentCommand()
 
     def step(self, command: AgentCommand) -> Perception:
         return self.advance(1, command)

@@ -61,6 +61,7 @@ from robocup_gym.protocol.framing import FrameDecoder, encode_frame
 from robocup_gym.protocol.monitor import MonitorState
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim.pose import resting_torso_height
 from robocup_gym.types import AgentCommand, GroundTruth, Perception
 
 __all__ = ["GroundTruthSnapshot", "Rcssserver3dBackend", "ResetStats"]
@@ -583,6 +584,8 @@ class Rcssserver3dBackend(Backend):
         self.last_reset: ResetStats | None = None
         """Statistics of the latest :meth:`reset_episode`."""
         self.resets = 0
+        self.respawns = 0
+        """New robots the resets asked for (one whose joint sat on a stop, see :meth:`_respawn`)."""
         self._targets = np.zeros(n)
         """Motor velocity targets in force (rad/s, sticky as on the server)."""
         self._tracker = _MonitorTracker()
@@ -595,7 +598,6 @@ class Rcssserver3dBackend(Backend):
         """A connection broke (set by :meth:`_connection_lost`; cleared by a relaunch)."""
         self._warned_async = False
         self._stand_cache: dict[tuple[float, ...], float] = {}
-        self._kinematics: Any = None
         self._finalizer = weakref.finalize(self, _release, self._links, None)
         self._launch = (binary, script_template, tuple(server_args))
         try:
@@ -672,6 +674,32 @@ class Rcssserver3dBackend(Backend):
         self._targets[:] = 0.0
         self._last = None
         self._open(*self._launch)
+
+    def _respawn(self) -> None:
+        """A new robot: the agent connection is closed (the server removes its robot) and
+        opened again with the same uniform number (``scene``, ``init``). A new robot has every
+        joint at 0 and every motor at rest, which no command can give a robot whose joint sits
+        on a stop (the server ignores that joint's commands)."""
+        old = self._agent
+        if old is not None:
+            self._links.remove(old)
+            old.close()
+        unum = self.unum
+        self.unum = self.side = None
+        self._targets[:] = 0.0
+        self._tracker = _MonitorTracker()  # the scene changes: follow the new robot's nodes
+        assert self._monitor is not None
+        self._monitor.send(tc.reqfullstate(), self.timeout)
+        self._agent = _Link(
+            wait_for_port(self.host, self.agent_port, self.startup_timeout, self.server), "agent"
+        )
+        self._links.append(self._agent)
+        requested, self.requested_unum = self.requested_unum, unum or self.requested_unum
+        try:
+            self._handshake()
+        finally:
+            self.requested_unum = requested
+        self.respawns += 1
 
     def _connect(self, server: ServerProcess | None, timeout: float) -> None:
         # The monitor port doubles as the readiness probe (a throw-away agent connection would
@@ -941,14 +969,17 @@ class Rcssserver3dBackend(Backend):
         *,
         play_mode: str = "PlayOn",
         seed: int | None = None,
+        settle_cycles: int = 0,
     ) -> Perception:
         """Start an episode through trainer commands (see the module docstring).
 
         Unlike the embedded world this runs server cycles: the joints are driven to their start
         angles as fast as the joint speed limits allow (robot held in the air), then the robot and
-        ball are placed and the play mode and game time set. :attr:`last_reset` has the cycles
-        and milliseconds. ``seed`` is ignored (the server cannot be seeded).
+        ball are placed and the play mode and game time set. The cycles the placement takes to
+        show count as the first of ``settle_cycles``. :attr:`last_reset` has the cycles and
+        milliseconds. ``seed`` is ignored (the server cannot be seeded).
         """
+        settle_cycles = self._check_settle(settle_cycles)
         if play_mode not in PLAY_MODES:
             raise ValueError(f"unknown play mode {play_mode!r}; valid: {', '.join(PLAY_MODES)}")
         if self._closed:
@@ -962,8 +993,17 @@ class Rcssserver3dBackend(Backend):
                 "with a full orientation (quat) needs the SPL fork or an in-process engine"
             )
         target = self._start_angles(pose.joint_angles_deg)
+        # a joint on a stop from the last episode cannot be driven off it: start with a new robot
+        q = np.asarray(self._last.joint_angles_deg, dtype=float) if self._last else target
+        lo, hi = self._ranges[:, 0], self._ranges[:, 1]
+        on_stop = (q >= hi - _STOP_TOLERANCE_DEG) | (q <= lo + _STOP_TOLERANCE_DEG)
+        respawned = bool((on_stop & (np.abs(target - q) > self.reset_tolerance_deg)).any())
+        if respawned:
+            self._respawn()
         z = float(pose.z) if pose.z is not None else self._standing_z(target)
-        hover_z = z + self.hover_height
+        # held upright while the joints move: high enough that the feet of the upright robot
+        # clear the ground even when the start is lower (a robot lying down)
+        hover_z = max(z, self._standing_z(target)) + self.hover_height
         yaw = float(pose.heading_deg) - 90.0  # the trainer's move takes the model's raw yaw
         team = self._team
         assert self.unum is not None
@@ -981,7 +1021,6 @@ class Rcssserver3dBackend(Backend):
         gain = self.reset_gain
         hovered = False
         joint_cycles = 0
-        lo, hi = self._ranges[:, 0], self._ranges[:, 1]
         stuck = np.zeros(self._n, dtype=int)  # cycles on a stop without moving, commanded
         q_before = None
         while True:
@@ -999,9 +1038,21 @@ class Rcssserver3dBackend(Backend):
                 stuck = np.where(on_stop & still, stuck + 1, 0)
             q_before = q
             pinned = stuck >= PINNED_CYCLES
+            if pinned.any() and not respawned:
+                # a joint that the last episode's command drove onto a stop during the first
+                # cycles: a new robot, and the drive starts again (once)
+                self._respawn()
+                respawned = True
+                p, joint_cycles, hovered, q_before = self._last, 0, False, None
+                stuck[:] = 0
+                continue
             done = bool(np.abs(np.where(pinned, 0.0, err)).max() <= tol)
             done = done and not (on_stop & ~pinned).any()
-            if (done and hovered) or joint_cycles >= self.reset_max_cycles:
+            # done once the joints are there with their motors at rest (the last command 0), as
+            # the in-process engines place a robot
+            if (done and hovered and not self._targets.any()) or (
+                joint_cycles >= self.reset_max_cycles
+            ):
                 break
             v = np.clip(gain * np.radians(err) / CYCLE_S, -self._vmax, self._vmax)
             if done:
@@ -1014,7 +1065,7 @@ class Rcssserver3dBackend(Backend):
             if (
                 s is not None
                 and s.torso is not None
-                and s.torso[2, 3] > z + 0.5 * self.hover_height
+                and s.torso[2, 3] > hover_z - 0.5 * self.hover_height
             ):
                 hovered = True
         if not done:
@@ -1089,6 +1140,8 @@ class Rcssserver3dBackend(Backend):
         )
         self.resets += 1
         log.debug("reset %d: %s", self.resets, self.last_reset)
+        if settle_cycles > settle:
+            p = self.advance(settle_cycles - settle, self.hold_command())
         return p
 
     @property
@@ -1169,20 +1222,12 @@ class Rcssserver3dBackend(Backend):
         return np.clip(out, self._ranges[:, 0] + margin, self._ranges[:, 1] - margin)
 
     def _standing_z(self, angles_deg: np.ndarray) -> float:
-        """Torso-centre height at which the lowest point of the robot in this pose touches the
-        ground (computed with the embedded world's kinematics of the same model)."""
+        """Torso-centre height at which the lowest point of the upright robot in this pose
+        touches the ground."""
         key = tuple(np.round(angles_deg, 2).tolist())
         z = self._stand_cache.get(key)
         if z is None:
-            if self._kinematics is None:
-                from robocup_gym.sim.engines.mujoco.world import World  # only for the kinematics
-
-                self._kinematics = World([self.robot_type])
-            w = self._kinematics
-            w.place_robot(
-                0, 0.0, 0.0, heading_deg=0.0, z=None, joint_angles_deg=np.asarray(angles_deg)
-            )
-            z = float(w.torso_position(0)[2])
+            z = resting_torso_height(self.robot_type, np.asarray(angles_deg, float))
             if len(self._stand_cache) > 256:
                 self._stand_cache.clear()
             self._stand_cache[key] = z

@@ -256,15 +256,18 @@ class RcssServerMJBackend(Backend):
         *,
         play_mode: str = "PlayOn",
         seed: int | None = None,
+        settle_cycles: int = 0,
     ) -> Perception:
         """Place the robot (all joints at 0) and the ball through the monitor, at rest and with
         no joint torque, and return the first perception that shows them placed (after one
-        limp 20 ms step, as the in-process backend's reset).
+        limp 20 ms step, as the in-process backend's reset; it counts as the first of
+        ``settle_cycles``).
 
         Raises:
             ValueError: start angles other than 0, or ``z=None`` with a tilted ``quat``.
             BackendError: the placement did not show within ``reset_cycles`` cycles.
         """
+        settle_cycles = self._check_settle(settle_cycles)
         angles = league_pose(self._model, pose.joint_angles_deg)
         if np.abs(angles).max(initial=0.0) > 1e-9:
             raise ValueError(
@@ -308,7 +311,14 @@ class RcssServerMJBackend(Backend):
             # no frame shows the ball when the perception does: place both again
         else:
             p = self._parse(self._send(self._limp))  # one more limp step brings a frame
-        return self._with_ground_truth(p, fresh=True)
+        p = self._with_ground_truth(p, fresh=True)
+        if settle_cycles > 1:
+            return self.advance(settle_cycles - 1, self.hold_command())
+        return p
+
+    def hold_command(self) -> AgentCommand:
+        """No command: the joints stay limp, as the reset left them."""
+        return AgentCommand()
 
     def _place(self, monitor_text: str, want: np.ndarray) -> LeaguePerception:
         """Send a placement through the monitor; answer with limp joints until a perception

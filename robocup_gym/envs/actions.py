@@ -29,6 +29,8 @@ class ActionMapper:
             0 holds, with ``spread_deg``; ``None``: action 0 is the middle of each joint's range.
         spread_deg: With ``around_deg``: an action of ±1 is ``around_deg`` ± this many degrees,
             clipped to the joint's range.
+        stop_margin_deg: Target angles stay this far inside each joint's stops (deg): a joint
+            exactly on a stop obeys or ignores rcssserver3d's next command on rounding.
     """
 
     def __init__(
@@ -40,6 +42,7 @@ class ActionMapper:
         mirror: bool = False,
         around_deg: np.ndarray | None = None,
         spread_deg: float | None = None,
+        stop_margin_deg: float = 0.0,
     ):
         self.model = model
         self.joints = np.asarray(joints, dtype=int)
@@ -72,6 +75,7 @@ class ActionMapper:
         self.angle_mid, self.angle_half, self._limits = _target_window(
             lo, hi, self.joints, around_deg, spread_deg
         )
+        self._limits = (self._limits[0] + stop_margin_deg, self._limits[1] - stop_margin_deg)
         self.target_offset_deg = np.zeros(n)
         """Added to every target angle (deg, per controlled joint, in action order) before the
         clip to the joint's range: a task's reference motion (Walk's gait), set each step."""

@@ -75,6 +75,9 @@ class EpisodeStart:
     """Ball velocity, m/s, world frame."""
     kick_target: np.ndarray
     """(distance m, angle deg) for the ``kick_target`` observation."""
+    settle_cycles: int = 0
+    """Cycles the placed robot spends still (every joint velocity 0) before the episode's
+    first observation, e.g. to come to rest after a drop (``Backend.reset_episode``)."""
 
 
 FALL_HEIGHT_FRACTION = 0.65
@@ -305,6 +308,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                 bool(config.mirror_actions),
                 around_deg=around,
                 spread_deg=spread,
+                stop_margin_deg=float(config.target_stop_margin_deg),
             )
         n_act = self._actions.size
         self.action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
@@ -462,6 +466,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             start.ball_vel,
             play_mode=self.config.play_mode,
             seed=backend_seed,
+            settle_cycles=start.settle_cycles,
         )
         self.episode_start = start
         self.ball_spawn_pos = np.array(start.ball_pos, dtype=float)

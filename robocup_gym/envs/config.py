@@ -253,6 +253,12 @@ class EnvConfig:
     """Proportional gain of the target-angle modes, 1/s: velocity = gain × angle error. 12.5 is
     critically damped with SimSpark's one-cycle dead time (the error halves every cycle);
     the paper used 1.0."""
+    target_stop_margin_deg: float = 0.5
+    """Target-angle modes on the Nao: target angles stay this far inside each joint's stops,
+    deg. rcssserver3d takes a joint's velocity only while the joint is strictly inside its
+    stops (spec §8.3), so a joint driven exactly onto a stop obeys or ignores the next command
+    on differences of rounding, and the same policy then moves differently in-process and on a
+    real server; kept off the stops, it moves the same. 0: targets may reach the stops."""
     target_around_start_deg: float | None = None
     """Target-angle modes: ``None``, an action of ±1 spans each joint's whole range (0 is its
     middle); a number of degrees, the action spans the start pose (``joint_start_deg``) ± that
@@ -384,6 +390,11 @@ class EnvConfig:
         need(
             math.isfinite(self.target_gain) and self.target_gain > 0,
             f"target_gain must be > 0 (1/s), got {self.target_gain!r}",
+        )
+        need(
+            _finite(self.target_stop_margin_deg) and 0.0 <= self.target_stop_margin_deg <= 5.0,
+            "target_stop_margin_deg must be a number of degrees in [0, 5], got "
+            f"{self.target_stop_margin_deg!r}",
         )
         need(
             len(self.ball_start_pos) == 3 and all(map(math.isfinite, self.ball_start_pos)),

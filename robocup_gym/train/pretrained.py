@@ -80,8 +80,12 @@ def recorded_env_options(meta: dict[str, Any]) -> dict[str, Any]:
     return {**recorded, **(meta.get("env_kwargs") or {})}
 
 
+_TARGETS_ONTO_STOPS = {"target_stop_margin_deg": 0.0}
 OPTIONS_ADDED: dict[str, dict[str, Any]] = {
-    "RobocupGym/GetUp-v0": {"reference_motion": False},
+    "RobocupGym/SimpleKick-v0": _TARGETS_ONTO_STOPS,
+    "RobocupGym/VelocityKick-v0": _TARGETS_ONTO_STOPS,
+    "RobocupGym/Walk-v0": _TARGETS_ONTO_STOPS,
+    "RobocupGym/GetUp-v0": {"reference_motion": False, **_TARGETS_ONTO_STOPS},
 }
 """Per task, options added since policies were first exported, with the value that gives the
 environment those policies ran in (a recorded ``env_config`` without the option predates it)."""

@@ -320,6 +320,74 @@ def test_getup_lies_on_the_real_server_as_in_process(real_binary, side):
         finally:
             env.close()
     (p0, q0, j0), (p1, q1, j1) = states["ode"], states["rcssserver3d"]
-    np.testing.assert_allclose(p1, p0, atol=0.002)
+    # the robot dropped on both, so the real one's ground truth is the monitor's last resend,
+    # which comes only after a pose changed by 5 mm
+    np.testing.assert_allclose(p1, p0, atol=0.005)
     assert min(np.abs(q1 - q0).max(), np.abs(q1 + q0).max()) < 0.005
     np.testing.assert_allclose(j1, j0, atol=0.1)
+
+
+def test_a_joint_left_on_a_stop_is_reset_with_a_new_robot(real_binary):
+    """rcssserver3d ignores a joint's commands while the joint is not strictly inside its stops,
+    so a joint the last episode left on a stop may not follow the reset's drive. Such a reset
+    starts with a new robot (a new agent connection) and reaches the start pose; the uniform
+    number and the ground truth follow the new robot."""
+    pose = RobotPose(-1.0, 0.0)
+    ball = (-0.8, -0.055, 0.042)
+    real = Rcssserver3dBackend(binary=real_binary, startup_timeout=60, timeout=20)
+    try:
+        real.reset_episode(pose, ball_pos=ball)
+        unum = real.unum
+        for _ in range(250):  # the head's yaw pushed onto its stop (120 deg)
+            p = real.step(AgentCommand({"he1": 1.0}))
+        assert p.joint("hj1") > 120.0
+        p = real.reset_episode(pose, ball_pos=ball)
+        assert real.respawns == 1 and real.unum == unum
+        assert real.last_reset.converged and not real.last_reset.pinned, real.last_reset
+        assert abs(p.joint("hj1")) < 0.1
+        np.testing.assert_allclose(p.ground_truth.torso_pos[:2], (-1.0, 0.0), atol=0.01)
+        p = real.reset_episode(pose, ball_pos=ball)  # nothing on a stop: the same robot
+        assert real.respawns == 1
+    finally:
+        real.close()
+
+
+@pytest.mark.parametrize("side", ["front", "back"])
+def test_getups_lying_poses_are_reached_on_the_real_server(real_binary, side):
+    """Every one of GetUp's first lying poses is reached on a real server (the joints driven to
+    the drop's start within the reset's tolerance, none pinned on a stop, also after episodes of
+    random actions), and after the drop the robot rests as in-process: torso within 5 mm (the
+    monitor resends a pose only after it moved 5 mm), joint angles within 0.5 deg. One drop in
+    six may land a joint differently: the real robot carries its joints' small constraint
+    errors from before into the placement (ODE keeps them), and a few drops bifurcate on them
+    (by 1.7 deg in one hip here)."""
+    import gymnasium
+
+    import robocup_gym.envs  # noqa: F401
+
+    rests: dict[str, list] = {}
+    for backend in ("ode", "rcssserver3d"):
+        env = gymnasium.make("RobocupGym/GetUp-v0", backend=backend, action_mode="velocity")
+        try:
+            if backend == "rcssserver3d" and not env.unwrapped.backend.places_any_orientation:
+                pytest.skip("this rcssserver3d does not turn robots (not the SPL fork)")
+            rests[backend] = []
+            env.action_space.seed(0)
+            for k in range(6):
+                env.reset(seed=k, options={"start_side": side, "lying_pose": k})
+                if backend == "rcssserver3d":
+                    stats = env.unwrapped.backend.last_reset
+                    assert stats.converged and not stats.pinned, (k, stats)
+                u = env.unwrapped
+                rests[backend].append(
+                    (u.ground_truth.torso_pos.copy(), np.array(u.perception.joint_angles_deg))
+                )
+                for _ in range(80):  # get up (or try), driving joints onto stops now and then
+                    env.step(env.action_space.sample())
+        finally:
+            env.close()
+    off = []
+    for (p0, j0), (p1, j1) in zip(rests["ode"], rests["rcssserver3d"], strict=True):
+        np.testing.assert_allclose(p1, p0, atol=0.005)
+        off.append(float(np.abs(j1 - j0).max()))
+    assert sum(d > 0.5 for d in off) <= 1 and sorted(off)[-2] < 0.5, off

@@ -73,6 +73,26 @@ def test_target_angle_mode_reaches_the_target(make_env):
     assert right == pytest.approx(-30.0, abs=1.0)
 
 
+def test_target_angles_stay_off_the_stops(make_env):
+    """A full action drives a joint to ``target_stop_margin_deg`` inside its stop, never onto it
+    (where rcssserver3d ignores the joint's next command on a difference of rounding); with a
+    margin of 0 onto it; a margin out of range is refused."""
+    from robocup_gym.envs import EnvConfigError
+
+    env = _arm_env(make_env, "target_angle")
+    env.reset(seed=0)
+    for _ in range(40):
+        env.step(np.array([1.0, -1.0], dtype=np.float32))
+    left, right = _angles(env)
+    assert env.config.target_stop_margin_deg == 0.5
+    assert left == pytest.approx(119.5, abs=0.05) and right == pytest.approx(-119.5, abs=0.05)
+    onto = _arm_env(make_env, "target_angle", target_stop_margin_deg=0.0)
+    assert onto._actions.targets_deg(np.array([1.0, -1.0])) == pytest.approx([120.0, -120.0])
+    for bad in (-0.1, 6.0, float("nan")):
+        with pytest.raises(EnvConfigError, match="target_stop_margin_deg"):
+            _arm_env(make_env, "target_angle", target_stop_margin_deg=bad)
+
+
 def test_target_angle_max_speed_limits_the_speed(make_env):
     env = _arm_env(make_env, "target_angle_max_speed")
     assert env.action_space.shape == (4,)

@@ -15,7 +15,7 @@ from robocup_gym.backends import (
     make_backend,
     register_backend,
 )
-from robocup_gym.backends.mujoco_backend import MujocoBackend
+from robocup_gym.backends.in_process import MujocoBackend
 from robocup_gym.envs import BaseEnv
 from robocup_gym.types import AgentCommand, Perception
 

@@ -21,12 +21,11 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.backends import make_backend
 from robocup_gym.backends.base import RobotPose
 from robocup_gym.envs.base_env import BaseEnv
 from robocup_gym.envs.config import BALL_REST_Z, ActionMode, EnvConfig, EnvConfigError
 from robocup_gym.envs.observations import up_z
-from robocup_gym.types import AgentCommand
+from robocup_gym.sim.pose import resting_torso_height
 
 __all__ = [
     "GETUP_KEYFRAMES",
@@ -109,10 +108,10 @@ GETUP_KEYFRAMES_BY_TYPE: dict[int, dict[str, tuple[tuple[float, tuple[float, ...
             (18, (-114.5, 29.5, -61.9, 1.0, -1.7, 45.0, -23.1, -16.6, 11.0, 25.0)),
         ),
         "back": (
-            (20, (-95.5, 95.0, -87.5, -53.9, -90.0, 7.0, 100.0, -20.6, 75.0, -45.0)),
-            (13, (-104.0, 9.8, -120.0, -16.5, -15.5, 45.0, -10.8, 1.0, -32.0, 4.0)),
-            (30, (95.4, 23.0, -120.0, 1.0, -87.1, 3.5, 100.0, -24.5, -45.0, 25.0)),
-            (12, (-45.2, -1.0, -116.3, 1.0, -9.0, 45.0, 11.7, -29.3, 2.4, 23.6)),
+            (24, (-109.1, 95.0, -75.5, -85.6, -60.7, -12.1, 95.0, -14.0, 75.0, -28.8)),
+            (9, (-101.6, -1.0, -120.0, 1.0, -5.3, 5.1, -15.4, -6.7, -34.0, 25.0)),
+            (30, (98.6, -1.0, -111.0, 1.0, -66.0, 30.9, 100.0, -29.8, -30.6, 15.4)),
+            (3, (-41.6, -0.8, -85.0, -31.9, 1.0, 45.0, 17.4, -26.9, 10.6, 22.1)),
         ),
     },
     4: {
@@ -128,11 +127,12 @@ GETUP_KEYFRAMES_BY_TYPE: dict[int, dict[str, tuple[tuple[float, tuple[float, ...
 """The scripted get-up of every Nao type (same layout as :data:`GETUP_KEYFRAMES`, type 0's;
 angles within the joints' ranges; type 4's toes stay at 0). Types 1 and 3 (longer legs: type
 0's script gets them up from the back from none of 16 lying poses) have their own for both
-sides, types 2 and 4 from the front; their backs are type 0's, which gets them up from 61 and
-62 of 64 lying poses. Found in session 17 by the same open-loop CMA-ES on the ODE engine as
-type 0's, started from type 0's script: over lying poses 0–11, each played clean and with 1.5°
-of target noise, for the task's return and then for getting up within 80 cycles
-(docs/training.md, *Scripts per Nao type*)."""
+sides, types 2 and 4 from the front; their backs are type 0's. Found by the same open-loop
+CMA-ES on the ODE engine as type 0's, started from type 0's script: over lying poses 0–11, each
+played clean and with 1.5° of target noise, for the task's return and then for getting up
+within 80 cycles; type 3's back again with the targets kept 0.5° off the stops
+(``target_stop_margin_deg``), on which its first script leant. Over lying poses 0–63 each gets
+its type up within 80 cycles from 58 to 64 poses a side (docs/results.md)."""
 
 
 def getup_keyframes(robot_type: int) -> dict[str, tuple[tuple[float, tuple[float, ...]], ...]]:
@@ -148,7 +148,9 @@ def getup_keyframes(robot_type: int) -> dict[str, tuple[tuple[float, tuple[float
 
 
 DROP_CYCLES = 100
-"""Cycles a dropped robot is given to come to rest (2 s)."""
+"""Cycles a dropped robot is given to come to rest (2 s) before an episode starts."""
+LYING_POSE_STOP_MARGIN_DEG = 1.0
+"""How far inside its stops every joint angle of a lying pose stays, deg."""
 
 
 @dataclass
@@ -355,18 +357,22 @@ class GetUp(BaseEnv):
         self.reward_terms: dict[str, float] = {}
 
     # ------------------------------------------------------------------ lying poses
-    def lying_pose(self, side: str, index: int = 0) -> tuple[float, np.ndarray, np.ndarray]:
-        """``(torso z m, torso quat, joint angles deg)`` of the robot at rest on ``side``
-        (lying pose ``index``, see ``GetUpConfig.lying_poses``), made once by dropping it in
-        this environment's world."""
+    def lying_pose(self, side: str, index: int = 0) -> tuple[float | None, np.ndarray, np.ndarray]:
+        """``(torso z m, torso quat, joint angles deg)`` from which the robot is dropped to lie
+        on ``side`` (lying pose ``index``, see ``GetUpConfig.lying_poses``): tilted forward
+        (front) or backward (back), its lowest point resting 1 mm deep; every episode from it
+        first settles :data:`DROP_CYCLES` cycles with the joints held (``EpisodeStart.
+        settle_cycles``), on an in-process engine and on a real server alike. Joint angles stay
+        :data:`LYING_POSE_STOP_MARGIN_DEG` inside each joint's stops, where a real server can
+        drive them (it ignores a joint's commands on a stop). ``z`` is ``None`` for a league
+        robot (its backend puts its lowest point on the ground)."""
         key = (side, int(index))
         if key not in self._lying:
-            # tilted forward (front) or backward (back), joints at 0: upright facing +x (the
-            # torso's forward axis is its +y: turned -90° about z), then pitched about the
-            # world's y axis (+: the top goes forward, +x). The Nao by 80°, joints held; a
-            # league robot flat (90°, its lowest point on the ground) and limp: held stiff, the
-            # tall T1 and K1 come to rest propped on toes and hands, differently on different
-            # MuJoCo versions.
+            # tilted forward (front) or backward (back): upright facing +x (the torso's forward
+            # axis is its +y: turned -90° about z), then pitched about the world's y axis (+: the
+            # top goes forward, +x). The Nao by 80°, joints held; a league robot flat (90°, its
+            # lowest point on the ground) and limp: held stiff, the tall T1 and K1 come to rest
+            # propped on toes and hands, differently on different MuJoCo versions.
             tilt_deg = 90.0 if self.league else 80.0
             n = len(self.robot_model.joints)
             start = np.zeros(n)
@@ -375,37 +381,14 @@ class GetUp(BaseEnv):
                 spread = self.config.lying_pose_spread_deg
                 tilt_deg = min(90.0, tilt_deg + rng.uniform(-spread, spread))
                 lo, hi = np.asarray(self.robot_model.ranges_deg, dtype=float).T
-                start = np.clip(rng.uniform(-spread, spread, n), lo, hi)
+                margin = LYING_POSE_STOP_MARGIN_DEG
+                start = np.clip(rng.uniform(-spread, spread, n), lo + margin, hi - margin)
             tilt = math.radians(tilt_deg) * (1.0 if side == "front" else -1.0)
             yaw = _quat_about((0.0, 0.0, 1.0), -math.pi / 2)
             pitch = _quat_about((0.0, 1.0, 0.0), tilt)
             quat = _quat_mul(pitch, yaw)
-            x, y = self.config.robot_start_pos
-            # in a world of its own where the environment made its backend, so that the
-            # episodes' world has no history of the drop (episodes are then reproducible)
-            if self.backend.name not in self.IN_PROCESS:  # a real server: drop it on ODE
-                world = make_backend("ode", robot_type=self.config.robot_type)
-            elif self._owns_backend:
-                world = make_backend(self.backend.name, **self.backend_kwargs())
-            else:
-                world = self.backend
-            try:
-                world.reset_episode(
-                    RobotPose(x, y, joint_angles_deg=start, quat=quat),
-                    ball_pos=(x + 5.0, y + 5.0),
-                    play_mode=self.config.play_mode,
-                )
-                hold = AgentCommand() if self.league else AgentCommand(np.zeros(n))
-                p = world.advance(DROP_CYCLES, hold)
-            finally:
-                if world is not self.backend:
-                    world.close()
-            gt = p.ground_truth
-            self._lying[key] = (
-                float(gt.torso_pos[2]),
-                np.array(gt.torso_quat, dtype=float),
-                np.array(p.joint_angles_deg, dtype=float),
-            )
+            z = None if self.league else resting_torso_height(self.config.robot_type, start, quat)
+            self._lying[key] = (z, quat, start)
         return self._lying[key]
 
     # ------------------------------------------------------------------ episode
@@ -424,6 +407,13 @@ class GetUp(BaseEnv):
                 raise ValueError(f"reset option lying_pose must be an integer in 0..63, got {k!r}")
             k = int(k)
         z, quat, angles = self.lying_pose(side, k)
+        if self._start_noise.any():  # joint_start_noise_deg varies the drop (inside the stops)
+            lo, hi = self._ranges[:, 0], self._ranges[:, 1]
+            noisy = angles + self.np_random.normal(0.0, 1.0, angles.shape) * self._start_noise
+            margin = LYING_POSE_STOP_MARGIN_DEG
+            angles = np.clip(noisy, lo + margin, hi - margin)
+            if z is not None:
+                z = resting_torso_height(self.config.robot_type, angles, quat)
         self.side = side
         self.pose_index = k
         self._up_steps = 0
@@ -435,6 +425,7 @@ class GetUp(BaseEnv):
         start.pose = RobotPose(
             start.pose.x, start.pose.y, joint_angles_deg=angles.copy(), z=z, quat=quat.copy()
         )
+        start.settle_cycles = DROP_CYCLES
         return start
 
     def step(self, action: Any):

@@ -261,8 +261,8 @@ def compare(
 # ------------------------------------------------------------------ recorded episodes
 @dataclass
 class WorldRecording:
-    """Everything a ``World`` was told during an episode, in order: placements and per-cycle
-    joint commands (canonical arrays, rad/s, NaN = joint not commanded), so that the same
+    """Everything a ``World`` was told during an episode, in order: placements, commands and
+    per-cycle joint commands (canonical arrays, rad/s, NaN = joint not commanded), so that the same
     episode can be replayed open-loop on another world (:func:`replay_recording`)."""
 
     calls: list = field(default_factory=list)
@@ -288,7 +288,14 @@ class record_world:  # noqa: N801 (used as a context manager, like contextlib's 
 
     def __enter__(self) -> WorldRecording:
         w, calls = self.world, self.recording.calls
-        step, place_robot, place_ball = w.step, w.place_robot, w.place_ball
+        step, command = w.step, w.command
+        place_robot, place_ball = w.place_robot, w.place_ball
+
+        def recording_command(index, cmd):
+            velocities = getattr(cmd, "joint_velocities", cmd)
+            copied = dict(velocities) if isinstance(velocities, dict) else np.array(velocities)
+            calls.append(("command", (index, copied)))
+            return command(index, cmd)
 
         def recording_step(commands=None):
             arrays = {}
@@ -308,15 +315,16 @@ class record_world:  # noqa: N801 (used as a context manager, like contextlib's 
             calls.append(("ball", (tuple(pos), tuple(vel))))
             return place_ball(pos, vel, angular_vel, **kwargs)
 
-        w.step, w.place_robot, w.place_ball = (
+        w.step, w.command, w.place_robot, w.place_ball = (
             recording_step,
+            recording_command,
             recording_place_robot,
             recording_place_ball,
         )
         return self.recording
 
     def __exit__(self, *exc) -> None:
-        for name in ("step", "place_robot", "place_ball"):
+        for name in ("step", "command", "place_robot", "place_ball"):
             del self.world.__dict__[name]
 
 
@@ -330,6 +338,9 @@ def replay_recording(recording: WorldRecording, world, on_cycle: Callable | None
         elif kind == "ball":
             pos, vel = arg
             world.place_ball(pos, vel=vel)
+        elif kind == "command":
+            index, velocities = arg
+            world.command(index, velocities)
         else:
             world.step(arg)
             if on_cycle is not None:

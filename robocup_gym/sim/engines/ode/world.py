@@ -711,7 +711,9 @@ class OdeWorld(Senses):
                 f"{SANE_SPEED:g}; place the ball and robots again"
             )
         for i, force in self._pushes.items():
-            self._lib.dBodyAddForce(self.robots[i].bodies[0], *force)
+            torso = self.robots[i].bodies[0]
+            self._lib.dBodyEnable(torso)  # a push wakes a robot that ODE put to sleep
+            self._lib.dBodyAddForce(torso, *force)
         self._collide_and_step()
         self._fresh = False
         self.cycle += 1
