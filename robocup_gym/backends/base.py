@@ -95,6 +95,18 @@ class RobotPose:
         )
 
 
+@dataclass(frozen=True)
+class EpisodeSetup:
+    """What :meth:`Backend.reset_episode` was asked for, checked (see its arguments)."""
+
+    pose: RobotPose
+    ball_pos: tuple[float, ...]
+    ball_vel: tuple[float, ...]
+    play_mode: str
+    seed: int | None
+    settle_cycles: int
+
+
 class Backend(abc.ABC):
     """One simulated learning robot (plus the ball and the rest of the world it lives in).
 
@@ -142,7 +154,6 @@ class Backend(abc.ABC):
         return True
 
     # ------------------------------------------------------------------ episode control
-    @abc.abstractmethod
     def reset_episode(
         self,
         pose: RobotPose,
@@ -175,6 +186,34 @@ class Backend(abc.ABC):
         Raises:
             ValueError: ``settle_cycles`` is not a whole number >= 0.
         """
+        if isinstance(settle_cycles, bool) or not isinstance(settle_cycles, int | np.integer):
+            raise ValueError(f"settle_cycles must be a whole number >= 0, got {settle_cycles!r}")
+        if settle_cycles < 0:
+            raise ValueError(f"settle_cycles must be a whole number >= 0, got {settle_cycles}")
+        start = EpisodeSetup(
+            pose,
+            tuple(float(v) for v in ball_pos),
+            tuple(float(v) for v in ball_vel),
+            play_mode,
+            seed,
+            int(settle_cycles),
+        )
+        p, ran = self._place(start)
+        if start.settle_cycles > ran:
+            p = self.advance(start.settle_cycles - ran, self.hold_command())
+        return p
+
+    @abc.abstractmethod
+    def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
+        """Put the robot and the ball in place for :meth:`reset_episode` (arguments checked);
+        return the first perception and how many of ``start.settle_cycles`` already ran (a
+        real server's placement takes cycles; an in-process world may restore a settled start
+        it kept: all of them). :meth:`reset_episode` runs the rest."""
+
+    def hold_command(self) -> AgentCommand:
+        """The command that holds the robot still while a start settles: every joint velocity
+        0 (a league robot's PD backends keep the reset's targets instead)."""
+        return AgentCommand(np.zeros(len(self.robot_model.joints)))
 
     @abc.abstractmethod
     def step(self, command: AgentCommand) -> Perception:
@@ -183,19 +222,6 @@ class Backend(abc.ABC):
         Raises:
             BackendDivergedError: the simulation blew up; call :meth:`reset_episode`.
         """
-
-    def hold_command(self) -> AgentCommand:
-        """The command that holds the robot still while a start settles: every joint velocity
-        0 (a league robot's PD backends keep the reset's targets instead)."""
-        return AgentCommand(np.zeros(len(self.robot_model.joints)))
-
-    @staticmethod
-    def _check_settle(settle_cycles: int) -> int:
-        if isinstance(settle_cycles, bool) or not isinstance(settle_cycles, int | np.integer):
-            raise ValueError(f"settle_cycles must be a whole number >= 0, got {settle_cycles!r}")
-        if settle_cycles < 0:
-            raise ValueError(f"settle_cycles must be a whole number >= 0, got {settle_cycles}")
-        return int(settle_cycles)
 
     def advance(self, cycles: int, command: AgentCommand | None = None) -> Perception:
         """Run ``cycles`` cycles (``command`` in the first, nothing new after: targets are sticky)

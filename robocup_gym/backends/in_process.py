@@ -28,6 +28,7 @@ from robocup_gym.backends.base import (
     Backend,
     BackendDivergedError,
     BackendNotAvailableError,
+    EpisodeSetup,
     RobotPose,
 )
 from robocup_gym.robot.nao import NaoModel
@@ -67,31 +68,20 @@ class InProcessBackend(Backend):
         return self._model
 
     # ------------------------------------------------------------------ episode control
-    def reset_episode(
-        self,
-        pose: RobotPose,
-        ball_pos: Sequence[float],
-        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
-        *,
-        play_mode: str = "PlayOn",
-        seed: int | None = None,
-        settle_cycles: int = 0,
-    ) -> Perception:
-        settle_cycles = self._check_settle(settle_cycles)
+    def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
+        pose, ball_pos, ball_vel = start.pose, start.ball_pos, start.ball_vel
+        settle_cycles = start.settle_cycles
         w = self.world
-        self._restart(seed)
+        self._restart(start.seed)
         key = _start_key(pose, ball_pos, ball_vel, settle_cycles) if settle_cycles else None
-        if key is None:
+        if key is None or key not in self._settled:
             # An episode depends only on its start state: placing forgets the solver's warm
             # start and the motors' history.
             pose.place(w)
             w.place_ball(ball_pos, ball_vel)
             self._sense_placement()
-        else:
+        if key is not None:
             if key not in self._settled:
-                pose.place(w)
-                w.place_ball(ball_pos, ball_vel)
-                self._sense_placement()
                 self.advance(settle_cycles, self.hold_command())
                 if len(self._settled) >= _SETTLED_KEPT:
                     self._settled.pop(next(iter(self._settled)))
@@ -101,8 +91,8 @@ class InProcessBackend(Backend):
             robot, ball = self._settled[key]
             w.import_robot_state(0, robot)
             w.place_ball(*ball)
-        w.set_game(play_mode=play_mode, game_time=settle_cycles * CYCLE_S)
-        return w.perceive(0, vision=self.vision)
+        w.set_game(play_mode=start.play_mode, game_time=settle_cycles * CYCLE_S)
+        return w.perceive(0, vision=self.vision), settle_cycles
 
     def _restart(self, seed: int | None) -> None:
         """Before a reset: re-seed the world's randomness (``seed``), recover a diverged state."""

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.backends.base import Backend, BackendDivergedError, RobotPose
+from robocup_gym.backends.base import Backend, BackendDivergedError, EpisodeSetup, RobotPose
 from robocup_gym.protocol.league import (
     from_simspark_torso_quat,
     league_perception,
@@ -257,21 +257,12 @@ class LeagueBackend(Backend):
         return self._model
 
     # ------------------------------------------------------------------ episode control
-    def reset_episode(
-        self,
-        pose: RobotPose,
-        ball_pos: Sequence[float],
-        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
-        *,
-        play_mode: str = "PlayOn",
-        seed: int | None = None,
-        settle_cycles: int = 0,
-    ) -> Perception:
+    def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
         """Place the robot (joint angles included) and the ball, at rest, with no joint torque
         until the first command, and run one such limp 20 ms step (as a reset on the real
-        server does; it counts as the first of ``settle_cycles``); ``play_mode`` is not
-        settable on RCSSServerMJ (see the module docstring) and ``seed`` has nothing to seed."""
-        settle_cycles = self._check_settle(settle_cycles)
+        server does; it counts as the first settle cycle); ``play_mode`` is not settable on
+        RCSSServerMJ (see the module docstring) and ``seed`` has nothing to seed."""
+        pose, ball_pos, ball_vel = start.pose, start.ball_pos, start.ball_vel
         w = self.world
         angles = np.radians(league_pose(self._model, pose.joint_angles_deg))
         quat = _model_quat(pose)
@@ -285,9 +276,7 @@ class LeagueBackend(Backend):
         # one limp 20 ms step, as on the real server (whose placement shows in its perceptions
         # only a step later): the episode starts from what the robot then perceives
         self.advance(1)
-        if settle_cycles > 1:
-            self.advance(settle_cycles - 1, self.hold_command())
-        return self._perceive()
+        return self._perceive(), 1
 
     def hold_command(self) -> AgentCommand:
         """No command: the joints stay limp, as the reset left them."""

@@ -51,7 +51,13 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.backends.base import Backend, BackendDivergedError, BackendError, RobotPose
+from robocup_gym.backends.base import (
+    Backend,
+    BackendDivergedError,
+    BackendError,
+    EpisodeSetup,
+    RobotPose,
+)
 from robocup_gym.backends.process import ServerProcess, ServerStartError, wait_for_port
 from robocup_gym.protocol import trainer as tc
 from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT, PLAY_MODES
@@ -961,25 +967,21 @@ class Rcssserver3dBackend(Backend):
             )
         return p
 
-    def reset_episode(
-        self,
-        pose: RobotPose,
-        ball_pos: Sequence[float],
-        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
-        *,
-        play_mode: str = "PlayOn",
-        seed: int | None = None,
-        settle_cycles: int = 0,
-    ) -> Perception:
+    def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
         """Start an episode through trainer commands (see the module docstring).
 
         Unlike the embedded world this runs server cycles: the joints are driven to their start
         angles as fast as the joint speed limits allow (robot held in the air), then the robot and
         ball are placed and the play mode and game time set. The cycles the placement takes to
-        show count as the first of ``settle_cycles``. :attr:`last_reset` has the cycles and
-        milliseconds. ``seed`` is ignored (the server cannot be seeded).
+        show count as settle cycles. :attr:`last_reset` has the cycles and milliseconds. ``seed``
+        is ignored (the server cannot be seeded).
         """
-        settle_cycles = self._check_settle(settle_cycles)
+        pose, ball_pos, ball_vel, play_mode = (
+            start.pose,
+            start.ball_pos,
+            start.ball_vel,
+            start.play_mode,
+        )
         if play_mode not in PLAY_MODES:
             raise ValueError(f"unknown play mode {play_mode!r}; valid: {', '.join(PLAY_MODES)}")
         if self._closed:
@@ -1140,9 +1142,7 @@ class Rcssserver3dBackend(Backend):
         )
         self.resets += 1
         log.debug("reset %d: %s", self.resets, self.last_reset)
-        if settle_cycles > settle:
-            p = self.advance(settle_cycles - settle, self.hold_command())
-        return p
+        return p, settle
 
     @property
     def _team(self) -> str:

@@ -39,12 +39,11 @@ import math
 import socket
 import time
 from collections import Counter, deque
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from robocup_gym.backends.base import Backend, BackendError, RobotPose
+from robocup_gym.backends.base import Backend, BackendError, EpisodeSetup
 from robocup_gym.backends.league_backend import _model_quat, league_ball, league_pose, pd_commands
 from robocup_gym.protocol.errors import ProtocolError
 from robocup_gym.protocol.framing import FrameDecoder, encode_frame
@@ -248,26 +247,17 @@ class RcssServerMJBackend(Backend):
         return b1.copy(), (b1 - b0) / ((c1 - c0) * _CYCLE_S)
 
     # ------------------------------------------------------------------ episode control
-    def reset_episode(
-        self,
-        pose: RobotPose,
-        ball_pos: Sequence[float],
-        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
-        *,
-        play_mode: str = "PlayOn",
-        seed: int | None = None,
-        settle_cycles: int = 0,
-    ) -> Perception:
+    def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
         """Place the robot (all joints at 0) and the ball through the monitor, at rest and with
         no joint torque, and return the first perception that shows them placed (after one
-        limp 20 ms step, as the in-process backend's reset; it counts as the first of
-        ``settle_cycles``).
+        limp 20 ms step, as the in-process backend's reset; it counts as the first settle
+        cycle).
 
         Raises:
             ValueError: start angles other than 0, or ``z=None`` with a tilted ``quat``.
             BackendError: the placement did not show within ``reset_cycles`` cycles.
         """
-        settle_cycles = self._check_settle(settle_cycles)
+        pose, ball_pos, ball_vel = start.pose, start.ball_pos, start.ball_vel
         angles = league_pose(self._model, pose.joint_angles_deg)
         if np.abs(angles).max(initial=0.0) > 1e-9:
             raise ValueError(
@@ -297,12 +287,12 @@ class RcssServerMJBackend(Backend):
         second = f"{head}{z!r} {tail}{ball_cmd}"
         above, want = np.array([pose.x, pose.y, z + 1.0]), np.array([pose.x, pose.y, z])
         for _ in range(_RESET_ATTEMPTS):
-            answered = _perception_cycle(self._place(first, above).time)
+            answered = _perception_cycle(self._show(first, above).time)
             expected = answered + int(self._delay_parities[1] > self._delay_parities[0])
             if self._frame_cycle(expected) != expected:
                 # so that the placement shows in a cycle with a monitor frame
                 answered = _perception_cycle(self._parse(self._send(self._limp)).time)
-            p = self._place(second, want)
+            p = self._show(second, want)
             shown = _perception_cycle(p.time)
             self._delay_parities[(shown - answered) % 2] += 1
             if self._frame_cycle(shown) == shown:
@@ -311,16 +301,13 @@ class RcssServerMJBackend(Backend):
             # no frame shows the ball when the perception does: place both again
         else:
             p = self._parse(self._send(self._limp))  # one more limp step brings a frame
-        p = self._with_ground_truth(p, fresh=True)
-        if settle_cycles > 1:
-            return self.advance(settle_cycles - 1, self.hold_command())
-        return p
+        return self._with_ground_truth(p, fresh=True), 1
 
     def hold_command(self) -> AgentCommand:
         """No command: the joints stay limp, as the reset left them."""
         return AgentCommand()
 
-    def _place(self, monitor_text: str, want: np.ndarray) -> LeaguePerception:
+    def _show(self, monitor_text: str, want: np.ndarray) -> LeaguePerception:
         """Send a placement through the monitor; answer with limp joints until a perception
         shows the torso within :data:`_PLACE_TOLERANCE_M` of ``want``; return it (parsed)."""
         self._monitor_command(monitor_text)

@@ -30,13 +30,12 @@ import contextlib
 import math
 import socket
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from robocup_gym.backends.base import Backend, RobotPose
+from robocup_gym.backends.base import Backend, EpisodeSetup
 from robocup_gym.protocol import trainer as trainer_cmds
 from robocup_gym.protocol.effectors import format_command, format_init, format_scene
 from robocup_gym.protocol.framing import FrameDecoder, decode_payload, recv_frame, send_frame
@@ -87,7 +86,7 @@ class AgentConnectionBackend(Backend):
             trainer commands).
         sync: Append ``(syn)`` to every message (needed by servers in sync mode, harmless else).
         timeout: Seconds to wait for a percept.
-        settle_cycles: Most cycles spent driving the joints to an episode's start pose.
+        drive_cycles: Most cycles spent driving the joints to an episode's start pose.
     """
 
     name = "agent-connection"
@@ -103,7 +102,7 @@ class AgentConnectionBackend(Backend):
         monitor_port: int | None = None,
         sync: bool = True,
         timeout: float = 10.0,
-        settle_cycles: int = 60,
+        drive_cycles: int = 60,
         reset_cycles: int = 4,
         seed: int | None = None,
         vision: bool = False,
@@ -114,7 +113,7 @@ class AgentConnectionBackend(Backend):
         self.team = team
         self.sync = sync
         self.timeout = timeout
-        self.settle_cycles = int(settle_cycles)
+        self.drive_cycles = int(drive_cycles)
         self.reset_cycles = int(reset_cycles)
         self._model = nao_model(self.robot_type)
         self._geometry = _Geometry(self.robot_type)
@@ -233,15 +232,13 @@ class AgentConnectionBackend(Backend):
         """Team frame → world frame (the right team plays mirrored)."""
         return (-x, -y) if self.side == "right" else (x, y)
 
-    def reset_episode(
-        self,
-        pose: RobotPose,
-        ball_pos: Sequence[float],
-        ball_vel: Sequence[float] = (0.0, 0.0, 0.0),
-        *,
-        play_mode: str = "PlayOn",
-        seed: int | None = None,
-    ) -> Perception:
+    def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
+        pose, ball_pos, ball_vel, play_mode = (
+            start.pose,
+            start.ball_pos,
+            start.ball_vel,
+            start.play_mode,
+        )
         team = "Left" if self.side != "right" else "Right"
         # 1. drive the joints to the start pose, wherever the robot is
         target = np.zeros(len(self._model.joints))
@@ -249,7 +246,7 @@ class AgentConnectionBackend(Backend):
             target = np.asarray(pose.joint_angles_deg, dtype=float)
         speeds = np.asarray(self._model.max_speeds, dtype=float)
         p = self.last
-        for _ in range(self.settle_cycles):
+        for _ in range(self.drive_cycles):
             err = np.radians(target - np.asarray(p.joint_angles_deg, dtype=float))
             if np.max(np.abs(err)) < math.radians(1.0):
                 break
@@ -281,7 +278,7 @@ class AgentConnectionBackend(Backend):
         self._gt = None
         self._last_seen = None
         self._need_ground_truth()
-        return self.last
+        return self.last, 0
 
     def step(self, command: AgentCommand) -> Perception:
         self._send(format_command(command, self.robot_type, sync=False))

@@ -92,7 +92,7 @@ def test_bad_settings_and_backends_that_cannot_push_are_refused():
         name = "remote"
         robot_model = None
 
-        def reset_episode(self, *a, **k):
+        def _place(self, start):
             raise NotImplementedError
 
         def step(self, command):
