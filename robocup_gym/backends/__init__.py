@@ -33,6 +33,8 @@ from robocup_gym.sim import ENGINES
 __all__ = [
     "DEFAULT_ENGINE",
     "ENGINES",
+    "IN_PROCESS_BACKENDS",
+    "LEAGUE_BACKENDS",
     "Backend",
     "BackendDivergedError",
     "BackendError",
@@ -57,13 +59,30 @@ DEFAULT_ENGINE = ENGINES[0]
 """SimSpark's own step on ODE: what is learnt on it works on rcssserver3d."""
 
 
-def resolve_backend(backend: str | None = None, engine: str | None = None) -> str:
+IN_PROCESS_BACKENDS = ("ode", "mujoco", "rcsssmj")
+"""Backends that run the simulation in this process (and can, e.g., push the robot)."""
+LEAGUE_BACKENDS = ("rcsssmj", "rcssservermj")
+"""The backends of the league's robots (T1, K1): their simulator in-process, or a real one."""
+
+
+def resolve_backend(
+    backend: str | None = None, engine: str | None = None, robot: str = "nao"
+) -> str:
     """The backend name for the ``backend=`` and ``engine=`` arguments (one of them, or none
-    for :data:`DEFAULT_ENGINE`).
+    for :data:`DEFAULT_ENGINE`) and ``robot``: a league robot (``"T1"``, ``"K1"``) runs on its
+    own simulator (:data:`LEAGUE_BACKENDS`, in-process by default), never on a Nao engine.
 
     Raises:
-        BackendNotAvailableError: an unknown engine, or both given and disagreeing.
+        BackendNotAvailableError: an unknown engine, both given and disagreeing, or a backend
+            that cannot run ``robot``.
     """
+    if robot != "nao":
+        if engine is not None or backend not in (None, *LEAGUE_BACKENDS):
+            raise BackendNotAvailableError(
+                f"the {robot} runs on the league's simulator (backend 'rcsssmj' in-process, or "
+                f"'rcssservermj' for a real server), not on {engine or backend!r}"
+            )
+        return backend or LEAGUE_BACKENDS[0]
     if engine is not None and engine not in ENGINES:
         raise BackendNotAvailableError(
             f"unknown engine {engine!r}; engines: {', '.join(map(repr, ENGINES))} "

@@ -44,6 +44,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from robocup_gym.backends.base import BackendError, BackendNotAvailableError
+from robocup_gym.protocol.framing import connect
 
 __all__ = [
     "RCSSSERVER3D_ENV",
@@ -634,25 +635,21 @@ def wait_for_port(
     Raises:
         ServerStartError: the server exited, or the port did not accept within ``timeout_s``.
     """
-    deadline = time.monotonic() + timeout_s
-    last: OSError | None = None
-    while True:
-        if server is not None:
-            server.check_alive()
-        try:
-            sock = socket.create_connection((host, port), timeout=max(0.1, min(2.0, timeout_s)))
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            return sock
-        except OSError as exc:  # refused while starting up (or a wrong port)
-            last = exc
-        if time.monotonic() >= deadline:
-            where = f"{host}:{port}"
-            tail = "" if server is None else f" Server output:\n{server.log_tail()}"
-            raise ServerStartError(
-                f"nothing accepted connections on {where} within {timeout_s:.1f} s ({last}).{tail}"
-            )
-        if server is not None:
-            if server.wait_exit(poll_s):
-                server.check_alive()
-        else:
+
+    def between() -> None:
+        if server is None:
             time.sleep(poll_s)
+        elif server.wait_exit(poll_s):
+            server.check_alive()  # it exited: raises with its output
+
+    if server is not None:
+        server.check_alive()
+    try:
+        return connect(
+            host, port, timeout=max(0.1, min(2.0, timeout_s)), retry_s=timeout_s, between=between
+        )
+    except OSError as exc:  # refused while starting up (or a wrong port)
+        tail = "" if server is None else f" Server output:\n{server.log_tail()}"
+        raise ServerStartError(
+            f"nothing accepted connections on {host}:{port} within {timeout_s:.1f} s ({exc}).{tail}"
+        ) from None

@@ -67,15 +67,15 @@ from robocup_gym.protocol.framing import FrameDecoder, encode_frame
 from robocup_gym.protocol.monitor import MonitorState
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.sim.pose import resting_torso_height
+from robocup_gym.sim.rotations import matrix_to_quat
 from robocup_gym.types import AgentCommand, GroundTruth, Perception
 
 __all__ = ["GroundTruthSnapshot", "Rcssserver3dBackend", "ResetStats"]
 
 log = logging.getLogger("robocup_gym.backends.rcssserver3d")
 
-CYCLE_S = 0.02
-"""One server cycle, s."""
 FROZEN_CLOCK_MODES = frozenset({"BeforeKickOff", "GameOver"})
 """Play modes in which the game clock stands still (ground truth then cannot be matched by time)."""
 _TIME_TOL = 0.006
@@ -417,28 +417,6 @@ class _MonitorTracker:
                 if s.game_time <= game_time + _TIME_TOL:
                     return s
         return self.snapshots[-1]
-
-
-def _quat_from_matrix(r: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method; the result is
-    normalised, which absorbs the 6-significant-digit rounding of monitor numbers)."""
-    tr = r[0, 0] + r[1, 1] + r[2, 2]
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
-        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
-        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
-    else:
-        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
-        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    q = np.array(q)
-    if q[0] < 0:
-        q = -q
-    return q / np.linalg.norm(q)
 
 
 # ------------------------------------------------------------------------------------------
@@ -881,7 +859,7 @@ class Rcssserver3dBackend(Backend):
             ball_pos=s.ball_pos.copy(),
             ball_vel=s.ball_vel.copy(),
             torso_pos=s.torso[:3, 3].copy(),
-            torso_quat=_quat_from_matrix(rot),
+            torso_quat=matrix_to_quat(rot),
             torso_vel=s.torso_vel.copy(),
             torso_ang_vel=rot @ np.radians(np.asarray(p.gyro, dtype=float)),
         )

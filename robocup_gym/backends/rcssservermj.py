@@ -27,7 +27,7 @@ import time
 
 from robocup_gym.backends.base import BackendError
 from robocup_gym.backends.process import ChildProcess, _death_signal_preexec, free_ports
-from robocup_gym.protocol.framing import FrameDecoder, encode_frame, recv_frame
+from robocup_gym.protocol.framing import FrameDecoder, connect, encode_frame, recv_frame
 from robocup_gym.protocol.league import format_pd_commands
 from robocup_gym.sim.engines.rcsssmj.join import SERVER_ENVIRONMENT
 
@@ -105,7 +105,7 @@ class RcssServerMJProcess(ChildProcess):
             if self.proc.poll() is not None:
                 return False
             try:
-                s = socket.create_connection(("127.0.0.1", self.monitor_port), timeout=1.0)
+                s = connect("127.0.0.1", self.monitor_port, timeout=1.0)
             except OSError:
                 time.sleep(0.05)
                 continue
@@ -262,8 +262,7 @@ class LeagueAgentLink:
         self, port: int, robot: str, team: str, number: int, *, timeout: float = 20.0
     ) -> None:
         self.timeout = float(timeout)
-        self.sock = socket.create_connection(("127.0.0.1", port), timeout=timeout)
-        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.sock = connect("127.0.0.1", port, timeout=timeout)
         self._decoder = FrameDecoder()
         self.send(f"(init {robot} {team} {int(number)})".encode())
 

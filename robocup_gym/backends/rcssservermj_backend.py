@@ -46,7 +46,7 @@ import numpy as np
 from robocup_gym.backends.base import Backend, BackendError, EpisodeSetup
 from robocup_gym.backends.league_backend import _model_quat, league_ball, league_pose, pd_commands
 from robocup_gym.protocol.errors import ProtocolError
-from robocup_gym.protocol.framing import FrameDecoder, encode_frame
+from robocup_gym.protocol.framing import FrameDecoder, connect, encode_frame
 from robocup_gym.protocol.league import (
     LeagueMonitorReader,
     LeaguePerception,
@@ -54,11 +54,11 @@ from robocup_gym.protocol.league import (
     parse_league_perception,
     to_simspark_torso_quat,
 )
+from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.types import AgentCommand, GroundTruth, PDCommand, Perception
 
 __all__ = ["RcssServerMJBackend"]
 
-_CYCLE_S = 0.02
 _RESET_ATTEMPTS = 8
 """Placements a reset tries before it settles for one limp step more (measured under a 4-process
 CPU load: 146 of 150 resets placed once, none needed more than 4)."""
@@ -71,7 +71,7 @@ the reset to count as done, m (one 20 ms limp step moves them by millimetres).""
 def _perception_cycle(t: float) -> int:
     """The server cycle of a perception's time: the server truncates it to 2 decimals, so a
     cycle's time 1.44 s can print as 1.43 (cycles are 20 ms: an odd last digit is one below)."""
-    return round(t / _CYCLE_S + 0.25)
+    return round(t / CYCLE_S + 0.25)
 
 
 class RcssServerMJBackend(Backend):
@@ -134,7 +134,7 @@ class RcssServerMJBackend(Backend):
                 for frame in scene:
                     self._take_frame(frame)
             else:
-                self._monitor = socket.create_connection((host, int(monitor_port)), timeout=timeout)
+                self._monitor = connect(host, int(monitor_port), timeout=timeout)
                 self._mdecoder = FrameDecoder()
             self._monitor.setblocking(False)
             self.link = LeagueAgentLink(int(port), self.robot, self.team, 1, timeout=timeout)
@@ -220,7 +220,7 @@ class RcssServerMJBackend(Backend):
         t = self._reader.time
         if t is None:
             return
-        cycle = round(t / _CYCLE_S)
+        cycle = round(t / CYCLE_S)
         if self._frames and cycle <= self._frames[-1][0]:
             return
         self._frames.append((cycle, self._reader.ball_position()))
@@ -244,7 +244,7 @@ class RcssServerMJBackend(Backend):
         if len(newest) < 2 or newest[0][1] is None:
             return b1.copy(), np.zeros(3)
         c0, b0 = newest[0]
-        return b1.copy(), (b1 - b0) / ((c1 - c0) * _CYCLE_S)
+        return b1.copy(), (b1 - b0) / ((c1 - c0) * CYCLE_S)
 
     # ------------------------------------------------------------------ episode control
     def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
@@ -347,7 +347,7 @@ class RcssServerMJBackend(Backend):
         vel = (
             np.zeros(3)
             if fresh or self._last_pos is None
-            else (pos - self._last_pos) / (_CYCLE_S * cycles)
+            else (pos - self._last_pos) / (CYCLE_S * cycles)
         )
         self._last_pos = pos
         quat = p.raw_torso_quat if p.raw_torso_quat is not None else np.array([1.0, 0, 0, 0])

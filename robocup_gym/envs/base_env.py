@@ -262,16 +262,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                     f"{config.robot_type}"
                 )
         elif backend is None or isinstance(backend, str):
-            if self.league:
-                if engine is not None or backend not in (None, "rcsssmj", "rcssservermj"):
-                    raise EnvConfigError(
-                        f"the {config.robot} runs on the league's simulator (backend "
-                        f"'rcsssmj' in-process, or 'rcssservermj' for a real server), not on "
-                        f"{engine or backend!r}"
-                    )
-                name = backend or "rcsssmj"
-            else:
-                name = resolve_backend(backend, engine)
+            name = resolve_backend(backend, engine, config.robot)
             self.backend = make_backend(name, **self.backend_kwargs(needs_vision))
         else:
             raise EnvConfigError(

@@ -14,6 +14,7 @@ import contextlib
 import socket
 import struct
 import time
+from collections.abc import Callable
 
 from robocup_gym.protocol.errors import ProtocolError
 
@@ -21,6 +22,7 @@ __all__ = [
     "DEFAULT_MAX_FRAME_SIZE",
     "DEFAULT_TIMEOUT_S",
     "FrameDecoder",
+    "connect",
     "decode_payload",
     "encode_frame",
     "encode_payload",
@@ -260,3 +262,36 @@ def recv_frame(
 def _check_timeout(timeout: float) -> None:
     if timeout is None or not timeout > 0:
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+
+
+def connect(
+    host: str,
+    port: int,
+    *,
+    timeout: float = 10.0,
+    retry_s: float = 0.0,
+    between: Callable[[], None] | None = None,
+) -> socket.socket:
+    """A TCP connection to ``host:port`` for framed messages: ``TCP_NODELAY`` on (the messages
+    are small and must not wait for Nagle's algorithm), ``timeout`` on its operations. A
+    refused connection (a server still starting) is tried again until ``retry_s`` seconds have
+    passed, calling ``between()`` (default: a 50 ms sleep; a caller that watches a server
+    process checks it there and raises when it died).
+
+    Raises:
+        OSError: the last attempt's error, once ``retry_s`` has passed.
+    """
+    deadline = time.monotonic() + retry_s
+    while True:
+        try:
+            sock = socket.create_connection((host, int(port)), timeout=timeout)
+        except OSError:
+            if time.monotonic() >= deadline:
+                raise
+            if between is not None:
+                between()
+            else:
+                time.sleep(0.05)
+            continue
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        return sock

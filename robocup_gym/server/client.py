@@ -8,24 +8,19 @@ trainer commands. Both work against a real rcssserver3d too.
 from __future__ import annotations
 
 import contextlib
-import socket
-import time
 
-from robocup_gym.protocol.framing import FrameDecoder, decode_payload, recv_frame, send_frame
+from robocup_gym.protocol.framing import (
+    FrameDecoder,
+    connect,
+    decode_payload,
+    recv_frame,
+    send_frame,
+)
 
 
 class _Client:
     def __init__(self, host: str, port: int, timeout: float = 10.0, retries_s: float = 5.0):
-        deadline = time.monotonic() + retries_s
-        while True:
-            try:
-                self.sock = socket.create_connection((host, port), timeout=timeout)
-                break
-            except ConnectionRefusedError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.05)
-        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.sock = connect(host, port, timeout=timeout, retry_s=retries_s)
         self.timeout = timeout
         self.decoder = FrameDecoder()
 

@@ -22,10 +22,10 @@ import numpy as np
 
 from robocup_gym.protocol.constants import PLAY_MODES
 from robocup_gym.server.worldhost import BALL_RADIUS, WorldHost
+from robocup_gym.sim.physics import CYCLE_S
 
 log = logging.getLogger("robocup_gym.server")
 
-CYCLE_S = 0.02
 FIELD_HALF_LENGTH = 15.0
 FIELD_HALF_WIDTH = 10.0
 GOAL_HALF_WIDTH = 1.05

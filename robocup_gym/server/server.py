@@ -59,11 +59,11 @@ from robocup_gym.server.wire import (
 from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES, SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator
+from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.sim.vision import VisionConfig
 
 log = logging.getLogger("robocup_gym.server")
 
-CYCLE_S = 0.02
 SCENE_PATHS = ("rsg/agent/nao/nao_hetero.rsg", "rsg/agent/nao/nao.rsg")
 _POLL_S = 0.25
 """Longest single wait in select (so a stop request or a sync time-out is noticed quickly)."""

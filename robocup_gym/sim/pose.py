@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from robocup_gym.robot.nao import NaoModel
+from robocup_gym.sim.rotations import yaw_quat
 
 __all__ = [
     "heading_to_quat",
@@ -21,11 +22,6 @@ __all__ = [
     "rigid_move",
     "yaw_quat",
 ]
-
-
-def yaw_quat(yaw_rad: float) -> np.ndarray:
-    """Quaternion (w, x, y, z) of a rotation by ``yaw_rad`` about world z."""
-    return np.array([math.cos(yaw_rad / 2), 0.0, 0.0, math.sin(yaw_rad / 2)])
 
 
 def heading_to_quat(heading_deg: float) -> np.ndarray:

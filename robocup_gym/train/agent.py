@@ -29,7 +29,6 @@ from __future__ import annotations
 import contextlib
 import math
 import socket
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,13 +37,17 @@ import numpy as np
 from robocup_gym.backends.base import Backend, EpisodeSetup
 from robocup_gym.protocol import trainer as trainer_cmds
 from robocup_gym.protocol.effectors import format_command, format_init, format_scene
-from robocup_gym.protocol.framing import FrameDecoder, decode_payload, recv_frame, send_frame
+from robocup_gym.protocol.framing import (
+    FrameDecoder,
+    connect,
+    decode_payload,
+    recv_frame,
+    send_frame,
+)
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.pose import heading_to_quat
 from robocup_gym.types import AgentCommand, GroundTruth, Perception
-
-CYCLE_S = 0.02
 
 
 class _Geometry:
@@ -142,18 +145,12 @@ class AgentConnectionBackend(Backend):
     # ------------------------------------------------------------------ wire
     @staticmethod
     def _connect(host: str, port: int, retries_s: float = 5.0) -> socket.socket:
-        deadline = time.monotonic() + retries_s
-        while True:
-            try:
-                s = socket.create_connection((host, port), timeout=10.0)
-                s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                return s
-            except ConnectionRefusedError:
-                if time.monotonic() > deadline:
-                    raise ConnectionRefusedError(
-                        f"no server at {host}:{port} (start one with `robocup-gym serve`)"
-                    ) from None
-                time.sleep(0.05)
+        try:
+            return connect(host, port, retry_s=retries_s)
+        except ConnectionRefusedError:
+            raise ConnectionRefusedError(
+                f"no server at {host}:{port} (start one with `robocup-gym serve`)"
+            ) from None
 
     def _send(self, text: str) -> None:
         if self.sync and not text.endswith("(syn)"):

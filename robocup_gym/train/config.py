@@ -29,7 +29,12 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from robocup_gym.backends import DEFAULT_ENGINE, available_backends
+from robocup_gym.backends import (
+    IN_PROCESS_BACKENDS,
+    BackendNotAvailableError,
+    available_backends,
+    resolve_backend,
+)
 
 ALGOS = ("ppo", "sac")
 
@@ -143,7 +148,7 @@ class TrainConfig:
     n_envs: int = DEFAULT_N_ENVS
     timesteps: int = 1_000_000
     seed: int = 0
-    backend: str = DEFAULT_ENGINE
+    backend: str | None = None
     """Simulator: ``ode`` (SimSpark's physics, exact, the default), ``mujoco`` (the fast
     approximation; its kicks do not work on rcssserver3d) or ``rcssserver3d`` (a real server);
     for a league robot (``env_kwargs`` ``robot: T1``) ``rcsssmj`` (its simulator in-process,
@@ -209,10 +214,10 @@ class TrainConfig:
         self.algo = self.algo.lower()
         if self.algo not in ALGOS:
             raise ValueError(f"unknown algorithm {self.algo!r}; choose one of {', '.join(ALGOS)}")
-        if self.env_kwargs.get("robot", "nao") != "nao" and self.backend == DEFAULT_ENGINE:
-            # a league robot (RCSSServerMJ) runs on the league's simulator, not on the Nao's
-            # default engine
-            self.backend = "rcsssmj"
+        try:
+            self.backend = resolve_backend(self.backend, robot=self.env_kwargs.get("robot", "nao"))
+        except BackendNotAvailableError as exc:
+            raise ValueError(str(exc)) from None
         backends = available_backends()
         if self.backend not in backends:
             raise ValueError(
@@ -244,7 +249,7 @@ class TrainConfig:
                     "assist_force needs assist_steps >= 1: the training steps over which the "
                     "push fades out"
                 )
-            if self.backend not in ("ode", "mujoco", "rcsssmj"):
+            if self.backend not in IN_PROCESS_BACKENDS:
                 raise ValueError(
                     f"assist_force pushes the robot in-process; the {self.backend!r} backend "
                     "cannot (use the ode or mujoco engine, rcsssmj for a league robot, or "
@@ -327,6 +332,10 @@ class TrainConfig:
     def merged(self, **overrides: Any) -> TrainConfig:
         """A copy with the given fields replaced (``None`` values are ignored)."""
         data = self.to_dict()
+        if overrides.get("backend") is None and self.backend == resolve_backend(
+            robot=self.env_kwargs.get("robot", "nao")
+        ):
+            data["backend"] = None  # the default backend follows the robot
         for key, value in overrides.items():
             if value is not None:
                 data[key] = value

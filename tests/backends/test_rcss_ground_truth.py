@@ -6,13 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robocup_gym.backends.rcssserver3d_backend import (
-    _MonitorTracker,
-    _quat_from_matrix,
-    _VelocityTrack,
-)
+from robocup_gym.backends.rcssserver3d_backend import _MonitorTracker, _VelocityTrack
 from robocup_gym.protocol.monitor import MonitorState
 from robocup_gym.server.client import AgentClient, MonitorClient
+from robocup_gym.sim.rotations import matrix_to_quat
 
 from .conftest import HOST
 from .mock_rcss import fixture_lines
@@ -127,5 +124,5 @@ def test_quaternion_from_rotation_matrix():
                 [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
             ]
         )
-        got = _quat_from_matrix(np.round(r, 6))
+        got = matrix_to_quat(np.round(r, 6))
         assert abs(np.dot(got, q)) == pytest.approx(1.0, abs=1e-6)

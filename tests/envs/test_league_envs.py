@@ -15,7 +15,12 @@ pytest.importorskip("rcsssmj", reason="the optional rcsssmj package is not insta
 from gymnasium.utils.env_checker import check_env
 
 import robocup_gym.envs
-from robocup_gym.backends import BackendDivergedError, RobotPose, make_backend
+from robocup_gym.backends import (
+    BackendDivergedError,
+    BackendNotAvailableError,
+    RobotPose,
+    make_backend,
+)
 from robocup_gym.envs import EnvConfigError, GetUp, VelocityKick, Walk
 from robocup_gym.envs.observations import torso_axes
 from robocup_gym.robot.league import (
@@ -75,7 +80,7 @@ def test_bad_league_options_are_clear_errors():
         VelocityKick(action_mode="torque")
     with pytest.raises(EnvConfigError, match=r"foot_force.*FRP.*T1 has none"):
         VelocityKick(robot="T1", observations=("joint_pos", "foot_force"))
-    with pytest.raises(EnvConfigError, match=r"'rcsssmj' in-process.*not on 'ode'"):
+    with pytest.raises(BackendNotAvailableError, match=r"'rcsssmj' in-process.*not on 'ode'"):
         VelocityKick(robot="T1", engine="ode")
     with pytest.raises(EnvConfigError, match=r"unknown joint 'LKneePitch' in joint_start_deg"):
         VelocityKick(robot="T1", joint_start_deg={"LKneePitch": 10.0})

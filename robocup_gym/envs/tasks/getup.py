@@ -26,6 +26,7 @@ from robocup_gym.envs.base_env import BaseEnv
 from robocup_gym.envs.config import BALL_REST_Z, ActionMode, EnvConfig, EnvConfigError
 from robocup_gym.envs.observations import up_z
 from robocup_gym.sim.pose import resting_torso_height
+from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply
 
 __all__ = [
     "GETUP_KEYFRAMES",
@@ -320,7 +321,6 @@ class GetUp(BaseEnv):
     config: GetUpConfig
     task_reset_options = frozenset({"start_side", "lying_pose"})
 
-    IN_PROCESS = ("ode", "mujoco", "rcsssmj")
     """Backends whose worlds the lying poses are dropped in; for a real server they are dropped
     on the ODE engine (SimSpark's own step), which it runs."""
 
@@ -384,9 +384,9 @@ class GetUp(BaseEnv):
                 margin = LYING_POSE_STOP_MARGIN_DEG
                 start = np.clip(rng.uniform(-spread, spread, n), lo + margin, hi - margin)
             tilt = math.radians(tilt_deg) * (1.0 if side == "front" else -1.0)
-            yaw = _quat_about((0.0, 0.0, 1.0), -math.pi / 2)
-            pitch = _quat_about((0.0, 1.0, 0.0), tilt)
-            quat = _quat_mul(pitch, yaw)
+            yaw = axis_angle_quat((0.0, 0.0, 1.0), -math.pi / 2)
+            pitch = axis_angle_quat((0.0, 1.0, 0.0), tilt)
+            quat = quat_multiply(pitch, yaw)
             z = None if self.league else resting_torso_height(self.config.robot_type, start, quat)
             self._lying[key] = (z, quat, start)
         return self._lying[key]
@@ -525,22 +525,3 @@ def scripted_target(script: list[tuple[float, np.ndarray]], step: int) -> np.nda
         if step < end:
             return targets
     return script[-1][1]
-
-
-def _quat_about(axis, angle: float) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation by ``angle`` rad about unit ``axis``
-    (MuJoCo's ``mju_axisAngle2Quat``)."""
-    import mujoco  # not at import time: importing mujoco fails on a bad MUJOCO_GL
-
-    q = np.zeros(4)
-    mujoco.mju_axisAngle2Quat(q, np.asarray(axis, dtype=float), angle)
-    return q
-
-
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The rotation ``b`` followed by ``a`` (MuJoCo's ``mju_mulQuat``: ``a · b``)."""
-    import mujoco
-
-    q = np.zeros(4)
-    mujoco.mju_mulQuat(q, np.asarray(a, dtype=float), np.asarray(b, dtype=float))
-    return q

@@ -474,7 +474,7 @@ class Walk(BaseEnv):
                     touchdowns.append(self._air[foot])
                 self._air[foot] = 0.0
             else:
-                self._air[foot] += 0.02
+                self._air[foot] += CYCLE_S
         terms = walk_reward_terms(
             self.config,
             velocity=velocity,

@@ -47,6 +47,7 @@ from robocup_gym.sim.engines.ode.fast import SANE_SPEED, FastLoops
 from robocup_gym.sim.engines.ode.fast import load as load_fast
 from robocup_gym.sim.field import GOAL_BOXES, WALLS
 from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat, rigid_move
+from robocup_gym.sim.rotations import axis_angle_quat, quat_to_matrix
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import AgentCommand, ForceResistance, GameState, GroundTruth
@@ -140,20 +141,6 @@ def _apart(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two axis-aligned boxes ``(minx, maxx, miny, maxy, minz, maxz)`` are apart (then
     their geoms cannot touch); ``ode_step.c``'s ``apart`` is the same test."""
     return a[1] < b[0] or b[1] < a[0] or a[3] < b[2] or b[3] < a[2] or a[5] < b[4] or b[5] < a[4]
-
-
-def _rotation(quat: np.ndarray) -> np.ndarray:
-    """The 3×3 matrix of a unit quaternion ``(w, x, y, z)`` (MuJoCo's ``mju_quat2Mat``)."""
-    m = np.zeros(9)
-    mujoco.mju_quat2Mat(m, quat)
-    return m.reshape(3, 3)
-
-
-def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation matrix by ``angle`` (rad) about ``axis`` (MuJoCo's ``mju_axisAngle2Quat``)."""
-    q = np.zeros(4)
-    mujoco.mju_axisAngle2Quat(q, axis, angle)
-    return _rotation(q)
 
 
 def _mat3(r: np.ndarray) -> ode.Mat3:
@@ -614,7 +601,7 @@ class OdeWorld(Senses):
         """Per body, the rotation and translation that take zero-pose torso-frame points to
         world points (relative to the torso's x, y; torso centre at height 0) for a torso with
         orientation ``quat``."""
-        root = _rotation(quat)
+        root = quat_to_matrix(quat)
         links = _kinematics(model)[1]
         rot: list = [None] * len(links)
         trans: list = [None] * len(links)
@@ -622,7 +609,7 @@ class OdeWorld(Senses):
             if p < 0:
                 rot[i], trans[i] = root, np.zeros(3)
                 continue
-            turn = _axis_rotation(axis, angles[k])
+            turn = quat_to_matrix(axis_angle_quat(axis, angles[k]))
             rot[i] = rot[p] @ turn
             trans[i] = rot[p] @ (a - turn @ a) + trans[p]
         return rot, trans

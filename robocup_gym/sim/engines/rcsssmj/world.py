@@ -29,7 +29,7 @@ import numpy as np
 
 from robocup_gym.robot.league import RcsssmjUnavailableError, clearance, league_robot
 from robocup_gym.sim.engines.rcsssmj.join import zero_filled_allocations
-from robocup_gym.sim.physics import finite_force
+from robocup_gym.sim.physics import CYCLE_S, finite_force
 from robocup_gym.types import PDCommand
 
 __all__ = ["CYCLE_S", "LeagueSimulationError", "LeagueWorld", "PDCommand"]
@@ -38,10 +38,6 @@ __all__ = ["CYCLE_S", "LeagueSimulationError", "LeagueWorld", "PDCommand"]
 class LeagueSimulationError(RuntimeError):
     """``rcsssmj``'s simulation failed in a step (the state is left as it was then: place the
     robots and the ball again before going on)."""
-
-
-CYCLE_S = 0.02
-"""One agent cycle, s (four 5 ms MuJoCo steps)."""
 
 
 @dataclass(frozen=True)
