@@ -36,7 +36,7 @@ def main(argv: list[str] | None = None) -> dict:
     from robocup_gym.sim.engines.mujoco.world import World
     from robocup_gym.sim.engines.ode import OdeUnavailableError, OdeWorld
     from robocup_gym.sim.engines.ode.compare import record_world, replay_recording
-    from robocup_gym.train.evaluate import run_episodes
+    from robocup_gym.train.episodes import run_episodes
     from robocup_gym.train.run import load_model, load_run
     from robocup_gym.train.tasks import make_env
 

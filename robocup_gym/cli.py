@@ -561,7 +561,7 @@ if typer is not None:
                 raise _usage_error(
                     f"--command expects FORWARD,LEFT,TURN (m/s, m/s, deg/s), got {command!r}"
                 )
-            from robocup_gym.train.export import read_metadata
+            from robocup_gym.train.onnx_policy import read_metadata
             from robocup_gym.train.pretrained import recorded_env_options
 
             try:

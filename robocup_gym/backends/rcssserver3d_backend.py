@@ -67,8 +67,8 @@ from robocup_gym.protocol.framing import FrameDecoder, encode_frame
 from robocup_gym.protocol.monitor import MonitorState
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim.kinematics import resting_torso_height
 from robocup_gym.sim.physics import CYCLE_S
-from robocup_gym.sim.pose import resting_torso_height
 from robocup_gym.sim.rotations import matrix_to_quat
 from robocup_gym.types import AgentCommand, GroundTruth, Perception
 

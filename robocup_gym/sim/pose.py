@@ -18,7 +18,6 @@ __all__ = [
     "joint_angles_array",
     "joint_index",
     "placement_quat",
-    "resting_torso_height",
     "rigid_move",
     "yaw_quat",
 ]
@@ -165,25 +164,3 @@ def rigid_move(
     rotated = (d[:, 0:1] * mat[:, 0] + d[:, 1:2] * mat[:, 1]) + d[:, 2:3] * mat[:, 2]
     new_r = np.stack([_matmul3(mat, ri) for ri in r])
     return (target + rotated).astype(float), new_r.astype(float)
-
-
-_KINEMATICS_WORLDS: dict[int, object] = {}
-"""One MuJoCo world per Nao type, for :func:`resting_torso_height` (kinematics only)."""
-
-
-def resting_torso_height(
-    robot_type: int, joint_angles_deg: np.ndarray, quat: Sequence[float] | None = None
-) -> float:
-    """Torso centre height (m) of a Nao of ``robot_type`` with these joint angles (canonical
-    order) and torso orientation (``quat`` (w, x, y, z); ``None``: upright) when its lowest point
-    rests on the ground 1 mm deep (ODE's surface layer), as ``place_robot(z=None)`` puts it:
-    the kinematics alone, read off a MuJoCo world (no physics runs)."""
-    world = _KINEMATICS_WORLDS.get(robot_type)
-    if world is None:
-        from robocup_gym.sim.engines.mujoco.world import World
-
-        world = _KINEMATICS_WORLDS[robot_type] = World([robot_type])
-    world.place_robot(  # type: ignore[attr-defined]
-        0, 0.0, 0.0, joint_angles_deg=np.asarray(joint_angles_deg, float), quat=quat, forward=False
-    )
-    return float(world.torso_position(0)[2])  # type: ignore[attr-defined]

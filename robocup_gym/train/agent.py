@@ -346,7 +346,7 @@ def run_onnx_agent(
 
     Episode ``k`` is reset with seed ``seed + k`` (as ``robocup-gym eval``).
     """
-    from robocup_gym.train.export import OnnxPolicy
+    from robocup_gym.train.onnx_policy import OnnxPolicy
     from robocup_gym.train.pretrained import pretrained_env, recorded_env_options
 
     if int(episodes) < 1:

@@ -483,7 +483,7 @@ class PeriodicEvalCallback(BaseCallback):
         return True
 
     def evaluate(self) -> dict[str, Any]:
-        from robocup_gym.train.evaluate import run_episodes
+        from robocup_gym.train.episodes import run_episodes
 
         if self.env is None:
             self.env = self.make_env()

@@ -35,8 +35,8 @@ from robocup_gym.backends import (
     available_backends,
     resolve_backend,
 )
-
-ALGOS = ("ppo", "sac")
+from robocup_gym.train.algos import ALGOS
+from robocup_gym.train.tasks import resolve_task
 
 PPO_PAPER_DEFAULTS: dict[str, Any] = {
     "learning_rate": 1e-4,
@@ -283,8 +283,6 @@ class TrainConfig:
         ``""`` for a name no task has (the trainer reports that)."""
         if self.env_id:
             return self.env_id
-        from robocup_gym.train.tasks import resolve_task
-
         try:
             return resolve_task(self.task)
         except ValueError:

@@ -11,50 +11,17 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from robocup_gym.backends import DEFAULT_ENGINE
-from robocup_gym.train.metrics import episode_record, summarize
+from robocup_gym.train.episodes import run_episodes
+from robocup_gym.train.metrics import summarize
+from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
 from robocup_gym.train.run import RunInfo, load_model, load_run
-
-
-def run_episodes(
-    model,
-    env,
-    episodes: int,
-    *,
-    seed: int | None = 0,
-    deterministic: bool = True,
-    obs_normalizer: Callable[[np.ndarray], np.ndarray] | None = None,
-    on_step: Callable[[Any], None] | None = None,
-) -> list[dict[str, float]]:
-    """Run ``episodes`` episodes of ``model`` on a single (non-vectorised) Gymnasium ``env``.
-
-    Episode ``k`` is reset with ``seed + k``. ``on_step(env)`` is called after every reset and
-    step (for video frames). Returns one metrics record per episode (see
-    :func:`robocup_gym.train.metrics.episode_record`).
-    """
-    records = []
-    for k in range(episodes):
-        obs, info = env.reset(seed=None if seed is None else seed + k)
-        if on_step is not None:
-            on_step(env)
-        ret, length, done = 0.0, 0, False
-        while not done:
-            o = obs_normalizer(obs) if obs_normalizer is not None else obs
-            action, _ = model.predict(o, deterministic=deterministic)
-            obs, reward, terminated, truncated, info = env.step(action)
-            if on_step is not None:
-                on_step(env)
-            ret += float(reward)
-            length += 1
-            done = terminated or truncated
-        records.append(episode_record(info, ret, length))
-    return records
+from robocup_gym.train.tasks import make_env
 
 
 def policy_and_env(
@@ -69,8 +36,6 @@ def policy_and_env(
     own options) or ``"zero"`` (``env_id`` on ``engine``, default the default engine, and an
     action of zeros: a baseline). ``env_overrides`` replace some of the environment's options
     (a benchmark's harder starts, say)."""
-    from robocup_gym.train.run import load_model, load_run
-    from robocup_gym.train.tasks import make_env
 
     extra = dict(env_overrides or {})
     if policy == "zero":
@@ -78,8 +43,6 @@ def policy_and_env(
         zeros = np.zeros(env.action_space.shape)
         return env, lambda obs: zeros
     if policy.startswith("pretrained:"):
-        from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
-
         onnx = pretrained_policy(policy.split(":", 1)[1])
         return pretrained_env(onnx, engine, extra), onnx
     info = load_run(policy)
@@ -266,7 +229,6 @@ def evaluate_run(
     ``backend`` evaluates on another simulator than the run trained on (e.g. ``"ode"``:
     SimSpark's physics on ODE itself, closed-loop); the video, if any, is recorded on the run's
     own backend."""
-    from robocup_gym.train.tasks import make_env
 
     if int(episodes) < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
@@ -320,7 +282,6 @@ def record_video(
     here with the joints stopped (exactly as the environment's wait) for at least ``roll_s``
     seconds, and drawn.
     """
-    from robocup_gym.train.tasks import make_env
 
     ensure_gl_backend()
     cfg = info.config

@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from robocup_gym.train.episodes import run_episodes
+from robocup_gym.train.onnx_policy import INPUT_NAME, METADATA_KEY, OUTPUT_NAME
 from robocup_gym.train.run import (
     RunInfo,
     curve_so_far,
@@ -30,11 +32,9 @@ from robocup_gym.train.run import (
     load_run,
     space_mismatch,
 )
+from robocup_gym.train.tasks import make_env
 
-METADATA_KEY = "robocup_gym"
 FORMAT = "robocup-gym-policy/1"
-INPUT_NAME = "obs"
-OUTPUT_NAME = "action"
 
 
 class ExportError(RuntimeError):
@@ -96,9 +96,6 @@ def _sample_observations(info: RunInfo, model, obs_space, n_random: int, seed: i
     samples = np.where(finite, low + u * (high - low), samples)
     rows = [samples.astype(np.float32)]
     try:
-        from robocup_gym.train.evaluate import run_episodes
-        from robocup_gym.train.tasks import make_env
-
         cfg = info.config
         env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options())
         seen: list[np.ndarray] = []
@@ -133,7 +130,6 @@ def _env_description(info: RunInfo, env_kwargs: dict[str, Any], model=None) -> d
         ValueError: with ``model``, the environment's observation or action space is not the
             policy's (an option given to the export changed it).
     """
-    from robocup_gym.train.tasks import make_env
 
     cfg = info.config
     out: dict[str, Any] = {}
@@ -314,45 +310,3 @@ def _compact_json(data: Any) -> str:
     return re.sub(
         r"\[\s+([^\[\]{}]*?)\s+\]", lambda m: "[" + " ".join(m.group(1).split()) + "]", text
     )
-
-
-def read_metadata(onnx_path: str | os.PathLike) -> dict[str, Any]:
-    """The ``robocup_gym`` metadata of an exported policy (from the ONNX file itself)."""
-    import onnx
-
-    proto = onnx.load(str(onnx_path), load_external_data=False)
-    for p in proto.metadata_props:
-        if p.key == METADATA_KEY:
-            return json.loads(p.value)
-    sidecar = Path(onnx_path).with_suffix(".json")
-    if sidecar.exists():
-        return json.loads(sidecar.read_text())
-    raise ValueError(f"{onnx_path} carries no robocup_gym metadata (not exported by robocup-gym?)")
-
-
-class OnnxPolicy:
-    """An exported policy: ``policy(obs) → action`` with ONNX Runtime (no torch needed)."""
-
-    def __init__(self, onnx_path: str | os.PathLike) -> None:
-        import onnxruntime as ort
-
-        self.path = Path(onnx_path)
-        try:
-            self.session = ort.InferenceSession(str(self.path), providers=["CPUExecutionProvider"])
-            self.metadata = read_metadata(self.path)
-        except ValueError:
-            raise
-        except Exception as exc:  # protobuf/runtime errors of a bad file
-            first = (str(exc).strip().splitlines() or [""])[0]
-            raise ValueError(
-                f"{self.path} is not a valid ONNX policy ({type(exc).__name__}: {first[:200]}); "
-                "make one with `robocup-gym export RUN --onnx FILE`"
-            ) from None
-
-    def __call__(self, obs: np.ndarray) -> np.ndarray:
-        x = np.asarray(obs, dtype=np.float32)
-        single = x.ndim == 1
-        if single:
-            x = x[None]
-        y = self.session.run([OUTPUT_NAME], {INPUT_NAME: x})[0]
-        return y[0] if single else y

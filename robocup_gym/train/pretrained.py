@@ -17,6 +17,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from robocup_gym.backends import DEFAULT_ENGINE
+from robocup_gym.train.episodes import run_episodes
+from robocup_gym.train.metrics import summarize
+from robocup_gym.train.onnx_policy import OnnxPolicy
+from robocup_gym.train.tasks import make_env
 
 if TYPE_CHECKING:
     from robocup_gym.backends.base import Backend
@@ -61,8 +65,6 @@ def pretrained_path(name: str) -> Path:
 def pretrained_policy(name: str):
     """The shipped policy ``name`` as an :class:`~robocup_gym.train.export.OnnxPolicy`
     (``policy(obs) → action``; ``policy.metadata`` has its task and options)."""
-    from robocup_gym.train.export import OnnxPolicy
-
     return OnnxPolicy(pretrained_path(name))
 
 
@@ -102,8 +104,6 @@ def pretrained_env(
     Raises:
         ValueError: the overrides give observations of another size than the policy takes.
     """
-    from robocup_gym.train.tasks import make_env
-
     meta = policy.metadata
     extra = dict(env_overrides or {})
     env = make_env(
@@ -138,9 +138,6 @@ def evaluate_pretrained(
     run: ``episodes`` episodes of its task with its options (episode ``k`` seeded ``seed + k``)
     on ``backend`` (default: the engine it was trained on). Returns the summary (mean return,
     the task's measures: ``success_rate``, ``forward_speed_mps_mean``, …)."""
-    from robocup_gym.train.evaluate import run_episodes
-    from robocup_gym.train.metrics import summarize
-
     if int(episodes) < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     policy = pretrained_policy(name)

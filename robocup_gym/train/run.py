@@ -24,19 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+from robocup_gym.train.algos import algo_class
 from robocup_gym.train.config import TrainConfig
 
 _CKPT = re.compile(r"model_(\d+)_steps\.zip$")
-
-
-def algo_class(algo: str):
-    """The Stable-Baselines3 class that trains ``algo``: SAC, or PPO with pipelined rollouts
-    (:class:`robocup_gym.train.pipelined.PipelinedPPO`, the same algorithm, less waiting)."""
-    from stable_baselines3 import SAC
-
-    from robocup_gym.train.pipelined import PipelinedPPO
-
-    return {"ppo": PipelinedPPO, "sac": SAC}[algo.lower()]
 
 
 def curve_so_far(curve: Path) -> tuple[float, int]:

@@ -157,36 +157,3 @@ def resolved_env_config(env_id: str, env_kwargs: dict[str, Any] | None) -> dict[
     out = config.to_dict()
     out.pop("backend_options", None)
     return out
-
-
-def validate_algo_kwargs(algo: str, algo_kwargs: dict[str, Any]) -> None:
-    """Check that every hyperparameter is a keyword of the algorithm's class.
-
-    Raises:
-        ValueError: naming the unknown keys and listing the valid ones.
-    """
-    import inspect
-
-    from robocup_gym.train.run import algo_class
-
-    valid: set[str] = set()
-    for klass in algo_class(algo).__mro__:
-        init = klass.__dict__.get("__init__")
-        if init is None:
-            continue
-        for p in inspect.signature(init).parameters.values():
-            if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.name != "self":
-                valid.add(p.name)
-    valid = {n for n in valid if not n.startswith("_")} - {
-        "policy",
-        "env",
-        "support_multi_env",
-        "supported_action_spaces",
-        "monitor_wrapper",
-    }
-    unknown = sorted(set(algo_kwargs) - valid)
-    if unknown:
-        raise ValueError(
-            f"unknown {algo.upper()} hyperparameter(s) {', '.join(map(repr, unknown))}; "
-            f"valid: {', '.join(sorted(valid))}"
-        )

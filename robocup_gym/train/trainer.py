@@ -12,15 +12,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from robocup_gym.train.algos import algo_class, validate_algo_kwargs
 from robocup_gym.train.config import TrainConfig
 from robocup_gym.train.run import checkpoints, curve_so_far, load_run, new_run_dir
-from robocup_gym.train.tasks import (
-    make_env,
-    resolve_task,
-    resolved_env_config,
-    task_name,
-    validate_algo_kwargs,
-)
+from robocup_gym.train.tasks import make_env, resolve_task, resolved_env_config, task_name
 
 
 @dataclass
@@ -99,7 +94,7 @@ def _start_from_run(model, init, cfg: TrainConfig) -> None:
     Raises:
         ValueError: the runs' algorithms or observation/action spaces differ.
     """
-    from robocup_gym.train.run import algo_class, space_mismatch
+    from robocup_gym.train.run import space_mismatch
 
     if init.config.algo != cfg.algo:
         raise ValueError(
@@ -304,7 +299,6 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
         from stable_baselines3.common.utils import set_random_seed
         from stable_baselines3.common.vec_env import VecNormalize
 
-        from robocup_gym.train.run import algo_class
         from robocup_gym.train.vecenv import make_vec_env
 
         init = load_run(cfg.init_from) if start_from is None and cfg.init_from else None

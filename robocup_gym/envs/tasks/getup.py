@@ -25,7 +25,7 @@ from robocup_gym.backends.base import RobotPose
 from robocup_gym.envs.base_env import BaseEnv
 from robocup_gym.envs.config import BALL_REST_Z, ActionMode, EnvConfig, EnvConfigError
 from robocup_gym.envs.observations import up_z
-from robocup_gym.sim.pose import resting_torso_height
+from robocup_gym.sim.kinematics import resting_torso_height
 from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply
 
 __all__ = [
