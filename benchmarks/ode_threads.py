@@ -8,7 +8,7 @@ thread pool). This script steps the same 22 flailing robots of mixed types (as
 
     python benchmarks/ode_threads.py            # 300 cycles, 2 threads
 
-Measured on the 2-core machine (session 10): ×1.35–1.6 with two threads, but the states part
+Measured on a 2-core machine: ×1.35–1.6 with two threads, but the states part
 after some cycles by ~1e-10 (the threaded step rounds differently), and chaos amplifies that: the
 world therefore steps single-threaded, as exactness comes first. Prints one JSON object last.
 """

@@ -31,7 +31,7 @@ from robocup_gym.types import AgentCommand
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURE = ROOT / "tests" / "data" / "rcssserver3d" / "perceptor_messages.txt"
 
-# §5.13 of the protocol spec: one real rcssserver3d 0.7.3 percept (2 decimals), one line.
+# wire reference §5.13: one real rcssserver3d 0.7.3 percept (2 decimals), one line.
 UPSTREAM_FIXTURE = ROOT / "tests" / "data" / "rcssserver3d" / "upstream_percept_example.txt"
 
 

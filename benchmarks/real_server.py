@@ -6,8 +6,7 @@ docs/rcssserver3d.md); elsewhere it says so and exits 0 with ``{"skipped": ...}`
 on the ``rcssserver3d`` backend in launch mode (its own server, sync mode, real time off), random
 actions, the episodes as the task defines them (40 steps, then the 20 wait cycles), every reset
 and wait cycle counted in the wall time. Reference: the paper's code ran VelocityKick at ~208 env
-steps/s with resets on this machine class (issue 19); the target is twice that, and resets within
-30 ms.
+steps/s with resets on a 2-core machine; the target is twice that, and resets within 30 ms.
 
     python benchmarks/real_server.py [--steps 2000] [--robot-type 0]
 

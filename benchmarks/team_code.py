@@ -1,6 +1,6 @@
 """A published team's own skills on ``robocup-gym serve``: FC Portugal's walk, kick and get-up.
 
-Issue 18 asks whether a team's unchanged agent behaves on ``serve`` as on rcssserver3d. This runs
+Does a team's unchanged agent behave on ``serve`` as on rcssserver3d? This runs
 FC Portugal's public codebase (https://github.com/m-abr/FCPCodebase; not part of this project,
 see below for what it needs) against an in-process ``robocup-gym serve``
 (sync mode, real time off, the server's default noise) on each engine and robot type, and
@@ -13,9 +13,9 @@ measures, from the server's ground truth:
 * **get-up**: cycles of its ``Get_Up`` skill from lying on the front / on the back (after its
   ``Fall_Front`` / ``Fall_Back`` poses and a settle), and whether the robot is still up 1 s later.
 
-Anchors from a real rcssserver3d 0.7.3 (issue 18/21, the same codebase): walk 8.14 m in 10 s on
-type 0 (0.76–0.85 m/s on types 1–4), kick median 3.05 m, get-up ~66 cycles from the front and
-~55 from the back (up in 12 of 17 tries from the back).
+Anchors from a real rcssserver3d 0.7.3 (the same codebase, measured elsewhere): walk 8.14 m in
+10 s on type 0 (0.76–0.85 m/s on types 1–4), kick median 3.05 m, get-up ~66 cycles from the front
+and ~55 from the back (up in 12 of 17 tries from the back).
 
 It needs an FCPCodebase checkout that runs (its C++ modules built, as its own scripts do on
 their first run) and an interpreter that runs it (numpy < 2, which the codebase was written

@@ -46,7 +46,7 @@ real server and the in-process world on the same command sequence in the same ru
 * ``t1_world_cycles_per_s``: the in-process world on the same commands, without making the
   perceptions (what a learner that reads the state needs); ``t1_world_perceiving_cycles_per_s``
   making every perception message too;
-* ``t1_world_vs_rcssservermj``: the ratio (issue 20 asks for 5×);
+* ``t1_world_vs_rcssservermj``: the ratio;
 * ``t1_mujoco_step_cycles_per_s``: MuJoCo's ``mj_step`` alone on the world's model (four 5 ms
   steps per cycle), the bound of any in-process world on this model;
 * ``t1_env_steps_per_s``: ``VelocityKick(robot="T1")`` with random actions, every cycle counted.

@@ -6,4 +6,4 @@ Importing the package registers the environments (``RobocupGym/SimpleKick-v0``,
 
 from robocup_gym import envs as envs  # registers the Gymnasium ids
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -27,8 +27,8 @@ reset are in :attr:`~Rcssserver3dBackend.last_reset`.
 
 A joint that sits on one of its stops cannot be driven off it: rcssserver3d takes a joint's new
 velocity only while the joint is strictly inside its limits and otherwise keeps the old one
-(spec §8.3), so a joint that the last command pushed onto a stop (a hip yaw after a fall, say)
-stays there for the rest of the session. The reset notices such a joint (on a stop, not moving
+(reference §8.3), so a joint that the last command pushed onto a stop (a hip yaw after a fall, say)
+stays there for as long as that robot lives. The reset notices such a joint (on a stop, not moving
 although commanded, for :data:`PINNED_CYCLES` cycles), stops waiting for it, reports it in
 :attr:`ResetStats.pinned` and logs a warning once per joint.
 """
@@ -88,7 +88,8 @@ _TIME_TOL = 0.006
 
 
 class _Link:
-    """A blocking-send, poll-receive framed connection (4-byte length prefix, spec §1.2)."""
+    """A blocking-send, poll-receive framed connection (4-byte length prefix; wire reference
+    §1.2)."""
 
     def __init__(self, sock: socket.socket, what: str) -> None:
         self.sock = sock
@@ -204,7 +205,7 @@ class GroundTruthSnapshot:
 
 class _VelocityTrack:
     """Finite-difference velocity of a body whose pose only comes when it moved (monitor deltas
-    resend a transform after a change of more than 0.005, spec §7.4).
+    resend a transform after a change of more than 0.005, wire reference §7.4).
 
     ``v = (p_last_change - p_change_before) / (t_now - t_change_before)``: the exact mean velocity
     between the last two updates when the body was just resent, falling off while no update comes.
@@ -250,10 +251,10 @@ class _MonitorTracker:
 
     Full frames (``RSG``) go through the general parser (:class:`MonitorState`), which also
     locates the ball and the torso in the scene graph. Delta frames (``RDS``, every cycle) are
-    only scanned: a delta mirrors the last full scene node for node (spec §7.4), so only the
-    ``SLT`` of the nodes on the ball's and the torso's paths are read, found by their position
-    in the depth-first order. A delta whose node count differs from the full scene means a full
-    frame was missed (:attr:`need_full`).
+    only scanned: a delta mirrors the last full scene node for node (wire reference §7.4), so
+    only the ``SLT`` of the nodes on the ball's and the torso's paths are read, found by their
+    position in the depth-first order. A delta whose node count differs from the full scene means
+    a full frame was missed (:attr:`need_full`).
     """
 
     def __init__(self) -> None:
@@ -324,8 +325,8 @@ class _MonitorTracker:
         m = _TIME.search(text, 0, header)
         if m is not None:
             self.time = float(m.group(1))
-        # A delta has exactly the nodes of the last full scene in the same order (spec §7.4), so
-        # the k-th "(nd" of the delta is the k-th node of the scene's depth-first walk. A
+        # A delta has exactly the nodes of the last full scene in the same order (wire reference
+        # §7.4), so the k-th "(nd" of the delta is the k-th node of the scene's depth-first walk. A
         # transform that moved carries "(nd (SLT …)" right after its opening.
         starts = [nd.start() for nd in _ND.finditer(text, header)]
         if len(starts) != self._n_nodes:
@@ -355,7 +356,7 @@ class _MonitorTracker:
                     continue
                 name = (node.model or "").rsplit("/", 1)[-1]
                 if name.startswith("naobody") and name.endswith(".obj"):
-                    # torso body transform > mesh wrapper transform > mesh (spec §7.5)
+                    # torso body transform > mesh wrapper transform > mesh (wire reference §7.5)
                     self._torso_path = path[:-2] if len(path) >= 3 else path[:-1]
                     break
         self._slt = {}
@@ -408,7 +409,7 @@ class _MonitorTracker:
 
     def select(self, game_time: float, clock_running: bool) -> GroundTruthSnapshot | None:
         """The snapshot describing the same cycle as a percept with ``game_time``: the newest
-        whose time is not later (frames may run one cycle ahead of percepts, spec §2); the
+        whose time is not later (frames may run one cycle ahead of percepts, wire reference §2); the
         newest of all when the clock stands still or every frame is later (clock set back)."""
         if not self.snapshots:
             return None
@@ -1105,7 +1106,7 @@ class Rcssserver3dBackend(Backend):
             self._pins_reported |= new_pins
             log.warning(
                 "reset: %s sit(s) on a joint stop; rcssserver3d ignores velocity commands for a "
-                "joint that is not strictly inside its limits (spec §8.3), so it stays there",
+                "joint that is not strictly inside its limits (reference §8.3), so it stays there",
                 ", ".join(sorted(new_pins)),
             )
         converged = done

@@ -256,7 +256,7 @@ class EnvConfig:
     target_stop_margin_deg: float = 0.5
     """Target-angle modes on the Nao: target angles stay this far inside each joint's stops,
     deg. rcssserver3d takes a joint's velocity only while the joint is strictly inside its
-    stops (spec §8.3), so a joint driven exactly onto a stop obeys or ignores the next command
+    stops (reference §8.3), so a joint driven exactly onto a stop obeys or ignores the next command
     on differences of rounding, and the same policy then moves differently in-process and on a
     real server; kept off the stops, it moves the same. 0: targets may reach the stops."""
     target_around_start_deg: float | None = None

@@ -1,4 +1,4 @@
-"""Names and numbers the protocol exposes (protocol spec §7.3, §9, §10)."""
+"""Names and numbers the protocol exposes (wire reference §7.3, §9, §10)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Agent commands, agent → server (protocol spec §3, §4).
+"""Agent commands, agent → server (wire reference §3, §4).
 
 Client side: :func:`format_command`, :func:`format_scene`, :func:`format_init` write what an
 agent sends. Server side: :func:`parse_agent_message` reads it into typed actions with the real

@@ -1,4 +1,4 @@
-"""Length-prefixed framing used on both server ports (protocol spec §1.2–1.4).
+"""Length-prefixed framing used on both server ports (wire reference §1.2–1.4).
 
 Every message is a 4-byte unsigned big-endian payload length followed by the payload; no
 terminator, no padding. Frames may arrive several per ``recv`` or split at any byte (also inside

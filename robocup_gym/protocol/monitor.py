@@ -1,4 +1,4 @@
-"""The monitor stream, server → monitor on port 3200 (protocol spec §7).
+"""The monitor stream, server → monitor on port 3200 (wire reference §7).
 
 Every frame is three expressions: the environment/game-state list, the header ``(RSG 0 1)``
 (full scene) or ``(RDS 0 1)`` (delta), and the scene graph (:mod:`.scenegraph`).

@@ -1,6 +1,6 @@
 """Agent percepts, server side: :class:`~robocup_gym.types.Perception` → rcssserver3d 0.7.3 text.
 
-The output is byte-compatible with the real server (protocol spec §5.1, §5.11, §5.13): one
+The output is byte-compatible with the real server (wire reference §5.1, §5.11, §5.13): one
 predicate per perceptor without separators, one space before every element inside a predicate,
 floats in fixed notation with 2 decimals (``-0.00`` included), integers as integers, predicates in
 the Nao's model order. Units as on the wire: degrees, deg/s, m/s², m, N, s.
@@ -20,13 +20,13 @@ from robocup_gym.types import ForceResistance, GameState, HeardMessage, Percepti
 __all__ = ["LANDMARK_ORDER", "PLAYER_PART_ORDER", "format_perception"]
 
 LANDMARK_ORDER = ("G1L", "G2L", "G2R", "G1R", "F1L", "F2L", "F1R", "F2R", "B")
-"""Order of the landmark/ball group inside ``See`` (model order, spec §5.10)."""
+"""Order of the landmark/ball group inside ``See`` (model order, wire reference §5.10)."""
 
 PLAYER_PART_ORDER = ("head", "rlowerarm", "llowerarm", "rfoot", "lfoot")
 """Order of the visible body parts inside a ``P`` entry."""
 
-# Model order of the joint and foot perceptors after GYR/ACC (spec §5.11). Entries starting with
-# "@" are slots for See and the FRPs; joints that the robot lacks are simply skipped.
+# Model order of the joint and foot perceptors after GYR/ACC (wire reference §5.11). Entries
+# starting with "@" are slots for See and the FRPs; joints that the robot lacks are simply skipped.
 _SEQUENCE = (
     "hj1",
     "hj2",

@@ -1,4 +1,5 @@
-"""Agent percepts, server → agent (protocol spec §5): text → :class:`~robocup_gym.types.Perception`.
+"""Agent percepts, server → agent: text → :class:`~robocup_gym.types.Perception` (wire reference
+§5).
 
 Units are kept as on the wire: joint angles, gyro rates and vision angles in **degrees**
 (gyro deg/s), accelerations m/s², distances and positions m, forces N, times s.
@@ -150,7 +151,8 @@ def _parse_fast(s: str, robot_type: int | None) -> Perception | None:
     """
     if not s.isascii():
         return None
-    # The head of a percept is always time, GS, hear…, GYR, ACC (spec §5.11): match in place.
+    # The head of a percept is always time, GS, hear…, GYR, ACC (wire reference §5.11): match it
+    # in place.
     m = _TIME.match(s)
     if m is None:
         return None

@@ -1,4 +1,4 @@
-"""The monitor's scene graph (SparkMonitor format, protocol spec §7.4–7.6).
+"""The monitor's scene graph (SparkMonitor format, wire reference §7.4–7.6).
 
 A full scene (``RSG``) is a tree of :class:`SceneNode`: transforms ``TRF`` with a local 4×4
 matrix ``SLT``, meshes ``SMN``/``StaticMesh`` and lights. A delta (``RDS``) has exactly the same
@@ -201,7 +201,7 @@ class SceneGraph:
         self.nodes: list[SceneNode] = nodes or []
 
     def apply_delta(self, delta: Sequence[DeltaNode]) -> None:
-        """Apply a delta scene (matched by position, spec §7.4).
+        """Apply a delta scene (matched by position, wire reference §7.4).
 
         Raises:
             ProtocolError: if the delta's shape differs from the scene (a full frame was
@@ -257,7 +257,7 @@ class SceneGraph:
         """Top-level subtrees that are robots: ``(side, unum)`` → index in :attr:`nodes`.
 
         A robot is the top-level node holding a mesh whose materials include ``matNum<N>``
-        and ``matLeft``/``matRight`` (spec §7.6); ``side`` is ``"left"`` or ``"right"``.
+        and ``matLeft``/``matRight`` (wire reference §7.6); ``side`` is ``"left"`` or ``"right"``.
         """
         found: dict[tuple[str, int], int] = {}
         for path, node, _ in self.walk():
@@ -407,7 +407,8 @@ class DeltaEncoder:
 
     A delta repeats a node's ``SLT`` only when an entry moved by more than
     :data:`SLT_THRESHOLD` since it was last sent, and a mesh's ``setVisible`` only when it
-    toggled (spec §7.4). Call :meth:`full` after any structural change, :meth:`delta` otherwise.
+    toggled (wire reference §7.4). Call :meth:`full` after any structural change, :meth:`delta`
+    otherwise.
     """
 
     def __init__(self, threshold: float = SLT_THRESHOLD) -> None:

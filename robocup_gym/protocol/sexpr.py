@@ -1,4 +1,4 @@
-"""S-expression reader and writer for the rcssserver3d wire format (protocol spec §1.5).
+"""S-expression reader and writer for the rcssserver3d wire format (wire reference §1.5).
 
 Atoms are strings (numbers stay text; convert them with :mod:`robocup_gym.protocol.values`),
 lists are Python lists. Whitespace (space, tab, newline, CR, VT, FF) separates atoms and is

@@ -1,4 +1,4 @@
-"""Monitor/trainer commands, monitor port → server (protocol spec §8).
+"""Monitor/trainer commands, monitor port → server (wire reference §8).
 
 Client side: one function per command returning its text (:func:`ball`, :func:`agent_move`,
 :func:`play_mode`, …) or :func:`format_trainer_command` for the typed form. Server side:

@@ -101,7 +101,7 @@ def robot_xml(
 def self_collision_excludes(prefix: str, model: NaoModel) -> str:
     """``<exclude>`` pairs that switch off contacts between parts of the same robot.
 
-    SimSpark puts each robot in one ODE space with inner collision disabled (spec §1.1).
+    SimSpark puts each robot in one ODE space with inner collision disabled (reference §1.1).
     """
     names = [b.name for b in model.bodies if b.collides]
     out = []

@@ -1,4 +1,4 @@
-"""The simulated Nao as data: bodies and hinge joints of every robot type (spec §1–3).
+"""The simulated Nao as data: bodies and hinge joints of every robot type (reference §1–3).
 
 This module is the single source of truth for the robot. :func:`nao_model` resolves the rsg
 construction (offsets of each part from the previous one, type parameters) into positions of
@@ -25,7 +25,7 @@ Vec3 = tuple[float, float, float]
 
 @dataclass(frozen=True)
 class Body:
-    """One rigid body of the robot (spec §1.2)."""
+    """One rigid body of the robot (reference §1.2)."""
 
     name: str
     """rsg name without side prefix for the torso/neck/head, e.g. ``rthigh``."""
@@ -67,7 +67,7 @@ class Body:
 
 @dataclass(frozen=True)
 class Joint:
-    """One hinge joint (spec §2.1)."""
+    """One hinge joint (reference §2.1)."""
 
     effector: str
     """Command name on the wire (``he1`` … ``rle7``); velocities in rad/s."""

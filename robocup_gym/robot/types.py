@@ -15,7 +15,7 @@ DEFAULT_MAX_SPEED = 3.14159265 * 351.77 / 180.0
 
 @dataclass(frozen=True)
 class RobotType:
-    """Parameters of one heterogeneous robot type (spec §3.2)."""
+    """Parameters of one heterogeneous robot type (reference §3.2)."""
 
     index: int
     description: str

@@ -108,6 +108,53 @@ class _OneLineErrors(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+_SWITCHES: tuple[tuple[str, bool, str], ...] = (
+    (
+        "--sync",
+        False,
+        "sync mode: wait for (syn) from every agent (default off)",
+    ),
+    (
+        "--real-time",
+        True,
+        "20 ms cycles on the wall clock (default on; --no-real-time runs as fast as possible)",
+    ),
+    (
+        "--ground-truth",
+        False,
+        "mypos/myorien/ballpos in See (default off; `robocup-gym agent` without a monitor "
+        "port needs it)",
+    ),
+    (
+        "--vision-noise",
+        True,
+        "vision noise, calibration offset and beam noise, as rcssserver3d (--no-vision-noise: "
+        "exact vision)",
+    ),
+    (
+        "--full-vision",
+        False,
+        "unrestricted vision: 360 degree view cones (default: 120 degrees)",
+    ),
+    (
+        "--field-lines",
+        True,
+        "field lines in See, as rcssserver3d 0.7.3 (--no-field-lines: none, as the SPL fork)",
+    ),
+    (
+        "--rules",
+        True,
+        "the automatic referee (--no-rules: play modes only by trainer command)",
+    ),
+    (
+        "--type-limits",
+        True,
+        "the league's per-team robot-type rules (--no-type-limits: e.g. 11 robots of type 0)",
+    ),
+)
+"""The on/off options (``--NAME`` / ``--no-NAME``): flag, default, help."""
+
+
 def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.ArgumentParser:
     p = _OneLineErrors(
         prog=prog,
@@ -129,50 +176,8 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
         help="monitor/trainer port (3200; 0 = a free port, printed); --server-port as rcssserver3d",
     )
     p.add_argument("--host", default="0.0.0.0", help="address to listen on (all interfaces)")
-    p.add_argument(
-        "--sync",
-        action=argparse.BooleanOptionalAction,
-        default=False,
-        help="sync mode: wait for (syn) from every agent (default off)",
-    )
-    p.add_argument(
-        "--real-time",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="20 ms cycles on the wall clock (default on; --no-real-time runs as fast as possible)",
-    )
-    p.add_argument(
-        "--ground-truth",
-        action=argparse.BooleanOptionalAction,
-        default=False,
-        help="mypos/myorien/ballpos in See (default off; `robocup-gym agent` without a monitor "
-        "port needs it)",
-    )
-    p.add_argument(
-        "--vision-noise",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="vision noise, calibration offset and beam noise, as rcssserver3d (--no-vision-noise: "
-        "exact vision)",
-    )
-    p.add_argument(
-        "--full-vision",
-        action=argparse.BooleanOptionalAction,
-        default=False,
-        help="unrestricted vision: 360 degree view cones (default: 120 degrees)",
-    )
-    p.add_argument(
-        "--field-lines",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="field lines in See, as rcssserver3d 0.7.3 (--no-field-lines: none, as the SPL fork)",
-    )
-    p.add_argument(
-        "--rules",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="the automatic referee (--no-rules: play modes only by trainer command)",
-    )
+    for flag, default, text in _SWITCHES:
+        p.add_argument(flag, action=argparse.BooleanOptionalAction, default=default, help=text)
     p.add_argument(
         "--monitor-interval",
         type=positive_int,
@@ -204,12 +209,6 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
         type=robot_type_list,
         default=(0, 1, 2, 3, 4),
         help="robot types agents may load, e.g. 0,4 (default 0,1,2,3,4)",
-    )
-    p.add_argument(
-        "--type-limits",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="the league's per-team robot-type rules (--no-type-limits: e.g. 11 robots of type 0)",
     )
     p.add_argument(
         "--config",

@@ -1,4 +1,4 @@
-"""Per-connection state of an agent (protocol spec §3, §4, §6)."""
+"""Per-connection state of an agent (wire reference §3, §4, §6)."""
 
 from __future__ import annotations
 

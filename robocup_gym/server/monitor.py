@@ -1,4 +1,4 @@
-"""The monitor stream (SparkMonitor format, protocol spec §7): environment + ``RSG``/``RDS`` scene.
+"""The monitor stream (SparkMonitor format, wire reference §7): environment + ``RSG``/``RDS`` scene.
 
 Every frame is three expressions: the environment/game-state list, ``(RSG 0 1)`` or ``(RDS 0 1)``,
 and the scene graph. The scene is the one of rcssserver3d's soccer world (lights, field, sky box,

@@ -1,4 +1,5 @@
-"""Teams and game flow of the server: ``init`` rules and the automatic referee (spec §3.4, §9).
+"""Teams and game flow of the server: ``init`` rules and the automatic referee (wire reference
+§3.4, reference §9).
 
 :class:`TeamRegistry` decides sides, uniform numbers, the robot-type composition limits and the
 sideline start slots exactly as rcssserver3d's ``GameStateAspect``. :class:`Referee` runs the game
@@ -86,7 +87,8 @@ class Player:
 
 
 class TeamRegistry:
-    """Sides, uniform numbers and robot types of the two teams (spec §3.4, §9.8).
+    """Sides, uniform numbers and robot types of the two teams (wire reference §3.4, reference
+    §9.8).
 
     Args:
         robot_types: The robot types a player may use (rcssserver3d: 0–4).

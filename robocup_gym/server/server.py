@@ -1,7 +1,7 @@
 """The server loop: the embedded world behind the rcssserver3d 0.7.3 protocol.
 
 One thread, one ``selectors`` loop, non-blocking sockets. Every cycle follows rcssserver3d's order
-(protocol spec §2):
+(wire reference §2):
 
 1. **read** – accept connections, read every socket, realise every complete frame: hinge targets,
    ``say`` and ``syn`` at once, ``scene``/``init``/``beam``/``pass`` are kept for step 3; in sync
@@ -95,7 +95,7 @@ class SimServer:
         agent_port: TCP port for agents (0 = any free port; see :attr:`agent_port` after binding).
         monitor_port: TCP port for monitors/trainers (0 = any free port).
         host: address to bind (``"0.0.0.0"`` = all interfaces, as rcssserver3d).
-        sync: sync mode: each cycle waits for ``(syn)`` from every agent (spec §6).
+        sync: sync mode: each cycle waits for ``(syn)`` from every agent (wire reference §6).
         real_time: make each cycle last at least 20 ms of wall time.
         ground_truth: add ``mypos``/``myorien``/``ballpos`` to ``See`` (FC Portugal's "cheats",
             needed by RobocupGym).

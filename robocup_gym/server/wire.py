@@ -2,7 +2,7 @@
 
 A :class:`Connection` owns one accepted TCP socket. Received bytes go through a
 :class:`~robocup_gym.protocol.framing.FrameDecoder` into :attr:`Connection.inbox`; outgoing frames
-are written without ever blocking (protocol spec §1.4): when the kernel buffer is full the unsent
+are written without ever blocking (wire reference §1.4): when the kernel buffer is full the unsent
 tail of the current frame is kept, the next send to that client only pushes that tail and drops the
 new message. So frame boundaries stay intact and a slow reader loses messages, never stalls the
 server.
@@ -140,7 +140,7 @@ class Connection:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.sock = sock
         self.cid = cid
-        """Client id: 1, 2, 3, … in accept order, never reused (spec §1.1)."""
+        """Client id: 1, 2, 3, … in accept order, never reused (wire reference §1.1)."""
         self.addr = addr
         self.kind = kind
         """``"agent"`` or ``"monitor"`` (for log messages)."""

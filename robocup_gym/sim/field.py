@@ -1,4 +1,4 @@
-"""The soccer field of rcssserver3d: dimensions, landmarks, lines seen by vision (spec §6)."""
+"""The soccer field of rcssserver3d: dimensions, landmarks, lines seen by vision (reference §6)."""
 
 from __future__ import annotations
 
@@ -38,9 +38,9 @@ WALLS: tuple[tuple[str, tuple[float, float, float], tuple[float, float, float]],
     ("wall_back", (0.0, 25.0, 0.0), (50.98, 1.0, 1.0)),
     ("wall_front", (0.0, -25.0, 0.0), (50.98, 1.0, 1.0)),
 )
-"""The four static walls around the field (spec §6.2): name, centre (m), full size (m)."""
+"""The four static walls around the field (reference §6.2): name, centre (m), full size (m)."""
 GOAL_BOXES = tuple(_goal_boxes(-1) + _goal_boxes(1))
-"""The goals' solid parts (spec §6.3), left goal first: side walls, back wall, top bar; name,
+"""The goals' solid parts (reference §6.3), left goal first: side walls, back wall, top bar; name,
 centre (m), full size (m). The goal sensor box makes no contacts and is not listed."""
 
 #: Landmarks seen by vision, in the server's model order (world frame, not mirrored), m.
@@ -81,7 +81,7 @@ def _field_lines() -> list[tuple[tuple[float, float], tuple[float, float]]]:
     return lines
 
 
-#: The 21 field lines of spec §6.4 as ((x1, y1), (x2, y2)), all at z = 0.
+#: The 21 field lines of reference §6.4 as ((x1, y1), (x2, y2)), all at z = 0.
 FIELD_LINES = _field_lines()
 #: The same as an array of shape (21, 2, 3) (end points with z = 0).
 FIELD_LINE_POINTS = np.array([[[a[0], a[1], 0.0], [b[0], b[1], 0.0]] for a, b in FIELD_LINES])

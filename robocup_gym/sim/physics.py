@@ -4,8 +4,8 @@ SimSpark steps ODE once per 20 ms cycle with the exact big-matrix solver (``dWor
 embedded world does the same: **one MuJoCo step of 20 ms per cycle**, every constraint row
 translated from ODE's ERP/CFM formulation to MuJoCo's soft-constraint parameters so that both
 solve the same regularised problem (:func:`ode_solref`, :func:`ode_impedance`). Commands, drag
-forces and the accelerometer sample are applied once per cycle, as in SimSpark (spec §7.7).
-``docs/physics.md`` derives the mapping and lists every knowing difference from SimSpark.
+forces and the accelerometer sample are applied once per cycle, as in SimSpark (reference §7.7).
+``docs/reference/engines.md`` derives the mapping and lists every known difference from SimSpark.
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ import numpy as np
 CYCLE_S = 0.02
 """One agent cycle = one SimSpark physics step, s."""
 GRAVITY = 9.81
-"""m/s² (spec §7.1)."""
+"""m/s² (reference §7.1)."""
 SURFACE_LAYER = 0.001
-"""ODE contact surface layer (m): resting bodies sink this deep into the ground (spec §7.1).
+"""ODE contact surface layer (m): resting bodies sink this deep into the ground (reference §7.1).
 
 ODE makes a contact as soon as two geoms overlap, but its normal row pushes them apart only by
 what exceeds this layer (target separation speed ``erp·max(depth − layer, 0)/h``); within the
@@ -31,7 +31,7 @@ GROUND_PLANE_Z = 0.0
 """Height of the ground's collision plane, m (z = 0, as in SimSpark)."""
 UNBOUNDED_FRICTION = 1e4
 """Coulomb μ that stands for SimSpark's μ = ∞ (every contact handler keeps ODE's ``dInfinity``,
-spec §7.3): ODE's friction rows are then unbounded and act whatever the normal force, even on a
+reference §7.3): ODE's friction rows are then unbounded and act whatever the normal force, even on a
 contact that carries none (a toe resting within the surface layer). MuJoCo bounds friction by
 μ times the normal force; with this μ its elliptic cone still transmits the full viscous
 friction of a contact with a near-zero normal force (μ = 10 let a hopping robot's toe slide
@@ -40,24 +40,25 @@ where ODE's stays put)."""
 BALL_RADIUS = 0.042
 BALL_MASS = 0.026
 BALL_LINEAR_DRAG = 0.01
-"""N·s/m (spec §5)."""
+"""N·s/m (reference §5)."""
 BALL_ANGULAR_DRAG = 0.00005
-"""N·m·s/rad (spec §5)."""
+"""N·m·s/rad (reference §5)."""
 BODY_LINEAR_DRAG = 0.01
-"""Drag on every robot body, N·s/m (spec §7.5)."""
+"""Drag on every robot body, N·s/m (reference §7.5)."""
 BODY_ANGULAR_DRAG = 0.01
-"""Angular drag on every robot body, N·m·s/rad (spec §7.5)."""
+"""Angular drag on every robot body, N·m·s/rad (reference §7.5)."""
 MOTOR_MAX_TORQUE = 10.0
-"""ODE motor FMax of every hinge, N·m (spec §2.4)."""
+"""ODE motor FMax of every hinge, N·m (reference §2.4)."""
 MOTOR_FUDGE_FACTOR = 1e-5
-"""ODE's hinge fudge factor (spec §2.4): at a stop the motor row gives way to a constant torque,
-the full FMax into the stop, or this fraction of it when the target pulls away from the stop."""
+"""ODE's hinge fudge factor (reference §2.4): at a stop the motor row gives way to a constant
+torque, the full FMax into the stop, or this fraction of it when the target pulls away from the
+stop."""
 JOINT_STOP_BOUNCE = 1.0
-"""Restitution of the hinge stops (spec §2.4): a joint that runs into a stop leaves it with the
+"""Restitution of the hinge stops (reference §2.4): a joint that runs into a stop leaves it with the
 speed it arrived at."""
 
 BALL_RESTITUTION = 0.8
-"""Ball contact bounce (spec §5); ODE applies it above 0.8 m/s approach speed."""
+"""Ball contact bounce (reference §5); ODE applies it above 0.8 m/s approach speed."""
 BALL_BOUNCE_MIN_SPEED = 0.8
 """Approach speed above which ODE applies the ball's restitution, m/s."""
 
@@ -107,13 +108,13 @@ def ode_solref(erp: float, d: float, *, restitution: float = 0.0, h: float = CYC
     return (-erp * d / (h * h), -(1.0 + restitution) * d / h)
 
 
-# ODE mixed contact parameters (spec §7.4) as (soft ERP, soft CFM).
+# ODE mixed contact parameters (reference §7.4) as (soft ERP, soft CFM).
 ROBOT_GROUND_ERP_CFM = (0.40, 1e-4)
 """Robot part ↔ ground (robot 0.6 mixed with the ground's 0.2; CFM from the robot side)."""
 ROBOT_SLIP = 0.005
 """ODE force-dependent slip of robot contacts, m/s per N."""
 JOINT_STOP_ERP_CFM = (0.8, 1e-8)
-"""Hinge stops (spec §2.4)."""
+"""Hinge stops (reference §2.4)."""
 BALL_GROUND_ERP_CFM = (0.35, 0.05)
 BALL_ROBOT_ERP_CFM = (0.55, 0.02505)
 BALL_WALL_ERP_CFM = (0.50, 0.05)

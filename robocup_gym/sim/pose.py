@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from robocup_gym.robot.nao import NaoModel
+from robocup_gym.sim.kinematics import resting_torso_height
 from robocup_gym.sim.rotations import yaw_quat
 
 __all__ = [
@@ -18,6 +19,7 @@ __all__ = [
     "joint_angles_array",
     "joint_index",
     "placement_quat",
+    "resting_torso_height",
     "rigid_move",
     "yaw_quat",
 ]

@@ -1,8 +1,8 @@
 """What a robot senses and says, the same over every physics engine.
 
 SimSpark's perceptors and its hear/say effector are defined on the world's state, not on the
-physics engine that produced it: the game state (``GS``), hearing (spec §4.8), vision (``See``,
-spec §4.7, :func:`robocup_gym.sim.vision.see`) and the assembly of one
+physics engine that produced it: the game state (``GS``), hearing (reference §4.8), vision (``See``,
+reference §4.7, :func:`robocup_gym.sim.vision.see`) and the assembly of one
 :class:`~robocup_gym.types.Perception`. :class:`Senses` implements them once; a world on an
 engine (:class:`robocup_gym.sim.engines.mujoco.world.World` on MuJoCo,
 :class:`robocup_gym.sim.engines.ode.OdeWorld` on
@@ -44,7 +44,7 @@ __all__ = ["HEARING_RANGE_M", "PAUSED_MODES", "SAY_MAX_CHARS", "AgentState", "Se
 PAUSED_MODES = ("BeforeKickOff", "GameOver")
 """Play modes in which the game clock stands still."""
 SAY_MAX_CHARS = 20
-"""Longest ``say`` message, characters (spec §4.8)."""
+"""Longest ``say`` message, characters (reference §4.8)."""
 HEARING_RANGE_M = 50.0
 """Farthest a ``say`` message is heard, m."""
 
@@ -63,7 +63,7 @@ class AgentState:
     perception_counter: int = 0
     """Cycles since the world's start/reset (vision comes every ``interval``-th)."""
     calibration: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    """This robot's fixed vision calibration offset, m (spec §4.7)."""
+    """This robot's fixed vision calibration offset, m (reference §4.7)."""
     heard: list[HeardMessage] = field(default_factory=list)
     hear_capacity: dict[str, int] = field(default_factory=lambda: {"team": 2, "opp": 2})
 
@@ -146,7 +146,7 @@ class Senses:
 
     # ------------------------------------------------------------------ beam
     BEAM_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
-    """Play modes in which an agent's ``beam`` is applied (spec §9.4)."""
+    """Play modes in which an agent's ``beam`` is applied (reference §9.4)."""
     BEAM_HEIGHT_M = 0.4
     """Torso centre height a beamed robot is put at, m (it then falls onto its feet)."""
 
@@ -154,9 +154,9 @@ class Senses:
         self, index: int, x: float, y: float, rot_deg: float
     ) -> tuple[float, float, float] | None:
         """Where SimSpark's ``beam`` to ``(x, y, rot_deg)`` in robot ``index``'s team frame puts
-        its torso: world ``(x, y, heading_deg)``, with the spec's noise when vision noise is on,
-        clamped to the own half; ``None`` when the beam is not applied (play mode, or a value
-        that is not finite)."""
+        its torso: world ``(x, y, heading_deg)``, with the reference's noise (§5) when vision
+        noise is on, clamped to the own half; ``None`` when the beam is not applied (play mode, or
+        a value that is not finite)."""
         if self.game.play_mode not in self.BEAM_MODES:
             return None
         if not all(math.isfinite(float(v)) for v in (x, y, rot_deg)):
@@ -173,9 +173,9 @@ class Senses:
         return x, y, rot_deg
 
     def beam(self, index: int, x: float, y: float, rot_deg: float) -> bool:
-        """SimSpark ``beam`` in the robot's team frame (spec §9.4): only in BeforeKickOff and the
-        goal modes; adds the spec's noise when vision noise is on; torso at z = 0.4 m, upright,
-        motor targets kept. Returns whether the beam was applied."""
+        """SimSpark ``beam`` in the robot's team frame (reference §9.4): only in BeforeKickOff and
+        the goal modes; adds the reference's noise (§5) when vision noise is on; torso at z = 0.4 m,
+        upright, motor targets kept. Returns whether the beam was applied."""
         pose = self._beam_pose(index, x, y, rot_deg)
         if pose is None:
             return False
@@ -185,7 +185,8 @@ class Senses:
     # ------------------------------------------------------------------ hear / say
     def say(self, index: int, message: str) -> None:
         """Broadcast ``message`` (≤ 20 printable characters, no spaces/parentheses) from robot
-        ``index`` to every robot with a team within 50 m (spec §4.8); heard in the next percept."""
+        ``index`` to every robot with a team within 50 m (reference §4.8); heard in the next
+        percept."""
         r = self.robot(index)
         if not message or len(message) > SAY_MAX_CHARS or r.team is None:
             return

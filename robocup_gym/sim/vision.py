@@ -1,4 +1,4 @@
-"""Restricted vision (``See``): geometry, field of view, line clipping and noise (spec §4.7).
+"""Restricted vision (``See``): geometry, field of view, line clipping and noise (reference §4.7).
 
 All functions are pure: they take world positions and the head pose and return polar coordinates
 ``(distance m, horizontal deg, vertical deg)`` relative to the head, horizontal positive to the

@@ -132,7 +132,7 @@ class EpisodeStatsCallback(BaseCallback):
         return summarize(self.recent)
 
     def overall_steps_per_s(self) -> float:
-        """Steps per second of this session (a resumed run's earlier steps not counted)."""
+        """Steps per second since this start (a resumed run's earlier steps not counted)."""
         elapsed = time.perf_counter() - self._t0
         return 0.0 if elapsed <= 0 else (self.num_timesteps - self._start_steps) / elapsed
 
@@ -170,7 +170,7 @@ class RichProgressCallback(BaseCallback):
     """What a training run shows while it runs: progress, measured rate, labelled elapsed and
     remaining time, recent reward and ball displacement, and every periodic evaluation.
 
-    The remaining time is the steps left divided by the rate measured over this session so far
+    The remaining time is the steps left divided by the rate measured since this start
     (evaluations and checkpoints included), so it settles instead of jumping with each rollout.
     Once ``estimate_after_s`` have passed it prints one line saying how long the whole run will
     take. On a terminal the display is two lines that fit the console's width (80 columns too);
@@ -203,11 +203,11 @@ class RichProgressCallback(BaseCallback):
 
     # ------------------------------------------------------------------ measures
     def elapsed_s(self) -> float:
-        """Wall-clock seconds of this training session."""
+        """Wall-clock seconds since this start."""
         return time.perf_counter() - self._t0
 
     def rate(self) -> float:
-        """Steps per second over this session so far (0 before the first step)."""
+        """Steps per second since this start (0 before the first step)."""
         elapsed = self.elapsed_s()
         done = self.num_timesteps - self._start_steps
         return done / elapsed if elapsed > 0 and done > 0 else 0.0

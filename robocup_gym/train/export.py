@@ -24,7 +24,13 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.train.episodes import run_episodes
-from robocup_gym.train.onnx_policy import INPUT_NAME, METADATA_KEY, OUTPUT_NAME
+from robocup_gym.train.onnx_policy import (  # noqa: F401 (import path kept)
+    INPUT_NAME,
+    METADATA_KEY,
+    OUTPUT_NAME,
+    OnnxPolicy,
+    read_metadata,
+)
 from robocup_gym.train.run import (
     RunInfo,
     curve_so_far,

@@ -14,6 +14,7 @@ from typing import Any
 import gymnasium as gym
 
 from robocup_gym.backends import DEFAULT_ENGINE
+from robocup_gym.train.algos import validate_algo_kwargs  # noqa: F401 (import path kept)
 
 NAMESPACE = "RobocupGym"
 _VERSION = re.compile(r"-v(\d+)$")

@@ -278,7 +278,7 @@ def train(
     dx = s.get("ball_dx_mean")
     say(
         f"[bold green]{'stopped' if interrupted else 'done'}[/bold green]: {steps_done:,} steps; "
-        f"this session {steps_done - (cfg.timesteps - remaining):,} steps in {wall:,.0f} s "
+        f"{steps_done - (cfg.timesteps - remaining):,} of them now, in {wall:,.0f} s "
         f"({result.steps_per_s:,.0f} steps/s)"
         + (f" · recent ball Δx {dx:.2f} m" if dx is not None else "")
         + (f" · recent reward {s['return_mean']:.2f}" if s.get("return_mean") is not None else "")

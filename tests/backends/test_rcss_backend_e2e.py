@@ -121,7 +121,7 @@ def test_repeated_resets_recover_a_fallen_robot(make_server, backends):
         )
         stats = b.last_reset
         # a joint the flailing left pushed onto a stop stays there (rcssserver3d takes a new
-        # velocity only strictly inside the limits, spec §8.3): it is reported, not waited for
+        # velocity only strictly inside the limits, reference §8.3): it is reported, not waited for
         pinned = np.isin(MODEL.perceptor_names, stats.pinned)
         assert stats.converged, stats
         lo, hi = MODEL.ranges_deg.T

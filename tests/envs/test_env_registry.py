@@ -61,3 +61,19 @@ def test_missing_backend_is_a_clear_error(monkeypatch, tmp_path):
         gym.make("RobocupGym/SimpleKick-v0", backend="rcssserver3d")
     with pytest.raises(BackendNotAvailableError, match=r"unknown backend 'bullet'"):
         gym.make("RobocupGym/VelocityKick-v0", backend="bullet")
+
+
+def test_every_registered_id_has_its_version_in_the_class_history():
+    """Each id's class documents its version (an id whose behaviour changes gets a new one)."""
+    import gymnasium as gym
+
+    from robocup_gym.envs import REGISTERED_IDS
+
+    for env_id in REGISTERED_IDS:
+        version = env_id.rsplit("-", 1)[1]
+        spec = gym.spec(env_id)
+        module, name = spec.entry_point.split(":")
+        cls = getattr(__import__(module, fromlist=[name]), name)
+        history = cls.__doc__.split("Version history:", 1)
+        assert len(history) == 2, f"{name} has no version history"
+        assert f"* {version}:" in history[1], f"{name}'s history lacks {version}"

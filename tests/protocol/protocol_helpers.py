@@ -21,7 +21,7 @@ PERCEPTS: list[str] = _lines("perceptor_messages.txt")
 MONITOR: list[str] = _lines("monitor_messages.txt")
 """6 raw monitor frames: header-only full, full after scene, full after init, 3 deltas."""
 UPSTREAM: str = _lines("upstream_percept_example.txt")[0]
-"""The upstream rcssserver3d 0.7.3 percept of protocol spec §5.13 (2 decimals)."""
+"""The upstream rcssserver3d 0.7.3 percept of wire reference §5.13 (2 decimals)."""
 
 
 def assert_same_perception(a: Perception, b: Perception) -> None:

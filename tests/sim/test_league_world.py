@@ -26,7 +26,7 @@ import rcssservermj_match  # noqa: E402
 def test_the_league_robots_come_from_rcsssmjs_model_files():
     assert {"T1", "K1"} <= set(league_robot_names())
     t1, k1 = league_robot("T1"), league_robot("K1")
-    assert len(t1.joints) == 23 and len(k1.joints) == 22  # as the issue and rcsssmj say
+    assert len(t1.joints) == 23 and len(k1.joints) == 22  # as rcsssmj's models say
     assert t1.model_file.is_file() and t1.model_file.parent.name == "T1"
     knee = t1.joint("Left_Knee_Pitch")
     assert knee.range_deg[0] == pytest.approx(0.0) and 100 < knee.range_deg[1] < 180

@@ -6,7 +6,7 @@ rows whose reference acceleration the world shifts between ``mj_step1`` and ``mj
 the rows first in the constraint list and in dof order (also checked at every World construction),
 a row per dof with non-zero ``dof_frictionloss`` only (the world drops a motor's row at a stop by
 zeroing it) and ``mj_step2`` solving with the ``efc_aref`` left by ``mj_step1`` and the world. Run
-this file with every supported MuJoCo version (docs/physics.md, "MuJoCo versions").
+this file with every supported MuJoCo version (docs/reference/engines.md §2.7).
 """
 
 import mujoco

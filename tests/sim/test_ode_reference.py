@@ -26,7 +26,7 @@ needs_ode = pytest.mark.skipif(
 
 
 def test_surface_mixing_gives_the_spec_table():
-    """SimSpark's rule (spec §7.3) applied to the handlers gives the pairs of spec §7.4."""
+    """SimSpark's rule (reference §7.3) applied to the handlers gives the pairs of its §7.4."""
     rg = mix_surfaces(ROBOT_SURFACE, GROUND_SURFACE)
     assert (rg.bounce, rg.soft_erp, rg.soft_cfm, rg.slip) == (None, 0.4, 1e-4, 0.005)
     bg = mix_surfaces(BALL_SURFACE, GROUND_SURFACE)
@@ -56,7 +56,8 @@ def test_missing_library_is_a_clear_error():
 
 @needs_ode
 def test_reference_reproduces_the_real_servers_kick():
-    """The scripted kick on ODE with the spec's parameters lands where the real server's did."""
+    """The scripted kick on ODE with the reference's parameters lands where the real server's
+    did."""
     from robocup_gym.sim.engines.ode import OdeWorld
 
     real = load_data("kick_D.json")
@@ -138,7 +139,7 @@ def test_world_follows_the_reference(name, torso_m, joints_deg):
 def test_world_kick_is_close_to_the_reference():
     """Kick D: the MuJoCo world's ball goes within 15 % of the reference's (ODE's maximal
     coordinates let the leg's joints stretch by millimetres at kick speed, which MuJoCo's
-    joints cannot: docs/physics.md)."""
+    joints cannot: docs/reference/engines.md §2.8)."""
     from robocup_gym.sim.engines.ode.compare import compare, motions
 
     c = compare(next(m for m in motions() if m.name == "kick_D"))

@@ -53,7 +53,7 @@ def test_over_speed_is_clipped_to_max_speed(world):
 
 
 def test_a_joint_driven_into_its_stop_bounces_and_takes_commands_only_inside():
-    """ODE's stops (spec §2.4, §8.3): fully elastic, so a motor pushing into a stop makes the
+    """ODE's stops (reference §2.4, §8.3): fully elastic, so a motor pushing into a stop makes the
     joint rattle against it (one cycle beyond, one cycle inside); a command that arrives while
     the joint is at or beyond the stop is ignored (the old target stays), one that arrives while
     it is inside is taken and drives it away."""
@@ -142,7 +142,7 @@ def test_perception_units_and_frames(world):
 
 
 def _frp_from_contacts(w: World, index: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """FRP (spec §4.6) computed independently from MuJoCo's contact list: per foot/toe geom the
+    """FRP (reference §4.6) computed independently from MuJoCo's contact list: per foot/toe geom the
     sum of the contact forces acting on it and the force-magnitude-weighted mean contact point,
     in the foot frame (``None`` where contacts exist but carry no force)."""
     m, d = w.model, w.data
@@ -426,7 +426,7 @@ def test_drag_on_every_robot_body_from_the_velocities_at_the_start_of_the_cycle(
         world_module.mujoco = mujoco
     assert len(seen) == w.substeps
     for b, v in before.items():
-        # F = −0.01 v at the centre of mass, τ = −0.01 ω (spec §7.5), held over the cycle
+        # F = −0.01 v at the centre of mass, τ = −0.01 ω (reference §7.5), held over the cycle
         np.testing.assert_allclose(seen[0][b], -0.01 * v, rtol=1e-9, atol=1e-15)
 
 

@@ -75,7 +75,7 @@ GETUP_KEYFRAMES: dict[str, tuple[tuple[float, tuple[float, ...]], ...]] = {
 right joints mirror them); the last is held to the episode's end. Found by an open-loop search
 (CMA-ES) on the ODE engine, Nao type 0, from the first trained policies' motions: over lying
 poses 0–15, then 0–13 each played clean and with 1.5° of noise on every target, so that the
-script stands a policy's exploration (docs/training.md, *A scripted get-up*)."""
+script stands a policy's exploration (docs/training.md, *Get-up*)."""
 GETUP_KEYFRAMES_BY_TYPE: dict[int, dict[str, tuple[tuple[float, tuple[float, ...]], ...]]] = {
     0: GETUP_KEYFRAMES,
     1: {
@@ -161,7 +161,7 @@ class GetUpConfig(EnvConfig):
     observations: tuple[str, ...] = GETUP_OBSERVATIONS
     action_mode: ActionMode | str = ActionMode.TARGET_ANGLE
     """Target angles (a get-up is a sequence of poses): learns far faster than velocities here
-    (session 13: unassisted evaluation return ~150 after 300k steps against ~15 after 2M)."""
+    (unassisted evaluation return ~150 after 300k steps against ~15 after 2M with velocities)."""
     mirror_actions: bool = True
     """Left and right joints mirror each other (a get-up is symmetric; 10 action values)."""
     ball_start_pos: tuple[float, float, float] = (1.0, 0.0, BALL_REST_Z)
@@ -189,13 +189,13 @@ class GetUpConfig(EnvConfig):
     """With ``reference_motion``: which Nao type's scripted get-up plays
     (:data:`GETUP_KEYFRAMES_BY_TYPE`; ``None``: the robot's own type's). The shipped ``get-up``,
     a small residual learnt over type 0's script, does better on types 1 and 3 over their own
-    scripts than over type 0's (docs/training.md, *Scripts per Nao type*), so ``None`` serves it
+    scripts than over type 0's (docs/training.md, *Get-up*), so ``None`` serves it
     too; a number pins one script."""
     reference_reach_deg: float = 5.0
     """With ``reference_motion``: how far an action of ±1 moves a target from the scripted
     one, deg (clipped to the joint's range). Small: the script stands random noise of 1–2°
-    on its targets but not a policy's steady offsets of a few degrees (session 16: residual
-    policies with 20° of reach got up from the back less often than zero actions)."""
+    on its targets but not a policy's steady offsets of a few degrees (residual policies
+    with 20° of reach got up from the back less often than zero actions)."""
     lying_pose_spread_deg: float = 10.0
     """How far poses 1… are drawn from pose 0: tilt and joint angles, ± deg (joint angles
     kept in range)."""
@@ -295,6 +295,10 @@ class GetUp(BaseEnv):
     rcssserver3d whose trainer turns robots (the SPL fork's ``rot``; the lying poses are then
     dropped on the ODE engine). ``TorsoAssist`` (``robocup-gym train get-up --assist-force …``)
     helps while training.
+
+    Version history:
+
+    * v0: first release (robocup-gym 0.2.0).
     """
 
     config_class = GetUpConfig

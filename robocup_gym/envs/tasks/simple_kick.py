@@ -37,6 +37,10 @@ class SimpleKick(BaseEnv):
 
     There are no reward coefficients. Everything else is :class:`SimpleKickConfig` /
     :class:`EnvConfig` (pass fields as keyword arguments).
+
+    Version history:
+
+    * v0: first release (robocup-gym 0.2.0).
     """
 
     config_class = SimpleKickConfig

@@ -76,6 +76,10 @@ class VelocityKick(BaseEnv):
     ==========================  =======  ========  ===========================================
 
     Everything else is :class:`EnvConfig` (pass fields as keyword arguments).
+
+    Version history:
+
+    * v0: first release (robocup-gym 0.2.0).
     """
 
     config_class = VelocityKickConfig

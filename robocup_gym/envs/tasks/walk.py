@@ -114,7 +114,7 @@ class WalkConfig(EnvConfig):
     """A new command is drawn every this many steps (0 = one command per episode)."""
     standing_command_prob: float = 0.2
     """Probability that a drawn command is zero (stand still); at 0.1 a walk learns standing
-    still less well (session 14's runs D and E)."""
+    still less well (docs/training.md, *Walk*)."""
     tracking_sigma: float = 0.1
     """Width of the tracking kernels exp(−error² / σ), (m/s)² and (rad/s)² (MuJoCo Playground:
     0.25; at 0.25 standing still pays much of what walking does, and the policy stands)."""
@@ -363,6 +363,10 @@ class Walk(BaseEnv):
     Foot contact is read from the foot force perceptors (``FRP``) a policy has too.
     ``reset(options={"velocity_command": (vx, vy, turn_deg_s)})`` fixes the episode's first
     command (evaluation, the benchmark).
+
+    Version history:
+
+    * v0: first release (robocup-gym 0.2.0).
     """
 
     config_class = WalkConfig

@@ -1,6 +1,7 @@
 """Assemble the MJCF of a world: field, goals, walls, ball and any number of Naos.
 
-Geometry from spec §6 (field 30 × 20 m, goals 2.1 × 0.6 × 0.8 m at x = ±15, walls) and §5 (ball).
+Geometry from reference §6 (field 30 × 20 m, goals 2.1 × 0.6 × 0.8 m at x = ±15, walls) and §5
+(ball).
 """
 
 from __future__ import annotations
@@ -144,7 +145,7 @@ def scene_xml(robots: list[RobotSlot], physics: PhysicsConfig | None = None) -> 
 
 
 FRP_GEOMS = {"rf": "rfoot", "lf": "lfoot", "rf1": "rtoe", "lf1": "ltoe"}
-"""Force resistance perceptor name → the robot geom (= body) it measures (spec §4.6)."""
+"""Force resistance perceptor name → the robot geom (= body) it measures (reference §4.6)."""
 
 
 def frp_sensor_name(prefix: str, perceptor: str) -> str:
@@ -153,7 +154,7 @@ def frp_sensor_name(prefix: str, perceptor: str) -> str:
 
 
 def _frp_sensors(slot: RobotSlot) -> list[str]:
-    """The force resistance perceptors (spec §4.6) as MuJoCo contact sensors, one per foot (and
+    """The force resistance perceptors (reference §4.6) as MuJoCo contact sensors, one per foot (and
     toe, type 4): ``reduce="netforce"`` sums the forces of all the geom's contacts of the step
     and reports them at the force-magnitude-weighted mean of the contact points, which is
     exactly SimSpark's ``FRP`` (``f`` and ``c``, world frame here; the world turns them into the
@@ -169,7 +170,7 @@ def _frp_sensors(slot: RobotSlot) -> list[str]:
 
 
 def _drag_sensors(slot: RobotSlot) -> list[str]:
-    """Velocity sensors the body drag is computed from (spec §7.5): per robot body, in body
+    """Velocity sensors the body drag is computed from (reference §7.5): per robot body, in body
     order, the linear then the angular velocity of its centre of mass in world coordinates
     (``objtype="body"`` is the body's inertial frame). MuJoCo evaluates them in ``mj_step1``,
     so the drag of a cycle costs the world one vector operation."""

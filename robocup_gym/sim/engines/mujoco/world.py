@@ -91,7 +91,7 @@ def _contiguous(ids: np.ndarray) -> slice | None:
 
 _AUTO_DISABLE_SPEED = 0.01
 """ODE's default auto-disable thresholds (linear m/s, angular rad/s) that SimSpark keeps: a body
-slower than both is resting (spec §7.1)."""
+slower than both is resting (reference §7.1)."""
 
 
 @dataclass(kw_only=True)
@@ -208,7 +208,7 @@ class World(Senses):
         """Robot index of every geom (-1: not a robot's), built on first use."""
         self._ball_qpos = int(m.jnt_qposadr[m.joint("ball").id])
         self._ball_qvel = int(m.jnt_dofadr[m.joint("ball").id])
-        # Ball drag (spec §5) as damping of its free joint: translational dofs are world-frame
+        # Ball drag (reference §5) as damping of its free joint: translational dofs are world-frame
         # velocities, so this is exactly F = -0.01 v; rotational damping is isotropic.
         m.dof_damping[self._ball_qvel : self._ball_qvel + 3] = phys.BALL_LINEAR_DRAG
         m.dof_damping[self._ball_qvel + 3 : self._ball_qvel + 6] = phys.BALL_ANGULAR_DRAG
@@ -445,7 +445,7 @@ class World(Senses):
         """Check, once per world, what the joint motors rely on in MuJoCo's constraint rows, so
         that a MuJoCo version that lays them out differently fails here with a clear error
         instead of silently driving the wrong rows (tested with MuJoCo 3.4 and 4.0, see
-        docs/physics.md):
+        docs/reference/engines.md §2.7):
 
         * the dof friction-loss rows (the motors) are the first ``nrows`` constraint rows, one per
           motor dof with non-zero ``dof_frictionloss``, in dof order, and no other row is one;
@@ -488,7 +488,7 @@ class World(Senses):
             raise RuntimeError(
                 f"MuJoCo {mujoco.__version__}: {problem}. The World's joint motors "
                 "(robocup_gym/sim/engines/mujoco/world.py, robocup_gym/robot/mjcf.py) rely on it; "
-                "use a tested MuJoCo version (docs/physics.md, 'MuJoCo versions')."
+                "use a tested MuJoCo version (docs/reference/engines.md §2.7)."
             )
 
     def _check_contact_rows(self) -> None:
@@ -731,7 +731,7 @@ class World(Senses):
                 when placing several robots in a row and call :meth:`forward` once at the
                 end (robots still overlapping half-way would create thousands of contacts).
             asleep: Leave the robot asleep, as ODE's auto-disable leaves a resting robot that a
-                trainer ``move`` teleports (spec §7.1, §8.3; fixture README: the real robot then
+                trainer ``move`` teleports (reference §7.1, §8.3: the real robot then
                 hangs where it was put, e.g. 2 mm above its resting height, until the first
                 non-zero joint velocity): it is held exactly in the placed pose, feeling no
                 gravity, until a non-zero motor target is realised for it or one of its parts
@@ -1029,7 +1029,7 @@ class World(Senses):
             self._raise_diverged()
 
     def _wake_commanded(self) -> None:
-        """A non-zero motor target wakes a sleeping robot for this very step (spec §8.3)."""
+        """A non-zero motor target wakes a sleeping robot for this very step (reference §8.3)."""
         for r in self._sleepers:
             if _any(r.targets != 0.0):
                 r.asleep = False
@@ -1078,7 +1078,7 @@ class World(Senses):
         if self._sleepers:
             self._wake_commanded()
         targets = self._targets
-        # ODE at a stop (spec §2.4, ODE's addLimot): the motor row gives way to the stop row
+        # ODE at a stop (reference §2.4, ODE's addLimot): the motor row gives way to the stop row
         # (fully elastic, ``_bounce_stops``) and a constant torque, FMax into the stop when the
         # target pushes into it or is 0, fudge·FMax away from it when the target pulls away.
         # FMax into a stop that the stop row holds only caps how fast the joint may leave it:
@@ -1135,7 +1135,7 @@ class World(Senses):
             mujoco.mj_step1(m, d)
             if sub == 0:
                 # mj_step1 brought poses and velocities up to the state before this cycle's
-                # physics: sample the accelerometer (spec §4.5) and set the cycle's drag
+                # physics: sample the accelerometer (reference §4.5) and set the cycle's drag
                 self._sense_accelerometers()
                 self._apply_drag()
             # The motor rows' reference acceleration −B·v becomes −B·(v − target): MuJoCo's
@@ -1184,14 +1184,14 @@ class World(Senses):
         return np.where(at_hi, -speed_hi, speed_lo)
 
     def _fudge_torques(self, away: np.ndarray, at_lo: np.ndarray) -> None:
-        """ODE's torque on a joint at a stop whose target pulls it ``away`` (spec §2.4): only
+        """ODE's torque on a joint at a stop whose target pulls it ``away`` (reference §2.4): only
         fudge factor × FMax (1e-4 N·m), out of the stop (positive at the lower stop); 0 for
         every other joint."""
         fudge = phys.MOTOR_FUDGE_FACTOR * phys.MOTOR_MAX_TORQUE
         self._data.qfrc_applied[self._qvel_j] = np.where(at_lo, fudge, -fudge) * away
 
     def _bounce_stops(self) -> None:
-        """Fully elastic joint stops (spec §2.4, ODE bounce 1): a stop row whose joint runs
+        """Fully elastic joint stops (reference §2.4, ODE bounce 1): a stop row whose joint runs
         into the stop asks for the larger of its ERP correction and the reflected speed
         (ODE: ``c = max(−erp·err/h, −bounce·v)``), as a shift of its reference acceleration.
         Called between ``mj_step1`` and ``mj_step2``; the stop rows follow the friction rows."""
@@ -1212,9 +1212,9 @@ class World(Senses):
         aref += bounce
 
     def _surface_layer(self) -> None:
-        """ODE's contact surface layer (spec §7.1) on this step's contacts: the normal row pushes
-        only by the depth beyond the 1 mm layer (reference acceleration ``−B·v − K·I·min(pos +
-        layer, 0)`` instead of MuJoCo's ``−B·v − K·I·pos``, i.e. a shift of
+        """ODE's contact surface layer (reference §7.1) on this step's contacts: the normal row
+        pushes only by the depth beyond the 1 mm layer (reference acceleration
+        ``−B·v − K·I·min(pos + layer, 0)`` instead of MuJoCo's ``−B·v − K·I·pos``, i.e. a shift of
         ``K·I·max(pos, −layer)``), so a contact within the layer still stops further approach
         and carries friction but does not push out. Called between ``mj_step1`` (which made
         the rows) and ``mj_step2`` (which solves them). Every contact here has three rows
@@ -1231,7 +1231,7 @@ class World(Senses):
 
     def _ball_ground_contact_mode(self) -> None:
         """Bouncy ball-ground contact only if the ball will hit the ground this cycle faster than
-        0.8 m/s (ODE's bounce threshold, spec §5); otherwise ODE's over-damped soft contact."""
+        0.8 m/s (ODE's bounce threshold, reference §5); otherwise ODE's over-damped soft contact."""
         z = self._qpos[self._ball_qpos + 2]
         vz = self._qvel[self._ball_qvel + 2]
         bouncy = bool(
@@ -1243,7 +1243,7 @@ class World(Senses):
             self._ball_bouncy = bouncy
 
     def _sense_accelerometers(self) -> None:
-        """Each robot's accelerometer (spec §4.5): the torso's change of velocity over the last
+        """Each robot's accelerometer (reference §4.5): the torso's change of velocity over the last
         cycle plus gravity, in the torso frame, m/s²; called once the poses are current."""
         for r, v, rot, a_world in self._accel_io:
             np.subtract(v, r.prev_vel, out=a_world)
@@ -1253,7 +1253,7 @@ class World(Senses):
             a_world.dot(rot, out=r.accel)
 
     def _apply_drag(self) -> None:
-        """Drag F = −0.01 v at each robot body's centre of mass and τ = −0.01 ω (spec §7.5),
+        """Drag F = −0.01 v at each robot body's centre of mass and τ = −0.01 ω (reference §7.5),
         held over the cycle; from the drag sensors, which ``mj_step1`` has just evaluated."""
         if self._drag_force is not None:
             np.multiply(self._drag_vel, _DRAG, out=self._drag_force)
@@ -1344,7 +1344,8 @@ class World(Senses):
 
     def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
         """``FRP`` readings of robot ``index`` from the contacts of the last physics step: force
-        (N) and force-weighted centre of pressure (m), both in the foot's own frame (spec §4.6).
+        (N) and force-weighted centre of pressure (m), both in the foot's own frame (reference
+        §4.6).
         A foot without contact is omitted; one whose contacts carry no force repeats its last
         reading (as SimSpark does for a disabled body)."""
         r = self.robot(index)

@@ -79,7 +79,7 @@ def _random_flail(seed: int, cycles: int = 150, hold: int = 5, scale: float = 0.
 def _both(side_value: dict[str, float]) -> dict[str, float]:
     """Apply leg/arm commands given for the right side to both sides, mirrored: the joints
     whose ranges are mirrored between the sides (hip and ankle roll, shoulder yaw, elbow roll
-    and yaw; spec §2.1) change sign."""
+    and yaw; reference §2.1) change sign."""
     out = dict(side_value)
     for name, v in side_value.items():
         if name[0] == "r":

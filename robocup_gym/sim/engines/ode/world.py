@@ -4,17 +4,17 @@ against.
 rcssserver3d advances the Open Dynamics Engine once per 20 ms cycle (``dWorldStep``, ODE 0.16,
 double precision). :class:`OdeWorld` builds the same robot (from the same tables,
 :func:`robocup_gym.robot.nao.nao_model`), ball and ground on that engine, with the parameters of
-``shared/spec/simspark-model.md``: world CFM 1e-5, surface layer 1 mm, auto-disable on; hinge
+``docs/reference/simspark.md``: world CFM 1e-5, surface layer 1 mm, auto-disable on; hinge
 motors with FMax 10 N·m, CFM 1e-8, stop ERP 0.8 / CFM 1e-8, fudge factor 1e-5 and bounce 1;
 contact surfaces mixed from each side's handler as SimSpark does (§7.3); drag before each step
 (§7.5); the hinge effector's rules (clip to the joint's max speed, ignore commands while the
 joint is not strictly inside its limits, wake the body on a non-zero command, §8.3).
 
-It is the default engine of the environments (since session 10) and of ``robocup-gym serve``
-(since session 11). It has every body perceptor (joint angles, gyro, accelerometer, the foot
-force perceptors from ODE's contact feedback, as SimSpark computes them), and the game state,
-hearing, vision and perception of :mod:`robocup_gym.sim.senses`, the same code as the MuJoCo
-world's, and the field's walls and goals (:mod:`robocup_gym.sim.field`). It needs the system
+It is the default engine of the environments and of ``robocup-gym serve``. It has every body
+perceptor (joint angles, gyro, accelerometer, the foot force perceptors from ODE's contact
+feedback, as SimSpark computes them), and the game state, hearing, vision and perception of
+:mod:`robocup_gym.sim.senses`, the same code as the MuJoCo world's, and the field's walls and
+goals (:mod:`robocup_gym.sim.field`). It needs the system
 library ``libode`` (:mod:`robocup_gym.sim.engines.ode.lib`).
 
 It has the MuJoCo world's interface (:class:`robocup_gym.sim.engines.mujoco.world.World`):
@@ -53,21 +53,21 @@ from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
 from robocup_gym.types import AgentCommand, ForceResistance, GameState, GroundTruth
 
 WORLD_CFM = 1e-5
-"""SimSpark's world CFM (spec §7.1); the world ERP stays ODE's default 0.2."""
+"""SimSpark's world CFM (reference §7.1); the world ERP stays ODE's default 0.2."""
 WORLD_ERP = 0.2
 HINGE_CFM = 1e-8
 HINGE_STOP_ERP, HINGE_STOP_CFM = phys.JOINT_STOP_ERP_CFM
 HINGE_FUDGE_FACTOR = 1e-5
 HINGE_STOP_BOUNCE = 1.0
 MAX_CONTACTS = 4
-"""Contact points per geom pair (spec §7.3)."""
+"""Contact points per geom pair (reference §7.3)."""
 SANE_POSITION = 1e3
 """A body this far (m) from the origin in a coordinate, or at NaN, means the world diverged."""
 
 
 @dataclass(frozen=True)
 class Surface:
-    """One contact handler's surface settings (spec §7.3); ``None`` = that mode is off."""
+    """One contact handler's surface settings (reference §7.3); ``None`` = that mode is off."""
 
     bounce: tuple[float, float] | None
     """(restitution, minimum approach speed m/s)."""
@@ -97,7 +97,7 @@ def _mix(a, b):
 
 def mix_surfaces(a: Surface, b: Surface) -> Surface:
     """The contact parameters SimSpark gives a pair: a mode enabled on both sides averages the
-    two values, on one side takes that side's value, on neither stays off (spec §7.3)."""
+    two values, on one side takes that side's value, on neither stays off (reference §7.3)."""
     return Surface(
         bounce=_mix(a.bounce, b.bounce),
         soft_erp=_mix(a.soft_erp, b.soft_erp),
@@ -265,7 +265,7 @@ class OdeWorld(Senses):
         self._ball_geom = lib.dCreateSphere(None, phys.BALL_RADIUS)
         lib.dGeomSetBody(self._ball_geom, self._ball)
         self._statics = []
-        """The walls and the goals' solid parts (spec §6.2, §6.3): static boxes, no body."""
+        """The walls and the goals' solid parts (reference §6.2, §6.3): static boxes, no body."""
         for _name, centre, size in (*WALLS, *GOAL_BOXES):
             g = lib.dCreateBox(None, *size)
             lib.dGeomSetPosition(g, *centre)
@@ -351,7 +351,8 @@ class OdeWorld(Senses):
     # ------------------------------------------------------------------ construction
     def _build_robot(self, type_index: int) -> OdeRobot:
         """One robot of type ``type_index`` in the zero pose at the origin (torso frame = world
-        frame, so the spec's anchors and axes apply as they are); :meth:`place_robot` moves it."""
+        frame, so the reference's anchors and axes apply as they are); :meth:`place_robot` moves
+        it."""
         lib = self._lib
         model = nao_model(type_index)
         names = [b.name for b in model.bodies]
@@ -381,7 +382,7 @@ class OdeWorld(Senses):
         for j in model.joints:
             h = lib.dJointCreateHinge(self._world, None)
             c, p = bodies[names.index(j.child)], bodies[names.index(j.parent)]
-            lib.dJointAttach(h, c, p)  # body 1 = child, body 2 = parent (spec §1.5)
+            lib.dJointAttach(h, c, p)  # body 1 = child, body 2 = parent (reference §1.5)
             lib.dJointSetHingeAnchor(h, *j.anchor)
             lib.dJointSetHingeAxis(h, *j.axis)  # the angle is 0 in this (zero) pose
             lo, hi = j.range_rad
@@ -416,7 +417,7 @@ class OdeWorld(Senses):
         """Every geom pair that can touch, as ``(geom1, geom2, body1, body2, surface)`` (body
         ``None`` for the static ground) with its mixed surface: robot parts with the ground,
         the ball and other robots' parts (never with their own robot: inner collision is
-        disabled, spec §1.1); the ball with the ground."""
+        disabled, reference §1.1); the ball with the ground."""
         robot_ground = _surface_parameters(mix_surfaces(ROBOT_SURFACE, GROUND_SURFACE))
         robot_ball = _surface_parameters(mix_surfaces(ROBOT_SURFACE, BALL_SURFACE))
         robot_robot = _surface_parameters(mix_surfaces(ROBOT_SURFACE, ROBOT_SURFACE))
@@ -829,7 +830,7 @@ class OdeWorld(Senses):
     def _sense_accelerometers(self) -> None:
         """Each torso's accelerometer, sampled as
         :class:`robocup_gym.sim.engines.mujoco.world.World` samples
-        it (spec §4.5): the change of the torso's velocity since the last sample over one cycle
+        it (reference §4.5): the change of the torso's velocity since the last sample over one cycle
         plus gravity, in the torso frame, m/s²; taken just before the physics step."""
         st = self._read_state()
         for r in self.robots:
@@ -841,7 +842,7 @@ class OdeWorld(Senses):
             r.accel[:] = a @ row[3:12].reshape(3, 3)
 
     def _read_feedback(self, m: int) -> None:
-        """SimSpark's force resistance perceptors from the step's contact feedback (spec §4.6):
+        """SimSpark's force resistance perceptors from the step's contact feedback (reference §4.6):
         per foot/toe the total contact force on it and the contacts' centre weighted by the
         magnitude of each contact's force, world frame. ``m`` sensed contacts: contact ``k``
         has feedback slot ``k``, pair ``self._out_pair[k]`` and position ``self._out_pos[k]``
