@@ -191,14 +191,14 @@ class _RealTruth:
         import threading
 
         from robocup_gym.backends.process import ServerProcess
-        from robocup_gym.backends.rcssserver3d_backend import _MonitorTracker
+        from robocup_gym.backends.rcssserver3d_monitor import MonitorTracker
         from robocup_gym.server.client import MonitorClient
 
         self.proc = ServerProcess(sync=True, real_time=False, monitor_step=0.02)
         self.proc.start()
         self.agent_port, self.monitor_port = self.proc.agent_port, self.proc.monitor_port
         self.truth: dict[float, tuple] = {}
-        self._tracker = _MonitorTracker()
+        self._tracker = MonitorTracker()
         self._tracker.set_agent("left", 1)
         self._client = MonitorClient("127.0.0.1", self.monitor_port, timeout=60.0)
         self._stop = threading.Event()

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
+    "PLAY_MODES",
     "AgentCommand",
     "ForceResistance",
     "GameState",
@@ -49,6 +50,32 @@ class ForceResistance:
     """Centre of pressure ``c`` in m, in the foot's own frame (origin at the foot box centre)."""
     force: np.ndarray
     """Total contact force ``f`` on the foot in N, foot frame (z ≈ +22.6 N when standing)."""
+
+
+PLAY_MODES: tuple[str, ...] = (
+    "BeforeKickOff",
+    "KickOff_Left",
+    "KickOff_Right",
+    "PlayOn",
+    "KickIn_Left",
+    "KickIn_Right",
+    "corner_kick_left",
+    "corner_kick_right",
+    "goal_kick_left",
+    "goal_kick_right",
+    "offside_left",
+    "offside_right",
+    "GameOver",
+    "Goal_Left",
+    "Goal_Right",
+    "free_kick_left",
+    "free_kick_right",
+    "direct_free_kick_left",
+    "direct_free_kick_right",
+    "pass_left",
+    "pass_right",
+)
+"""Play-mode names by numeric id (agents and trainers use names, monitors ids); case-sensitive."""
 
 
 @dataclass

@@ -18,7 +18,6 @@ import os
 import re
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -27,7 +26,7 @@ import time
 
 from robocup_gym.backends.base import BackendError
 from robocup_gym.backends.process import ChildProcess, _death_signal_preexec, free_ports
-from robocup_gym.protocol.framing import FrameDecoder, connect, encode_frame, recv_frame
+from robocup_gym.protocol.connection import Connection
 from robocup_gym.protocol.league import format_pd_commands
 from robocup_gym.sim.engines.rcsssmj.join import SERVER_ENVIRONMENT
 
@@ -71,9 +70,9 @@ class RcssServerMJProcess(ChildProcess):
         self.stop_grace_s = float(stop_grace_s)
         self.folder = tempfile.mkdtemp(prefix="robocup_gym_rcssservermj_")
         self.proc: subprocess.Popen | None = None
-        self._monitor: tuple[socket.socket, FrameDecoder] | None = None
+        self._monitor: Connection | None = None
         self._scene: list[bytes] = []
-        self._taken: socket.socket | None = None
+        self._taken: Connection | None = None
         self.agent_port = self.monitor_port = 0
         last = ""
         for _ in range(3):
@@ -105,18 +104,17 @@ class RcssServerMJProcess(ChildProcess):
             if self.proc.poll() is not None:
                 return False
             try:
-                s = connect("127.0.0.1", self.monitor_port, timeout=1.0)
+                conn = Connection.open("127.0.0.1", self.monitor_port, what="monitor", timeout=1.0)
             except OSError:
                 time.sleep(0.05)
                 continue
-            decoder = FrameDecoder()
             try:
-                first = recv_frame(s, decoder, max(0.5, deadline - time.monotonic()))
-            except (OSError, ConnectionError, TimeoutError):
-                s.close()
+                first = conn.recv(max(0.5, deadline - time.monotonic()))
+            except (OSError, TimeoutError):  # (ConnectionError is an OSError)
+                conn.close()
                 time.sleep(0.05)
                 continue
-            self._monitor = (s, decoder)
+            self._monitor = conn
             self._scene = [first]
             self._drain_stop = threading.Event()
             self._drainer = threading.Thread(target=self._drain, daemon=True)
@@ -143,18 +141,13 @@ class RcssServerMJProcess(ChildProcess):
         never blocks on a full socket), keeping the newest full scene and the deltas after it
         (whoever takes the monitor needs them: the server sends the next full one only every
         250 cycles)."""
-        s, decoder = self._monitor
-        s.settimeout(0.05)
+        conn = self._monitor
         while not self._drain_stop.is_set():
             try:
-                data = s.recv(1 << 16)
-            except TimeoutError:
-                continue
+                frames = conn.available(0.05)  # a partial frame stays in the decoder
             except OSError:
                 return
-            if data == b"":
-                return
-            for frame in decoder.feed(data):  # a partial frame stays in the decoder
+            for frame in frames:
                 self._keep(frame)
 
     def _keep(self, frame: bytes) -> None:
@@ -163,9 +156,9 @@ class RcssServerMJProcess(ChildProcess):
         elif self._scene and len(self._scene) < _SCENE_FRAMES_KEPT:
             self._scene.append(frame)
 
-    def take_monitor(self) -> tuple[socket.socket, FrameDecoder, list[bytes]]:
-        """The open monitor connection (from the start-up check), its frame decoder (which
-        holds any partly received message) and the messages read so far that the scene needs
+    def take_monitor(self) -> tuple[Connection, list[bytes]]:
+        """The open monitor connection (from the start-up check; its decoder holds any partly
+        received message) and the messages read so far that the scene needs
         (the newest full scene and the deltas after it), for the caller to read and to send
         monitor commands on; the caller must keep it open while the server runs (see
         :meth:`_wait_until_stepping`): :meth:`stop` closes it.
@@ -177,12 +170,10 @@ class RcssServerMJProcess(ChildProcess):
             raise BackendError("the monitor connection was taken already")
         self._drain_stop.set()
         self._drainer.join()
-        s, decoder = self._monitor
-        self._monitor = None
-        self._taken = s
-        s.settimeout(None)
+        conn, self._monitor = self._monitor, None
+        self._taken = conn
         scene, self._scene = self._scene, []
-        return s, decoder, scene
+        return conn, scene
 
     def _spawn(self) -> None:
         log = open(os.path.join(self.folder, "server.out"), "wb")  # noqa: SIM115
@@ -227,7 +218,7 @@ class RcssServerMJProcess(ChildProcess):
         if self._monitor is not None:
             self._drain_stop.set()
             self._drainer.join()
-            self._monitor[0].close()
+            self._monitor.close()
             self._monitor = None
         if self._taken is not None:
             self._taken.close()
@@ -262,20 +253,19 @@ class LeagueAgentLink:
         self, port: int, robot: str, team: str, number: int, *, timeout: float = 20.0
     ) -> None:
         self.timeout = float(timeout)
-        self.sock = connect("127.0.0.1", port, timeout=timeout)
-        self._decoder = FrameDecoder()
+        self.conn = Connection.open("127.0.0.1", port, what="agent", timeout=timeout)
+        self.sock = self.conn.sock
         self.send(f"(init {robot} {team} {int(number)})".encode())
 
     def send(self, payload: bytes) -> None:
-        self.sock.sendall(encode_frame(payload))
+        self.conn.send(payload)
 
     def recv(self) -> bytes:
         """The next message (a perception), as bytes."""
-        return bytes(recv_frame(self.sock, self._decoder, self.timeout))
+        return bytes(self.conn.recv())
 
     def close(self) -> None:
-        with contextlib.suppress(OSError):
-            self.sock.close()
+        self.conn.close()
 
     def __enter__(self) -> LeagueAgentLink:
         return self

@@ -34,9 +34,7 @@ What differs from the in-process backend (``"rcsssmj"``), both stepping the same
 
 from __future__ import annotations
 
-import contextlib
 import math
-import socket
 import time
 from collections import Counter, deque
 from typing import Any
@@ -45,8 +43,8 @@ import numpy as np
 
 from robocup_gym.backends.base import Backend, BackendError, EpisodeSetup
 from robocup_gym.backends.league_backend import _model_quat, league_ball, league_pose, pd_commands
+from robocup_gym.protocol.connection import Connection
 from robocup_gym.protocol.errors import ProtocolError
-from robocup_gym.protocol.framing import FrameDecoder, connect, encode_frame
 from robocup_gym.protocol.league import (
     LeagueMonitorReader,
     LeaguePerception,
@@ -123,20 +121,20 @@ class RcssServerMJBackend(Backend):
         self.reset_cycles = int(reset_cycles)
         self.server: RcssServerMJProcess | None = None
         self.link = None
-        self._monitor: socket.socket | None = None
+        self._monitor: Connection | None = None
         try:
             self._reader = LeagueMonitorReader()
             self._frames: deque[tuple[int, np.ndarray | None]] = deque(maxlen=_FRAMES_KEPT)
             if port is None:
                 self.server = RcssServerMJProcess()
                 port = self.server.agent_port
-                self._monitor, self._mdecoder, scene = self.server.take_monitor()
+                self._monitor, scene = self.server.take_monitor()
                 for frame in scene:
                     self._take_frame(frame)
             else:
-                self._monitor = connect(host, int(monitor_port), timeout=timeout)
-                self._mdecoder = FrameDecoder()
-            self._monitor.setblocking(False)
+                self._monitor = Connection.open(
+                    host, int(monitor_port), what="monitor", timeout=timeout
+                )
             self.link = LeagueAgentLink(int(port), self.robot, self.team, 1, timeout=timeout)
             self._recv()  # the first perception, which the server waits an answer to
         except BaseException:
@@ -180,12 +178,9 @@ class RcssServerMJBackend(Backend):
 
     def _monitor_command(self, text: str) -> None:
         try:
-            self._monitor.setblocking(True)
-            self._monitor.sendall(encode_frame(text.encode()))
+            self._monitor.send(text)
         except OSError as e:
             raise BackendError(f"the rcssservermj monitor connection failed ({e})") from e
-        finally:
-            self._monitor.setblocking(False)
 
     def _read_monitor(self, until_cycle: int | None = None) -> None:
         """Take every monitor frame that has arrived; with ``until_cycle``, wait (up to the
@@ -195,15 +190,11 @@ class RcssServerMJBackend(Backend):
         deadline = time.monotonic() + self.timeout
         while True:
             try:
-                data = self._monitor.recv(1 << 16)
-            except BlockingIOError:
-                data = None
-            except OSError as e:
+                frames = self._monitor.available()
+            except OSError as e:  # (a closed connection included)
                 raise BackendError(f"the rcssservermj monitor connection failed ({e})") from e
-            if data == b"":
-                raise BackendError("rcssservermj closed the monitor connection")
-            if data:
-                for frame in self._mdecoder.feed(data):
+            if frames:
+                for frame in frames:
                     self._take_frame(frame)
                 continue
             if until_cycle is None or (self._frames and self._frames[-1][0] >= until_cycle):
@@ -370,8 +361,7 @@ class RcssServerMJBackend(Backend):
             self.server.close()  # (closes the monitor connection after the server ended)
             self.server = None
         elif self._monitor is not None:
-            with contextlib.suppress(OSError):
-                self._monitor.close()
+            self._monitor.close()
         self._monitor = None
 
     def describe(self) -> dict[str, Any]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from robocup_gym.types import PLAY_MODES  # defined with the game state
+
 __all__ = [
     "DEFAULT_AGENT_PORT",
     "DEFAULT_ENVIRONMENT",
@@ -15,31 +17,6 @@ DEFAULT_AGENT_PORT = 3100
 """TCP port agents connect to."""
 DEFAULT_MONITOR_PORT = 3200
 """TCP port of monitors and trainers."""
-
-PLAY_MODES: tuple[str, ...] = (
-    "BeforeKickOff",
-    "KickOff_Left",
-    "KickOff_Right",
-    "PlayOn",
-    "KickIn_Left",
-    "KickIn_Right",
-    "corner_kick_left",
-    "corner_kick_right",
-    "goal_kick_left",
-    "goal_kick_right",
-    "offside_left",
-    "offside_right",
-    "GameOver",
-    "Goal_Left",
-    "Goal_Right",
-    "free_kick_left",
-    "free_kick_right",
-    "direct_free_kick_left",
-    "direct_free_kick_right",
-    "pass_left",
-    "pass_right",
-)
-"""Play-mode names by numeric id (agents and trainers use names, monitors ids); case-sensitive."""
 
 TEAM_SIDES = ("Left", "Right")
 """Team atoms of trainer commands (``None`` is also accepted by ``kickOff``)."""

@@ -7,26 +7,20 @@ trainer commands. Both work against a real rcssserver3d too.
 
 from __future__ import annotations
 
-import contextlib
-
-from robocup_gym.protocol.framing import (
-    FrameDecoder,
-    connect,
-    decode_payload,
-    recv_frame,
-    send_frame,
-)
+from robocup_gym.protocol.connection import Connection
 
 
 class _Client:
     def __init__(self, host: str, port: int, timeout: float = 10.0, retries_s: float = 5.0):
-        self.sock = connect(host, port, timeout=timeout, retry_s=retries_s)
+        self.conn = Connection.open(host, port, what=self.what, timeout=timeout, retry_s=retries_s)
+        self.sock = self.conn.sock
         self.timeout = timeout
-        self.decoder = FrameDecoder()
+
+    what = "server"
 
     def send(self, text: str | bytes) -> None:
         """Send one message (one frame)."""
-        send_frame(self.sock, text, self.timeout)
+        self.conn.send(text)
 
     def recv(self, timeout: float | None = None) -> str:
         """Block for the next message and return its text.
@@ -35,11 +29,10 @@ class _Client:
             TimeoutError: nothing complete within ``timeout`` (default: the client's timeout).
             ConnectionError: the server closed the connection.
         """
-        return decode_payload(recv_frame(self.sock, self.decoder, timeout or self.timeout))
+        return self.conn.recv_text(timeout or self.timeout)
 
     def close(self) -> None:
-        with contextlib.suppress(OSError):
-            self.sock.close()
+        self.conn.close()
 
     def __enter__(self):
         return self
@@ -50,6 +43,8 @@ class _Client:
 
 class AgentClient(_Client):
     """An agent connection: ``scene``, ``init``, then one message per received percept."""
+
+    what = "agent"
 
     def handshake(
         self,
@@ -71,3 +66,5 @@ class AgentClient(_Client):
 
 class MonitorClient(_Client):
     """A monitor/trainer connection."""
+
+    what = "monitor"

@@ -30,7 +30,6 @@ import contextlib
 import errno
 import logging
 import math
-import re
 import selectors
 import signal
 import socket
@@ -41,38 +40,27 @@ from typing import ClassVar
 
 import numpy as np
 
-from robocup_gym.protocol import effectors as fx
-from robocup_gym.protocol import trainer as tc
 from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT
 from robocup_gym.protocol.framing import encode_frame
 from robocup_gym.protocol.perceptor_format import format_perception
-from robocup_gym.robot.nao import nao_model
 from robocup_gym.server.agent import AgentState
+from robocup_gym.server.agent_messages import AgentMessages
 from robocup_gym.server.monitor import MonitorStream, RobotView
-from robocup_gym.server.referee import BEAM_MODES, InitError, Player, Referee
+from robocup_gym.server.trainer_commands import TrainerCommands
 from robocup_gym.server.wire import (
     Connection,
-    agent_actions,
-    fast_joint_message,
-    trainer_commands,
 )
 from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES, SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator
 from robocup_gym.sim.physics import CYCLE_S
+from robocup_gym.sim.referee import BEAM_MODES, Player, Referee
 from robocup_gym.sim.vision import VisionConfig
 
 log = logging.getLogger("robocup_gym.server")
 
-SCENE_PATHS = ("rsg/agent/nao/nao_hetero.rsg", "rsg/agent/nao/nao.rsg")
 _POLL_S = 0.25
 """Longest single wait in select (so a stop request or a sync time-out is noticed quickly)."""
-
-
-_CLIPPED = "%s: velocity %g rad/s is beyond the joint's maximum speed ±%g rad/s; clipped"
-_NOT_A_NUMBER = re.compile(rb"\(([a-z]{2,3}\d)\s+([^\s()]+)\s*\)")
-"""``(name value)`` items of an agent message, to find values that are not numbers."""
-_NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:inf|nan)", re.I)
 
 
 class PortInUseError(OSError):
@@ -87,7 +75,7 @@ class MonitorState:
         self.needs_full = True
 
 
-class SimServer:
+class SimServer(AgentMessages, TrainerCommands):
     """rcssserver3d-compatible server around the embedded world (SimSpark's step on ODE by
     default, or the MuJoCo approximation).
 
@@ -448,270 +436,7 @@ class SimServer:
     def _all_synced(self) -> bool:
         return all(a.synced for a in self.agents if a.waited_for)
 
-    def _process_agents(self) -> None:
-        for a in self.agents:
-            if not a.conn.inbox:
-                continue
-            frames, a.conn.inbox = a.conn.inbox, []
-            for frame in frames:
-                try:
-                    self._agent_frame(a, frame)
-                except Exception:
-                    log.exception("%r: error while handling %r", a.conn, frame[:200])
-
-    def _agent_frame(self, a: AgentState, frame: bytes) -> None:
-        if a.has_robot and not a.killed:
-            fast = fast_joint_message(frame)
-            if fast is not None:
-                items, syn = fast
-                limits = self._speed_limits(a)
-                joints = a.joints
-                for name, value in items:
-                    vmax = limits.get(name)
-                    if vmax is not None:
-                        v = float(value)
-                        if math.isfinite(v):  # "1e999" reads as inf
-                            joints[name] = v
-                            if v > vmax or v < -vmax:
-                                a.conn.warn(_CLIPPED, name, v, vmax)
-                        else:
-                            a.conn.warn("ignored non-finite velocity for %s", name)
-                    else:
-                        a.conn.warn(
-                            "ignored %s: not an effector of a type %s robot", name, a.robot_type
-                        )
-                if syn:
-                    a.synced = a.ever_synced = True
-                elif not a.ever_synced:
-                    a.synced = True
-                return
-        actions, ok = agent_actions(frame)
-        if not ok:
-            a.conn.warn(
-                "malformed message (unbalanced parentheses), complete parts used: %r", frame[:120]
-            )
-        conn = a.conn
-        for name, value in _NOT_A_NUMBER.findall(frame):
-            if _NUMBER.fullmatch(value) is None:
-                conn.warn(
-                    "%s: %r is not a number; read as 0 rad/s (as rcssserver3d's atof does)",
-                    name.decode("latin-1"),
-                    value.decode("latin-1"),
-                )
-        for act in actions:
-            if type(act) is fx.Hinge:
-                if a.has_robot and not a.killed:
-                    vmax = self._speed_limits(a).get(act.effector)
-                    if vmax is not None:
-                        v = act.velocity
-                        if math.isfinite(v):
-                            a.joints[act.effector] = v
-                            if v > vmax or v < -vmax:
-                                conn.warn(_CLIPPED, act.effector, v, vmax)
-                        else:
-                            conn.warn("ignored non-finite velocity for %s", act.effector)
-                    else:
-                        conn.warn(
-                            "ignored %s: no such joint on a type %s robot",
-                            act.effector,
-                            a.robot_type,
-                        )
-                continue
-            if type(act) is fx.Syn:
-                if a.has_robot:
-                    a.synced = a.ever_synced = True
-                continue
-            if not a.has_robot:
-                if type(act) is fx.Scene and a.robot_type is None:
-                    self._scene(a, act)
-                elif type(act) is fx.Scene:
-                    conn.warn("second scene ignored")
-                else:
-                    conn.warn("%s ignored: no robot yet (send scene first)", _name(act))
-                continue
-            if a.killed:
-                continue
-            if type(act) is fx.Beam:
-                if math.isfinite(act.x) and math.isfinite(act.y) and math.isfinite(act.rot):
-                    a.beam = (act.x, act.y, act.rot)
-                else:
-                    conn.warn("beam (%r, %r, %r) ignored: not finite", act.x, act.y, act.rot)
-            elif type(act) is fx.Say:
-                i = self.world_host.index(a.key)
-                if i is not None:
-                    self.world.say(i, act.text)
-            elif type(act) is fx.Init:
-                if a.side is not None:
-                    conn.warn("second init ignored (already #%s of %s)", a.unum, a.team_name)
-                else:
-                    a.init = (act.unum, act.teamname)
-            elif type(act) is fx.Pass:
-                a.want_pass = True
-            elif type(act) is fx.Scene:
-                conn.warn("second scene ignored")
-            else:
-                conn.warn("unknown command %r ignored", _name(act))
-        if a.has_robot and (not a.ever_synced or any(type(x) is fx.Init for x in actions)):
-            # the handshake: every message counts as (syn) until the first (syn), and an
-            # ``init`` always does (see AgentState): a client that kept sending (syn) while it
-            # waited for its robot must still get the answer to the ``init`` that follows
-            a.synced = True
-
     _limits_cache: ClassVar[dict[int, dict[str, float]]] = {}
-
-    def _speed_limits(self, a: AgentState) -> dict[str, float]:
-        """Effector name → the joint's maximum speed (rad/s) for the agent's robot type."""
-        t = a.robot_type or 0
-        limits = self._limits_cache.get(t)
-        if limits is None:
-            m = nao_model(t)
-            limits = self._limits_cache[t] = {
-                name: float(v) for name, v in zip(m.effector_names, m.max_speeds, strict=True)
-            }
-        return limits
-
-    def _scene(self, a: AgentState, act: fx.Scene) -> None:
-        path = act.path.lstrip("/")
-        if not any(path == p or path.endswith("/" + p) for p in SCENE_PATHS):
-            a.conn.warn("scene %r not available (only %s)", act.path, " and ".join(SCENE_PATHS))
-            return
-        t = act.robot_type
-        if t is None or not 0 <= t <= 4:
-            a.conn.warn("scene %r: robot type %r not in 0..4", act.path, act.args[:1])
-            return
-        if t not in self.referee.teams.robot_types:
-            allowed = ", ".join(map(str, sorted(self.referee.teams.robot_types)))
-            a.conn.warn(
-                "scene %r: robot type %s is not allowed here (allowed: %s)", act.path, t, allowed
-            )
-            return
-        a.robot_type = int(t)
-        a.scene_type = int(t)
-
-    # ------------------------------------------------------------------ monitors / trainer
-    def _process_monitors(self) -> None:
-        for m in self.monitors:
-            if not m.conn.inbox:
-                continue
-            frames, m.conn.inbox = m.conn.inbox, []
-            for frame in frames:
-                try:
-                    cmds, ok = trainer_commands(frame)
-                    if not ok:
-                        m.conn.warn("malformed message, complete parts used: %r", frame[:120])
-                    for cmd in cmds:
-                        self._trainer(m.conn, cmd)
-                except Exception:
-                    log.exception("%r: error while handling %r", m.conn, frame[:200])
-
-    def _find(self, side: str | None, unum: int | None) -> AgentState | None:
-        if side is None or unum is None:
-            return None
-        side = side.lower()
-        for a in self.agents:
-            if a.side == side and a.unum == unum and a.has_robot and not a.killed:
-                return a
-        return None
-
-    def _trainer(self, conn: Connection, cmd: tc.TrainerCommand) -> None:
-        host, ref = self.world_host, self.referee
-        kind = type(cmd)
-        if kind is tc.BallCmd:
-            values = [*(cmd.pos or ()), *(cmd.vel or ())]
-            if all(math.isfinite(v) for v in values):
-                host.set_ball(cmd.pos, cmd.vel)
-            else:
-                conn.warn("ball command ignored: not finite (pos %r, vel %r)", cmd.pos, cmd.vel)
-        elif kind is tc.AgentCmd:
-            if cmd.unum is None or cmd.team is None:
-                self.selected = None
-                return
-            a = self._find(cmd.team, cmd.unum)
-            i = None if a is None else host.index(a.key)
-            if i is None:
-                conn.warn("agent command for unknown player %s %s", cmd.team, cmd.unum)
-                return
-            if cmd.pos is not None:
-                if all(math.isfinite(v) for v in cmd.pos):
-                    host.teleport(i, cmd.pos)
-                else:
-                    conn.warn("agent pos %r ignored: not finite", cmd.pos)
-            if cmd.move is not None:
-                x, y, z, yaw = cmd.move
-                if all(math.isfinite(v) for v in cmd.move):
-                    host.teleport(i, (x, y, z), heading_deg=yaw + 90.0)
-                else:
-                    conn.warn("agent move %r ignored: not finite", cmd.move)
-            if cmd.rot is not None:  # the SPL fork's: turn about the torso centre
-                if all(math.isfinite(v) for v in cmd.rot):
-                    host.teleport(i, rot_deg=cmd.rot)
-                else:
-                    conn.warn("agent rot %r ignored: not finite", cmd.rot)
-        elif kind is tc.PlayModeCmd:
-            ref.set_play_mode(cmd.mode)
-        elif kind is tc.KickOffCmd:
-            ref.kick_off(cmd.team)
-        elif kind is tc.DropBallCmd:
-            ref.drop_ball()
-        elif kind is tc.TimeCmd:
-            if cmd.time >= 0 and math.isfinite(cmd.time):
-                self.world.set_game(game_time=cmd.time)
-            else:
-                conn.warn("time %r ignored: the game time must be finite and >= 0", cmd.time)
-        elif kind is tc.ScoreCmd:
-            self.world.set_game(score_left=cmd.left, score_right=cmd.right)
-        elif kind is tc.SelectCmd:
-            self._select(cmd)
-        elif kind is tc.KillCmd:
-            a = self._target(cmd.unum, cmd.team)
-            if a is not None:
-                log.info("trainer kills %s #%s", a.side, a.unum)
-                self._release(a)
-                a.killed = True
-        elif kind is tc.ReposCmd:
-            a = self._target(cmd.unum, cmd.team)
-            i = None if a is None else host.index(a.key)
-            if a is not None and i is not None:
-                ref.players = self._players()
-                ref.repos(Player(a.key, i, a.side, a.unum))  # type: ignore[arg-type]
-        elif kind is tc.ReqFullStateCmd:
-            self._full_requested = True
-        elif kind is tc.KillSimCmd:
-            log.info("(killsim) from %r: shutting down", conn)
-            self.request_stop()
-        elif kind is tc.InvalidCmd:
-            conn.warn("malformed %s command ignored: %s", cmd.name, cmd.reason)
-        elif kind is tc.UnknownCmd:
-            conn.warn("unknown trainer command %r ignored", cmd.name)
-
-    def _target(self, unum: int | None, team: str | None) -> AgentState | None:
-        if unum is None or team is None:
-            if self.selected is None:
-                return None
-            return self._find(*self.selected)
-        return self._find(team, unum)
-
-    def _select(self, cmd: tc.SelectCmd) -> None:
-        if cmd.unum == -1:
-            self.selected = None
-        elif cmd.unum is not None and cmd.team is not None:
-            if self._find(cmd.team, cmd.unum) is not None:
-                self.selected = (cmd.team.lower(), cmd.unum)
-        else:
-            players = sorted(
-                (a.side, a.unum) for a in self.agents if a.side and a.has_robot and not a.killed
-            )
-            if not players:
-                self.selected = None
-                return
-            if self.selected in players:
-                self.selected = players[(players.index(self.selected) + 1) % len(players)]
-            else:
-                self.selected = players[0]  # type: ignore[assignment]
-
-    def _release(self, a: AgentState) -> None:
-        if a.side is not None and a.unum is not None and not a.killed:
-            self.referee.teams.release(a.side, a.unum)
 
     # ------------------------------------------------------------------ send / physics / end
     def _send_percepts(self) -> None:
@@ -819,34 +544,6 @@ class SimServer:
         except Exception:
             log.exception("referee failed this cycle")
 
-    def _init(self, a: AgentState, unum: int, team: str) -> None:
-        host = self.world_host
-        i = host.index(a.key)
-        if i is None:
-            return
-        try:
-            side, unum = self.referee.teams.register(team, unum, a.robot_type or 0)
-        except InitError as exc:
-            # The real server teleports the robot to (0, 0, 10) and keeps it; a 10 m drop can
-            # destabilise the whole simulation and the robot would stay in the world for good.
-            # Here it is removed (next physics step) and the agent's connection closed.
-            log.warning(
-                "%r: init rejected: %s; its robot is removed and the connection closed", a.conn, exc
-            )
-            a.killed = True
-            a.conn.alive = False
-            return
-        world = self.world
-        world.set_team(i, side, team, unum)
-        x, y, z, heading = self.referee.teams.next_slot(side)
-        world.place_robot(i, x, y, z=z, heading_deg=heading)
-        slot = host.slot(a.key)
-        if slot is not None:
-            slot.team = side
-            slot.home = (x, y, z, heading)
-        a.side, a.unum, a.team_name = side, unum, team
-        log.info("%r is #%d of %s (%s)", a.conn, unum, team, side)
-
     def _end_cycle(self, monitor_cycle: bool) -> None:
         # close dead connections (a robot is removed at the next physics step)
         for a in self.agents:
@@ -936,12 +633,6 @@ def _joint_command(
         return np.array([joints[n] for n in names], dtype=float)
     except KeyError:
         return joints
-
-
-def _name(act: object) -> str:
-    if isinstance(act, fx.Unknown):
-        return act.name
-    return type(act).__name__.lower()
 
 
 def serve(

@@ -17,6 +17,13 @@ PENALTY_LENGTH = 1.8
 PENALTY_HALF_WIDTH = 3.0
 """Half of the drawn/used penalty-area width (PenaltyWidth + GoalWidth)/2, m."""
 CENTRE_CIRCLE_RADIUS = 2.0
+FIELD_HALF_LENGTH = FIELD_LENGTH / 2
+"""m: the goal lines are at x = ±15."""
+FIELD_HALF_WIDTH = FIELD_WIDTH / 2
+"""m: the side lines are at y = ±10."""
+GOAL_HALF_WIDTH = GOAL_WIDTH / 2
+PENALTY_X = FIELD_HALF_LENGTH - PENALTY_LENGTH
+"""|x| beyond which a point is inside a penalty area (with |y| < :data:`PENALTY_HALF_WIDTH`), m."""
 
 
 def _goal_boxes(

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robocup_gym.sim.referee import BEAM_MODES
 from robocup_gym.sim.vision import CALIBRATION_ERROR_M, see
 from robocup_gym.types import GameState, HeardMessage, Perception
 
@@ -145,7 +146,7 @@ class Senses:
             r.perception_counter += 1
 
     # ------------------------------------------------------------------ beam
-    BEAM_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
+    BEAM_MODES = BEAM_MODES
     """Play modes in which an agent's ``beam`` is applied (reference §9.4)."""
     BEAM_HEIGHT_M = 0.4
     """Torso centre height a beamed robot is put at, m (it then falls onto its feet)."""

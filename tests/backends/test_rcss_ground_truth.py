@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robocup_gym.backends.rcssserver3d_backend import _MonitorTracker, _VelocityTrack
+from robocup_gym.backends.rcssserver3d_monitor import MonitorTracker, _VelocityTrack
 from robocup_gym.protocol.monitor import MonitorState
 from robocup_gym.server.client import AgentClient, MonitorClient
 from robocup_gym.sim.rotations import matrix_to_quat
@@ -31,7 +31,7 @@ def _reference(state: MonitorState, side: str, unum: int):
 
 
 def _compare(frames: list[str], side: str, unum: int) -> int:
-    tracker = _MonitorTracker()
+    tracker = MonitorTracker()
     tracker.set_agent(side, unum)
     ref = MonitorState()
     compared = 0
@@ -81,7 +81,7 @@ def test_scanner_matches_the_parser_on_a_live_stream(make_server):
 
 def test_a_delta_that_does_not_fit_asks_for_a_full_frame():
     frames = fixture_lines("monitor_messages.txt")
-    tracker = _MonitorTracker()
+    tracker = MonitorTracker()
     tracker.set_agent("left", 1)
     for f in frames[:3]:
         tracker.feed(f)

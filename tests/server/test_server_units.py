@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from robocup_gym.protocol.framing import FrameDecoder
-from robocup_gym.server.referee import InitError, Player, Referee, TeamRegistry
 from robocup_gym.server.wire import Connection, fast_joint_message, salvage
 from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES
+from robocup_gym.sim.referee import InitError, Player, Referee, TeamRegistry
 from robocup_gym.sim.vision import VisionConfig
 
 

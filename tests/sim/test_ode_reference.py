@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from robocup_gym.sim.engines.ode import available, mix_surfaces
-from robocup_gym.sim.engines.ode.world import (
+from robocup_gym.sim.engines.ode.surfaces import (
     BALL_SURFACE,
     GROUND_SURFACE,
     ROBOT_SURFACE,

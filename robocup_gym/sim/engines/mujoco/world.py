@@ -28,15 +28,19 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-try:  # the clip ufunc itself: np.clip's Python wrapper costs more than the clipping here
-    from numpy._core.umath import clip as _clip
-except ImportError:  # numpy < 2
-    from numpy.core.umath import clip as _clip
-
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import SimulationDivergedError
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
+from robocup_gym.sim.engines.mujoco.motors import (
+    _SATURATED,
+    CREEP_WINDOW_RAD,
+    DIVERGED_QVEL_SQ,
+    OdeRowsNumpy,
+    _any,
+    _clip,
+)
+from robocup_gym.sim.engines.mujoco.readings import WorldReadings
 from robocup_gym.sim.engines.mujoco.scene import (
     FRP_GEOMS,
     RobotSlot,
@@ -53,17 +57,7 @@ from robocup_gym.types import (
     AgentCommand,
     ForceResistance,
     GameState,
-    GroundTruth,
 )
-
-CREEP_WINDOW_RAD = math.radians(0.5)
-"""Largest position error the motor creep compensation corrects (anti-windup), rad."""
-DIVERGED_QVEL_SQ = 1e10
-"""Squared norm of the velocity vector above which the world counts as diverged (no Nao or
-ball gets near 1e5 rad/s or m/s)."""
-_DRAG = np.array([-phys.BODY_LINEAR_DRAG] * 3 + [-phys.BODY_ANGULAR_DRAG] * 3)
-"""Drag coefficients per xfrc_applied component (force, torque)."""
-_INV_CYCLE = 1.0 / CYCLE_S
 
 _DIVERGENCE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQACC),
@@ -71,13 +65,8 @@ _DIVERGENCE_WARNINGS = (
     int(mujoco.mjtWarning.mjWARN_BADQPOS),
 )
 _XYZ = (0, 1, 2)
-_SATURATED = phys.MOTOR_MAX_TORQUE * (1.0 - 1e-9)
-"""Force (N·m) from which a motor row counts as saturated: it could not reach its target."""
-_any = np.count_nonzero
 _RELAXED = compiled_step.FLAGS.index("relaxed")
 _BOUNCY = compiled_step.FLAGS.index("bouncy")
-"""``a.any()`` for a 1-d bool array (hot path: counting is several times cheaper than the
-method's or ``np.logical_or.reduce``'s reduction machinery on a few values)."""
 
 
 def _contiguous(ids: np.ndarray) -> slice | None:
@@ -146,7 +135,7 @@ class RobotState(AgentState):
     """Root pose (7) and joint angles at which a sleeping robot is held."""
 
 
-class World(Senses):
+class World(OdeRowsNumpy, WorldReadings, Senses):
     """The SimSpark Nao world on MuJoCo.
 
     Args:
@@ -1061,205 +1050,6 @@ class World(Senses):
                 self._hold_sleepers()
         return fast.post()
 
-    def _step_numpy(self) -> bool:
-        """One cycle's physics with the per-cycle work in NumPy (the reference implementation).
-        Returns whether the state diverged."""
-        d = self._data
-        m = self.model
-        q = self._qpos[self._qpos_j]
-        at_lo = q <= self._lo
-        at_hi = q >= self._hi
-        limited = at_lo | at_hi
-        any_limited = _any(limited) > 0
-        due = self.cycle
-        for r in self.robots:
-            if r.pending and r.pending[0][0] <= due:
-                self._realise_commands(r, ~limited[r.joint_slice] if any_limited else None)
-        if self._sleepers:
-            self._wake_commanded()
-        targets = self._targets
-        # ODE at a stop (reference §2.4, ODE's addLimot): the motor row gives way to the stop row
-        # (fully elastic, ``_bounce_stops``) and a constant torque, FMax into the stop when the
-        # target pushes into it or is 0, fudge·FMax away from it when the target pulls away.
-        # FMax into a stop that the stop row holds only caps how fast the joint may leave it:
-        # the joint's velocity becomes max(stop row's target, free velocity − FMax·h/I). The
-        # motor row, kept with the stop row's target as its own, does exactly that without an
-        # explicit 10 N·m on light joints. Pulling away, the row goes (``_fudge_torques``).
-        at_stop = None
-        if any_limited:
-            away = (at_lo & (targets > 0.0)) | (at_hi & (targets < 0.0))
-            at_stop = away if _any(away) else None
-        # Creep compensation: MuJoCo regularises the motor rows, so a held joint creeps slowly
-        # under load where ODE's rigid motor row does not. Each motor follows the integral of its
-        # commanded velocity; the small difference is corrected within a cycle. A motor that
-        # saturated or sat at a stop restarts from where its joint is: motion lost there is
-        # never caught up, as in ODE.
-        q_ref = self._q_ref
-        np.copyto(q_ref, q, where=self._motor_lost)
-        _clip(q_ref, q - CREEP_WINDOW_RAD, q + CREEP_WINDOW_RAD, out=q_ref)
-        motor_target = q_ref - q
-        motor_target *= 1.0 / CYCLE_S
-        motor_target += targets
-        q_ref += targets * CYCLE_S
-        if any_limited:
-            np.copyto(motor_target, self._stop_speeds(q, at_lo, at_hi), where=limited)
-        sort = self._motor_sort
-        if sort is not None:
-            motor_target = motor_target[sort]
-        shift = self._motor_b * motor_target
-        dofs = self._motor_dofs_sorted
-        ms = self._motor_slice
-        if at_stop is not None:
-            rows = ~(at_stop if sort is None else at_stop[sort])
-            if ms is not None:
-                np.multiply(rows, phys.MOTOR_MAX_TORQUE, out=self._motor_views[0])
-            else:
-                m.dof_frictionloss[dofs] = np.where(rows, phys.MOTOR_MAX_TORQUE, 0.0)
-            shift = shift[rows]
-            self._fudge_torques(at_stop, at_lo)
-            self._motors_relaxed = True
-        elif self._motors_relaxed:
-            m.dof_frictionloss[dofs] = phys.MOTOR_MAX_TORQUE
-            d.qfrc_applied[self._qvel_j] = 0.0
-            self._motors_relaxed = False
-        nrows = len(shift)
-        # Warm start: every motor reaches its target (the solver corrects saturated ones).
-        if ms is not None:
-            _, warm, qvel_motors = self._motor_views
-            np.subtract(motor_target, qvel_motors, out=warm)
-            warm *= self._inv_timestep
-        else:
-            d.qacc_warmstart[dofs] = (motor_target - self._qvel[dofs]) * self._inv_timestep
-        self._ball_ground_contact_mode()
-        for sub in range(self._substeps):
-            mujoco.mj_step1(m, d)
-            if sub == 0:
-                # mj_step1 brought poses and velocities up to the state before this cycle's
-                # physics: sample the accelerometer (reference §4.5) and set the cycle's drag
-                self._sense_accelerometers()
-                self._apply_drag()
-            # The motor rows' reference acceleration −B·v becomes −B·(v − target): MuJoCo's
-            # friction-loss row turned into ODE's velocity motor (see robocup_gym/robot/mjcf.py).
-            if nrows:
-                d.efc_aref[:nrows] += shift
-            if d.ncon:
-                self._surface_layer()
-            if d.nl:
-                self._bounce_stops()
-            if self._sleepers:
-                self._wake_touched()
-            mujoco.mj_step2(m, d)
-            if self._sleepers:
-                self._hold_sleepers()
-        # which motors could not hold their target this step: saturated at ±FMax (read from the
-        # forces: with islands, MuJoCo 4 leaves ``efc_state`` at the solver's first guess), or
-        # absent at a stop
-        moving = np.abs(d.efc_force[:nrows]) < _SATURATED
-        if at_stop is not None:
-            held = np.zeros(len(dofs), dtype=bool)
-            held[rows] = moving
-            moving = held
-        if sort is None:
-            np.logical_not(moving, out=self._motor_lost)
-        else:
-            self._motor_lost[sort] = ~moving
-        if any_limited:
-            self._motor_lost |= limited
-        qvel = self._qvel
-        return not qvel.dot(qvel) < DIVERGED_QVEL_SQ  # also True for NaN
-
-    def _stop_speeds(self, q: np.ndarray, at_lo: np.ndarray, at_hi: np.ndarray) -> np.ndarray:
-        """Per joint, the velocity (rad/s) the stop row of a joint at a stop asks for: its ERP
-        correction back into the range or, for a joint running into the stop, the reflected
-        speed if larger (ODE: ``c = max(−erp·err/h, −bounce·v)``); meaningful where
-        ``at_lo``/``at_hi``."""
-        v = self._qvel[self._qvel_j]
-        erp_speed = phys.JOINT_STOP_ERP_CFM[0] * self._inv_timestep
-        into = np.maximum(v, 0.0)
-        into *= phys.JOINT_STOP_BOUNCE
-        speed_hi = np.maximum((q - self._hi) * erp_speed, into)
-        into = np.maximum(-v, 0.0)
-        into *= phys.JOINT_STOP_BOUNCE
-        speed_lo = np.maximum((self._lo - q) * erp_speed, into)
-        return np.where(at_hi, -speed_hi, speed_lo)
-
-    def _fudge_torques(self, away: np.ndarray, at_lo: np.ndarray) -> None:
-        """ODE's torque on a joint at a stop whose target pulls it ``away`` (reference §2.4): only
-        fudge factor × FMax (1e-4 N·m), out of the stop (positive at the lower stop); 0 for
-        every other joint."""
-        fudge = phys.MOTOR_FUDGE_FACTOR * phys.MOTOR_MAX_TORQUE
-        self._data.qfrc_applied[self._qvel_j] = np.where(at_lo, fudge, -fudge) * away
-
-    def _bounce_stops(self) -> None:
-        """Fully elastic joint stops (reference §2.4, ODE bounce 1): a stop row whose joint runs
-        into the stop asks for the larger of its ERP correction and the reflected speed
-        (ODE: ``c = max(−erp·err/h, −bounce·v)``), as a shift of its reference acceleration.
-        Called between ``mj_step1`` and ``mj_step2``; the stop rows follow the friction rows."""
-        d = self._data
-        start = d.ne + d.nf
-        rows = slice(start, start + d.nl)
-        v = d.efc_vel[rows]
-        aref = d.efc_aref[rows]
-        # the row velocity after the step that the reference asks for (≥ 0 for a row that is
-        # not moving into its stop: its ERP correction), and the bounce's, which wins only for a
-        # row moving into the stop (v < 0)
-        implied = aref / self._inv_timestep
-        implied += v
-        bounce = v * -phys.JOINT_STOP_BOUNCE
-        np.maximum(bounce, implied, out=bounce)
-        bounce -= implied
-        bounce *= self._inv_timestep
-        aref += bounce
-
-    def _surface_layer(self) -> None:
-        """ODE's contact surface layer (reference §7.1) on this step's contacts: the normal row
-        pushes only by the depth beyond the 1 mm layer (reference acceleration
-        ``−B·v − K·I·min(pos + layer, 0)`` instead of MuJoCo's ``−B·v − K·I·pos``, i.e. a shift of
-        ``K·I·max(pos, −layer)``), so a contact within the layer still stops further approach
-        and carries friction but does not push out. Called between ``mj_step1`` (which made
-        the rows) and ``mj_step2`` (which solves them). Every contact here has three rows
-        (condim 3, elliptic cones; checked when the world is built), normal row first, and the
-        contacts' rows come last."""
-        d = self._data
-        start = d.ne + d.nf + d.nl
-        rows = slice(start, start + 3 * d.ncon, 3)
-        shift = np.maximum(d.efc_pos[rows], -phys.SURFACE_LAYER)
-        kbip = d.efc_KBIP[rows]
-        shift *= kbip[:, 0]
-        shift *= kbip[:, 2]
-        d.efc_aref[rows] += shift
-
-    def _ball_ground_contact_mode(self) -> None:
-        """Bouncy ball-ground contact only if the ball will hit the ground this cycle faster than
-        0.8 m/s (ODE's bounce threshold, reference §5); otherwise ODE's over-damped soft contact."""
-        z = self._qpos[self._ball_qpos + 2]
-        vz = self._qvel[self._ball_qvel + 2]
-        bouncy = bool(
-            vz < -phys.BALL_BOUNCE_MIN_SPEED
-            and z - phys.BALL_RADIUS - phys.GROUND_PLANE_Z + vz * CYCLE_S < 0.0
-        )
-        if bouncy != self._ball_bouncy:
-            self.model.pair_solref[self._ball_ground_pair] = self._ball_ground_solref[bouncy]
-            self._ball_bouncy = bouncy
-
-    def _sense_accelerometers(self) -> None:
-        """Each robot's accelerometer (reference §4.5): the torso's change of velocity over the last
-        cycle plus gravity, in the torso frame, m/s²; called once the poses are current."""
-        for r, v, rot, a_world in self._accel_io:
-            np.subtract(v, r.prev_vel, out=a_world)
-            a_world *= _INV_CYCLE
-            a_world[2] += phys.GRAVITY
-            r.prev_vel[:] = v
-            a_world.dot(rot, out=r.accel)
-
-    def _apply_drag(self) -> None:
-        """Drag F = −0.01 v at each robot body's centre of mass and τ = −0.01 ω (reference §7.5),
-        held over the cycle; from the drag sensors, which ``mj_step1`` has just evaluated."""
-        if self._drag_force is not None:
-            np.multiply(self._drag_vel, _DRAG, out=self._drag_force)
-        elif self._drag_index is not None:
-            self._data.xfrc_applied[self._drag_index] = self._drag_vel * _DRAG
-
     def _raise_diverged(self) -> None:
         """Raise :class:`SimulationDivergedError`: the last step blew up (a NaN/inf or absurd
         velocity, |qvel| > 1e5; MuJoCo's automatic reset is disabled so that the blow-up stays
@@ -1278,35 +1068,6 @@ class World(Senses):
             + ". Call World.reset() to continue."
         )
 
-    # ------------------------------------------------------------------ perception
-    def ground_truth(self, index: int = 0) -> GroundTruth:
-        """Exact ball and torso state of robot ``index`` (world frame)."""
-        r = self.robot(index)
-        d = self._posed()
-        a, b = r.qpos_root, r.qvel_root
-        rot = d.xmat[r.torso_body].reshape(3, 3)
-        bq, bv = self._ball_qpos, self._ball_qvel
-        return GroundTruth(
-            ball_pos=d.qpos[bq : bq + 3].copy(),
-            ball_vel=d.qvel[bv : bv + 3].copy(),
-            torso_pos=d.qpos[a : a + 3].copy(),
-            torso_quat=d.qpos[a + 3 : a + 7].copy(),
-            torso_vel=d.qvel[b : b + 3].copy(),
-            torso_ang_vel=rot @ d.qvel[b + 3 : b + 6],
-        )
-
-    def ball_position(self) -> np.ndarray:
-        """Ball centre, world, m."""
-        return self._data.qpos[self._ball_qpos : self._ball_qpos + 3].copy()
-
-    def ball_velocity(self) -> np.ndarray:
-        """Ball linear velocity, world, m/s."""
-        return self._data.qvel[self._ball_qvel : self._ball_qvel + 3].copy()
-
-    def ball_angular_velocity(self) -> np.ndarray:
-        """Ball angular velocity, world, rad/s."""
-        return self._data.qvel[self._ball_qvel + 3 : self._ball_qvel + 6].copy()
-
     def set_torso_force(self, index: int, force: Sequence[float]) -> None:
         """Push robot ``index``'s torso with ``force`` (N, world frame, at the torso's origin,
         through its free joint) in every step until it is changed or :meth:`reset`;
@@ -1320,127 +1081,11 @@ class World(Senses):
         a = self.robot(index).qvel_root
         self._data.qfrc_applied[a : a + 3] = f
 
-    def torso_position(self, index: int = 0) -> np.ndarray:
-        """Torso centre of robot ``index``, world, m."""
-        a = self.robot(index).qpos_root
-        return self._data.qpos[a : a + 3].copy()
-
-    def torso_up(self, index: int = 0) -> np.ndarray:
-        """The torso's up axis (+z of the torso frame) in world coordinates."""
-        return self._posed().xmat[self.robot(index).torso_body].reshape(3, 3)[:, 2].copy()
-
-    def joint_angles_deg(self, index: int = 0) -> np.ndarray:
-        """Joint angles of robot ``index`` in degrees, canonical order."""
-        return np.degrees(self._data.qpos[self.robot(index).qpos_joints])
-
-    def joint_velocities(self, index: int = 0) -> np.ndarray:
-        """Joint angular velocities of robot ``index`` in rad/s, canonical order."""
-        return self._data.qvel[self.robot(index).qvel_joints].copy()
-
-    def gyro(self, index: int = 0) -> np.ndarray:
-        """Torso angular velocity in the torso frame, deg/s (``GYR``)."""
-        b = self.robot(index).qvel_root
-        return np.degrees(self._data.qvel[b + 3 : b + 6])
-
-    def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
-        """``FRP`` readings of robot ``index`` from the contacts of the last physics step: force
-        (N) and force-weighted centre of pressure (m), both in the foot's own frame (reference
-        §4.6).
-        A foot without contact is omitted; one whose contacts carry no force repeats its last
-        reading (as SimSpark does for a disabled body)."""
-        r = self.robot(index)
-        d = self._posed()
-        data = self._sensordata
-        out: dict[str, ForceResistance] = {}
-        last = r.last_frp
-        for name, adr, body in r.frp_sensors:
-            if data[adr] == 0.0:  # number of contacts of this foot in the last step
-                continue
-            force = data[adr + 1 : adr + 4]
-            if not force.any():
-                if name in last:
-                    out[name] = last[name]
-                continue
-            # world → foot frame: v @ R = Rᵀ v
-            rot = d.xmat[body].reshape(3, 3)
-            out[name] = ForceResistance(
-                point=(data[adr + 4 : adr + 7] - d.xpos[body]) @ rot, force=force @ rot
-            )
-        r.last_frp = out
-        return out
-
-    def accelerometer(self, index: int = 0) -> np.ndarray:
-        """The accelerometer (``ACC``) of robot ``index``, m/s², torso frame."""
-        return self.robot(index).accel.copy()
-
-    def _head_pose(self, index: int) -> tuple[np.ndarray, np.ndarray]:
-        """Head centre (world, m) and rotation matrix of robot ``index``."""
-        r = self.robots[index]
-        d = self._posed()
-        return d.xpos[r.head_body].copy(), d.xmat[r.head_body].reshape(3, 3).copy()
-
-    def _part_positions(self, index: int) -> np.ndarray:
-        """World positions of robot ``index``'s parts seen by vision (``PLAYER_PARTS``), m."""
-        return self._posed().xpos[self.robots[index].part_bodies]
-
-    # ------------------------------------------------------------------ what a server reads
-    def torso_quat(self, index: int = 0) -> np.ndarray:
-        """Torso orientation of robot ``index`` as a unit quaternion ``(w, x, y, z)``."""
-        a = self.robot(index).qpos_root
-        return self._data.qpos[a + 3 : a + 7].copy()
-
-    def motor_targets(self, index: int) -> np.ndarray:
-        """Robot ``index``'s active motor targets, rad/s, canonical order (a copy)."""
-        return self.robot(index).targets.copy()
-
     def set_motor_targets(self, index: int, targets: np.ndarray) -> None:
         """Set robot ``index``'s motor targets (rad/s, canonical order) as they are, without the
         hinge effector's rules: to restore what :meth:`motor_targets` returned after a placement
         (which zeroes them)."""
         self.robot(index).targets[:] = targets
-
-    def body_frames(self, index: int) -> tuple[np.ndarray, np.ndarray]:
-        """Every body of robot ``index`` in its model's order (``model.bodies``, torso first):
-        centres ``(n, 3)`` (world, m) and rotations ``(n, 3, 3)`` (columns = body axes)."""
-        r = self.robot(index)
-        d = self._posed()
-        return d.xpos[r.robot_bodies].copy(), d.xmat[r.robot_bodies].reshape(-1, 3, 3).copy()
-
-    def ball_frame(self) -> tuple[np.ndarray, np.ndarray]:
-        """Ball centre (world, m) and rotation matrix."""
-        d = self._posed()
-        b = self._ball_body
-        return d.xpos[b].copy(), d.xmat[b].reshape(3, 3).copy()
-
-    def body_positions(self) -> np.ndarray:
-        """Centres of every body of the world (robots' parts, the ball; world, m), for a sanity
-        check of the whole state."""
-        return self._posed().xpos
-
-    def ball_touchers(self) -> set[int]:
-        """Indices of the robots with a part in contact with the ball in the last step."""
-        d = self._data
-        ncon = d.ncon
-        out: set[int] = set()
-        if ncon == 0:
-            return out
-        geom_robot = self._geom_robot
-        if geom_robot is None:
-            geom_robot = self._geom_robot = [-1] * self.model.ngeom
-            for r in self.robots:
-                for g in r.robot_geoms:
-                    geom_robot[g] = r.index
-        ball = self._ball_geom
-        for g1, g2 in d.contact.geom[:ncon].tolist():  # a few pairs: plain Python is fastest
-            if g1 == ball:
-                i = geom_robot[g2]
-            elif g2 == ball:
-                i = geom_robot[g1]
-            else:
-                continue
-            if i >= 0:
-                out.add(i)
-        return out
 
     def close(self) -> None:
         """Nothing to free by hand (MuJoCo's model and data go with the object); kept for the

@@ -34,7 +34,6 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 
-import mujoco
 import numpy as np
 
 from robocup_gym.robot.nao import NaoModel, nao_model
@@ -45,12 +44,21 @@ from robocup_gym.sim.engines.mujoco.scene import FRP_GEOMS
 from robocup_gym.sim.engines.ode import lib as ode
 from robocup_gym.sim.engines.ode.fast import SANE_SPEED, FastLoops
 from robocup_gym.sim.engines.ode.fast import load as load_fast
+from robocup_gym.sim.engines.ode.readings import OdeReadings
+from robocup_gym.sim.engines.ode.surfaces import (
+    BALL_SURFACE,
+    GROUND_SURFACE,
+    ROBOT_SURFACE,
+    WALL_SURFACE,
+    mix_surfaces,
+    surface_parameters,
+)
 from robocup_gym.sim.field import GOAL_BOXES, WALLS
 from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat, rigid_move
 from robocup_gym.sim.rotations import axis_angle_quat, quat_to_matrix
 from robocup_gym.sim.senses import AgentState, Senses
-from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
-from robocup_gym.types import AgentCommand, ForceResistance, GameState, GroundTruth
+from robocup_gym.sim.vision import VisionConfig
+from robocup_gym.types import AgentCommand, ForceResistance, GameState
 
 WORLD_CFM = 1e-5
 """SimSpark's world CFM (reference §7.1); the world ERP stays ODE's default 0.2."""
@@ -63,67 +71,6 @@ MAX_CONTACTS = 4
 """Contact points per geom pair (reference §7.3)."""
 SANE_POSITION = 1e3
 """A body this far (m) from the origin in a coordinate, or at NaN, means the world diverged."""
-
-
-@dataclass(frozen=True)
-class Surface:
-    """One contact handler's surface settings (reference §7.3); ``None`` = that mode is off."""
-
-    bounce: tuple[float, float] | None
-    """(restitution, minimum approach speed m/s)."""
-    soft_erp: float | None
-    soft_cfm: float | None
-    slip: float | None
-    """Force-dependent slip, m/s per N (both friction directions)."""
-
-
-ROBOT_SURFACE = Surface(bounce=None, soft_erp=0.6, soft_cfm=1e-4, slip=0.005)
-"""Every robot part and foot (contact-joint and touch-perceptor handlers)."""
-BALL_SURFACE = Surface(bounce=(0.8, 0.8), soft_erp=0.5, soft_cfm=0.05, slip=0.6)
-GROUND_SURFACE = Surface(bounce=None, soft_erp=0.2, soft_cfm=None, slip=0.005)
-WALL_SURFACE = Surface(bounce=(0.8, 2.0), soft_erp=None, soft_cfm=None, slip=None)
-"""The default handler of walls and goals (not built here; kept for the mixing table)."""
-
-
-def _mix(a, b):
-    if a is None:
-        return b
-    if b is None:
-        return a
-    if isinstance(a, tuple):
-        return tuple((x + y) / 2 for x, y in zip(a, b, strict=True))
-    return (a + b) / 2
-
-
-def mix_surfaces(a: Surface, b: Surface) -> Surface:
-    """The contact parameters SimSpark gives a pair: a mode enabled on both sides averages the
-    two values, on one side takes that side's value, on neither stays off (reference §7.3)."""
-    return Surface(
-        bounce=_mix(a.bounce, b.bounce),
-        soft_erp=_mix(a.soft_erp, b.soft_erp),
-        soft_cfm=_mix(a.soft_cfm, b.soft_cfm),
-        slip=_mix(a.slip, b.slip),
-    )
-
-
-def _surface_parameters(s: Surface) -> ode.SurfaceParameters:
-    p = ode.SurfaceParameters()
-    p.mu = ode.INFINITY
-    mode = 0
-    if s.bounce is not None:
-        mode |= ode.CONTACT_BOUNCE
-        p.bounce, p.bounce_vel = s.bounce
-    if s.soft_erp is not None:
-        mode |= ode.CONTACT_SOFT_ERP
-        p.soft_erp = s.soft_erp
-    if s.soft_cfm is not None:
-        mode |= ode.CONTACT_SOFT_CFM
-        p.soft_cfm = s.soft_cfm
-    if s.slip is not None:
-        mode |= ode.CONTACT_SLIP1 | ode.CONTACT_SLIP2
-        p.slip1 = p.slip2 = s.slip
-    p.mode = mode
-    return p
 
 
 def _lowest(body, rot: np.ndarray, centre: np.ndarray) -> float:
@@ -208,7 +155,7 @@ class OdeRobot(AgentState):
     last_frp: dict[str, ForceResistance] = field(default_factory=dict)
 
 
-class OdeWorld(Senses):
+class OdeWorld(OdeReadings, Senses):
     """The SimSpark Nao world stepped by ODE 0.16 exactly as rcssserver3d steps it.
 
     Args:
@@ -418,12 +365,12 @@ class OdeWorld(Senses):
         ``None`` for the static ground) with its mixed surface: robot parts with the ground,
         the ball and other robots' parts (never with their own robot: inner collision is
         disabled, reference §1.1); the ball with the ground."""
-        robot_ground = _surface_parameters(mix_surfaces(ROBOT_SURFACE, GROUND_SURFACE))
-        robot_ball = _surface_parameters(mix_surfaces(ROBOT_SURFACE, BALL_SURFACE))
-        robot_robot = _surface_parameters(mix_surfaces(ROBOT_SURFACE, ROBOT_SURFACE))
-        ball_ground = _surface_parameters(mix_surfaces(BALL_SURFACE, GROUND_SURFACE))
-        robot_wall = _surface_parameters(mix_surfaces(ROBOT_SURFACE, WALL_SURFACE))
-        ball_wall = _surface_parameters(mix_surfaces(BALL_SURFACE, WALL_SURFACE))
+        robot_ground = surface_parameters(mix_surfaces(ROBOT_SURFACE, GROUND_SURFACE))
+        robot_ball = surface_parameters(mix_surfaces(ROBOT_SURFACE, BALL_SURFACE))
+        robot_robot = surface_parameters(mix_surfaces(ROBOT_SURFACE, ROBOT_SURFACE))
+        ball_ground = surface_parameters(mix_surfaces(BALL_SURFACE, GROUND_SURFACE))
+        robot_wall = surface_parameters(mix_surfaces(ROBOT_SURFACE, WALL_SURFACE))
+        ball_wall = surface_parameters(mix_surfaces(BALL_SURFACE, WALL_SURFACE))
         pairs = [(self._ball_geom, self._ground, ball_ground)]
         for i, r in enumerate(self.robots):
             for g in r.geoms:
@@ -980,189 +927,6 @@ class OdeWorld(Senses):
         return -1
 
     # ------------------------------------------------------------------ state
-    def _vec(self, ptr) -> np.ndarray:
-        return np.array([ptr[0], ptr[1], ptr[2]])
-
-    def _read_state(self) -> np.ndarray:
-        """The state snapshot (per body: position, rotation, velocity, angular velocity; every
-        hinge's angle and rate), read from ODE once after each change: in one C call, or by the
-        Python loops without a compiler (the same numbers)."""
-        if not self._fresh:
-            if self._fast is not None:
-                self._fast.read()
-            else:
-                lib = self._lib
-                for k, b in enumerate(self._state_bodies):
-                    p, m = lib.dBodyGetPosition(b), lib.dBodyGetRotation(b)
-                    v, w = lib.dBodyGetLinearVel(b), lib.dBodyGetAngularVel(b)
-                    self._state[k] = [
-                        p[0], p[1], p[2],
-                        m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10],
-                        v[0], v[1], v[2], w[0], w[1], w[2],
-                    ]  # fmt: skip
-                for k, h in enumerate(self._all_joints):
-                    self._angles[k] = lib.dJointGetHingeAngle(h)
-                    self._rates[k] = lib.dJointGetHingeAngleRate(h)
-            self._fresh = True
-        return self._state
-
-    def _body(self, body: int) -> np.ndarray:
-        """Body ``body``'s row of the state snapshot (a view: copy what is kept)."""
-        return self._read_state()[self._row[body]]
-
-    def _rotation(self, body: int) -> np.ndarray:
-        """Orientation of body handle ``body`` as a 3×3 matrix (its axes in world coordinates)."""
-        return self._body(body)[3:12].reshape(3, 3).copy()
-
-    def ball_position(self) -> np.ndarray:
-        """Ball centre, world, m."""
-        return self._body(self._ball)[0:3].copy()
-
-    def ball_velocity(self) -> np.ndarray:
-        """Ball linear velocity, world, m/s."""
-        return self._body(self._ball)[12:15].copy()
-
-    def ball_angular_velocity(self) -> np.ndarray:
-        """Ball angular velocity, world, rad/s."""
-        return self._body(self._ball)[15:18].copy()
-
-    def body_position(self, index: int, name: str) -> np.ndarray:
-        """Centre of robot ``index``'s body ``name`` (e.g. ``rfoot``), world, m."""
-        r = self.robots[index]
-        return self._body(r.bodies[r.body_index[name]])[0:3].copy()
-
-    def body_rotation(self, index: int, name: str) -> np.ndarray:
-        """Orientation of robot ``index``'s body ``name`` as a 3×3 matrix (torso-frame axes in
-        world coordinates)."""
-        r = self.robots[index]
-        return self._rotation(r.bodies[r.body_index[name]])
-
-    def torso_quat(self, index: int = 0) -> np.ndarray:
-        """Torso orientation of robot ``index`` as a unit quaternion ``(w, x, y, z)``."""
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, self._body(self.robots[index].bodies[0])[3:12])
-        return quat
-
-    def torso_velocity(self, index: int = 0) -> np.ndarray:
-        """Torso centre velocity of robot ``index``, world, m/s."""
-        return self._body(self.robots[index].bodies[0])[12:15].copy()
-
-    def torso_angular_velocity(self, index: int = 0) -> np.ndarray:
-        """Torso angular velocity of robot ``index``, world, rad/s."""
-        return self._body(self.robots[index].bodies[0])[15:18].copy()
-
-    def gyro(self, index: int = 0) -> np.ndarray:
-        """Torso angular velocity in the torso frame, deg/s (``GYR``, as the world's)."""
-        row = self._body(self.robots[index].bodies[0])
-        return np.degrees(row[15:18] @ row[3:12].reshape(3, 3))
-
-    def accelerometer(self, index: int = 0) -> np.ndarray:
-        """The accelerometer (``ACC``) of robot ``index``, m/s², torso frame."""
-        return self.robots[index].accel.copy()
-
-    def force_sensors(self, index: int = 0) -> dict[str, ForceResistance]:
-        """``FRP`` readings of robot ``index`` from the last step's contact feedback: force (N)
-        and centre of pressure (m) in the foot's own frame, as
-        :meth:`robocup_gym.sim.engines.mujoco.world.World.force_sensors` gives them (a foot without
-        contact
-        is omitted; one whose contacts carry no force repeats its last reading)."""
-        r = self.robots[index]
-        self._sync_frp()
-        out: dict[str, ForceResistance] = {}
-        for name, (force, centre) in r.frp.items():
-            if centre is None:
-                if name in r.last_frp:
-                    out[name] = r.last_frp[name]
-                continue
-            row = self._body(r.frp_bodies[name])
-            rot = row[3:12].reshape(3, 3)
-            out[name] = ForceResistance(point=(centre - row[0:3]) @ rot, force=force @ rot)
-        r.last_frp = out
-        return out
-
-    def torso_position(self, index: int = 0) -> np.ndarray:
-        """Torso centre of robot ``index``, world, m."""
-        return self._body(self.robots[index].bodies[0])[0:3].copy()
-
-    def ground_truth(self, index: int = 0) -> GroundTruth:
-        """Exact ball and torso state of robot ``index`` (world frame)."""
-        return GroundTruth(
-            ball_pos=self.ball_position(),
-            ball_vel=self.ball_velocity(),
-            torso_pos=self.torso_position(index),
-            torso_quat=self.torso_quat(index),
-            torso_vel=self.torso_velocity(index),
-            torso_ang_vel=self.torso_angular_velocity(index),
-        )
-
-    def _head_pose(self, index: int) -> tuple[np.ndarray, np.ndarray]:
-        """Head centre (world, m) and rotation matrix of robot ``index``."""
-        r = self.robots[index]
-        row = self._body(r.bodies[r.body_index["head"]])
-        return row[0:3].copy(), row[3:12].reshape(3, 3).copy()
-
-    def _part_positions(self, index: int) -> np.ndarray:
-        """World positions of robot ``index``'s parts seen by vision (``PLAYER_PARTS``), m."""
-        r = self.robots[index]
-        st = self._read_state()
-        return st[[self._row[r.bodies[r.body_index[p]]] for p in PLAYER_PARTS], 0:3]
-
-    def torso_up(self, index: int = 0) -> np.ndarray:
-        """The torso's up axis (+z of the torso frame) in world coordinates."""
-        return self._body(self.robots[index].bodies[0])[[5, 8, 11]].copy()
-
-    def joint_angles_deg(self, index: int = 0) -> np.ndarray:
-        """Joint angles of robot ``index`` in degrees, canonical order."""
-        self._read_state()
-        return np.degrees(self._angles[self.robots[index].joint_slice])
-
-    def joint_velocities(self, index: int = 0) -> np.ndarray:
-        """Joint angular velocities of robot ``index`` in rad/s, canonical order."""
-        self._read_state()
-        return self._rates[self.robots[index].joint_slice].copy()
-
-    # ------------------------------------------------------------------ what a server reads
-    def motor_targets(self, index: int) -> np.ndarray:
-        """Robot ``index``'s active motor targets (each hinge's ODE motor velocity), rad/s,
-        canonical order."""
-        get = self._lib.dJointGetHingeParam
-        return np.array([get(h, ode.PARAM_VEL) for h in self.robot(index).joints])
-
-    def set_motor_targets(self, index: int, targets: np.ndarray) -> None:
-        """Set robot ``index``'s motor targets (rad/s, canonical order) as they are, without the
-        hinge effector's rules or waking a body: to restore what :meth:`motor_targets` returned
-        after a placement (which zeroes them)."""
-        r = self.robot(index)
-        values = np.asarray(targets, dtype=float)
-        if values.shape != (len(r.joints),) or not np.isfinite(values).all():
-            raise ValueError(f"motor targets must be {len(r.joints)} finite numbers")
-        for h, v in zip(r.joints, values.tolist(), strict=True):
-            self._lib.dJointSetHingeParam(h, ode.PARAM_VEL, v)
-
-    def body_frames(self, index: int) -> tuple[np.ndarray, np.ndarray]:
-        """Every body of robot ``index`` in its model's order (``model.bodies``, torso first):
-        centres ``(n, 3)`` (world, m) and rotations ``(n, 3, 3)`` (columns = body axes)."""
-        r = self.robot(index)
-        rows = self._read_state()[[self._row[b] for b in r.bodies]]
-        return rows[:, 0:3].copy(), rows[:, 3:12].reshape(-1, 3, 3).copy()
-
-    def ball_frame(self) -> tuple[np.ndarray, np.ndarray]:
-        """Ball centre (world, m) and rotation matrix."""
-        row = self._body(self._ball)
-        return row[0:3].copy(), row[3:12].reshape(3, 3).copy()
-
-    def body_positions(self) -> np.ndarray:
-        """Centres of every body of the world (robots' parts, the ball; world, m), for a sanity
-        check of the whole state."""
-        return self._read_state()[:, 0:3]
-
-    def ball_touchers(self) -> set[int]:
-        """Indices of the robots with a part in contact with the ball in the last step."""
-        if not len(self._ball_pairs):
-            return set()
-        touched = self._hit[self._ball_pairs] == self._stamp
-        return set(self._ball_pair_robot[touched].tolist())
-
     def forward(self) -> None:
         """Nothing to do: ODE keeps no derived quantities (kept for the MuJoCo world's
         interface, whose ``forward`` recomputes body poses after a change of state)."""

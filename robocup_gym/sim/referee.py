@@ -1,0 +1,523 @@
+"""The rules of the game, once for every world: teams (``init``) and the automatic referee
+(wire reference §3.4, reference §9). ``robocup-gym serve`` and the soccer environments
+(:mod:`robocup_gym.soccer`) run the same :class:`Referee` over their worlds.
+
+:class:`TeamRegistry` decides sides, uniform numbers, the robot-type composition limits and the
+sideline start slots exactly as rcssserver3d's ``GameStateAspect``. :class:`Referee` runs the game
+flow after every physics step: BeforeKickOff (ball held at the centre, teams kept in their
+halves), kick-off clearing and the first touch, goals and score, the goal pause and the following
+kick-off, ball out over a side line (kick-in) or goal line (goal kick / corner kick), set pieces
+(ball held at the spot after 1 s, opponents kept 2 m away, first touch → PlayOn, drop ball after
+15 s), pass mode, half time (300 s → BeforeKickOff of the second half) and the end of the game
+(600 s → GameOver). ``docs/serve.md`` lists the rules that are not implemented (fouls, the
+self-collision rule, double touch, the kick-off/indirect no-score rules, offside).
+
+The referee acts on the world through a :class:`~robocup_gym.sim.game_host.GameHost` (the
+server's host rebuilds its world as robots come and go; an environment's keeps one).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+
+from robocup_gym.sim.field import (
+    CENTRE_CIRCLE_RADIUS,
+    FIELD_HALF_LENGTH,
+    FIELD_HALF_WIDTH,
+    GOAL_HALF_WIDTH,
+    GOAL_HEIGHT,
+    PENALTY_HALF_WIDTH,
+    PENALTY_X,
+)
+from robocup_gym.sim.game_host import GameHost
+from robocup_gym.sim.physics import BALL_RADIUS, CYCLE_S
+from robocup_gym.types import PLAY_MODES
+
+log = logging.getLogger("robocup_gym.referee")
+
+FREE_KICK_DISTANCE = 2.0
+FREE_KICK_MOVE = 2.5
+AGENT_RADIUS = 0.4
+HALF_TIME = 300.0
+GOAL_PAUSE = 3.0
+KICK_IN_PAUSE = 1.0
+DROP_BALL_TIME = 15.0
+PASS_MODE_DURATION = 4.0
+PASS_MODE_RETRY = 3.0
+PASS_MODE_MAX_BALL_SPEED = 0.05
+PASS_MODE_MAX_BALL_DIST = 0.5
+PASS_MODE_MIN_OPP_DIST = 1.0
+MAX_PLAYERS = 11
+MAX_ROBOT_TYPE_COUNT = 7
+MIN_ROBOT_TYPES = 3
+MAX_SUM_TWO_TYPES = 9
+
+BEAM_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
+_SET_PIECES = {
+    "KickIn_Left": "left",
+    "KickIn_Right": "right",
+    "corner_kick_left": "left",
+    "corner_kick_right": "right",
+    "goal_kick_left": "left",
+    "goal_kick_right": "right",
+    "free_kick_left": "left",
+    "free_kick_right": "right",
+    "direct_free_kick_left": "left",
+    "direct_free_kick_right": "right",
+    "offside_left": "left",
+    "offside_right": "right",
+}
+
+
+def other(side: str) -> str:
+    return "right" if side == "left" else "left"
+
+
+class InitError(Exception):
+    """An ``init`` that the server rejects (the message says why)."""
+
+
+@dataclass
+class Player:
+    """A robot that belongs to a team, as the referee sees it."""
+
+    key: int
+    index: int
+    side: str
+    unum: int
+
+
+class TeamRegistry:
+    """Sides, uniform numbers and robot types of the two teams (wire reference §3.4, reference
+    §9.8).
+
+    Args:
+        robot_types: The robot types a player may use (rcssserver3d: 0–4).
+        type_limits: Apply the league's per-team robot-type rules (at most 7 of one type, 9 of
+            the two most used, at least 3 types); ``False`` for training set-ups such as eleven
+            robots of one type.
+    """
+
+    def __init__(self, robot_types=(0, 1, 2, 3, 4), type_limits: bool = True) -> None:
+        self.robot_types = frozenset(int(t) for t in robot_types)
+        self.type_limits = bool(type_limits)
+        self.names: dict[str, str] = {}
+        """side → team name (first distinct name = left, second = right; never reassigned)."""
+        self.members: dict[str, dict[int, int]] = {"left": {}, "right": {}}
+        """side → {unum: robot type}."""
+        self.init_count: dict[str, int] = {"left": 0, "right": 0}
+
+    def side_of(self, name: str) -> str | None:
+        for side, n in self.names.items():
+            if n == name:
+                return side
+        return None
+
+    def register(self, team_name: str, unum: int, robot_type: int) -> tuple[str, int]:
+        """Join ``team_name`` as ``unum`` (0 = lowest free); returns (side, unum).
+
+        Raises:
+            InitError: third team, empty name, number taken or out of 0–11, team full, or the
+                robot-type limits (§3.4).
+        """
+        if not team_name:
+            raise InitError("empty team name")
+        if robot_type not in self.robot_types:
+            allowed = ", ".join(map(str, sorted(self.robot_types)))
+            raise InitError(
+                f"robot type {robot_type} is not allowed on this server (allowed: {allowed})"
+            )
+        side = self.side_of(team_name)
+        if side is None:
+            if len(self.names) >= 2:
+                raise InitError(
+                    f"team {team_name!r} rejected: the teams are already "
+                    f"{self.names['left']!r} and {self.names['right']!r}"
+                )
+            side = "left" if "left" not in self.names else "right"
+            self.names[side] = team_name
+        members = self.members[side]
+        if len(members) >= MAX_PLAYERS:
+            raise InitError(f"team {team_name!r} already has {MAX_PLAYERS} players")
+        if unum == 0:
+            unum = next(n for n in range(1, MAX_PLAYERS + 1) if n not in members)
+        elif not 1 <= unum <= MAX_PLAYERS:
+            raise InitError(f"uniform number {unum} is outside 1..{MAX_PLAYERS}")
+        elif unum in members:
+            raise InitError(f"uniform number {unum} is already taken in team {team_name!r}")
+        if self.type_limits:
+            self._check_types(team_name, list(members.values()), robot_type)
+        members[unum] = robot_type
+        return side, unum
+
+    @staticmethod
+    def _check_types(team: str, types: list[int], new: int) -> None:
+        counts = Counter(types)
+        if counts[new] + 1 > MAX_ROBOT_TYPE_COUNT:
+            raise InitError(
+                f"team {team!r} would have more than {MAX_ROBOT_TYPE_COUNT} robots of type {new}"
+            )
+        counts[new] += 1
+        top_two = sum(sorted(counts.values(), reverse=True)[:2])
+        if top_two > MAX_SUM_TWO_TYPES:
+            raise InitError(
+                f"team {team!r} would have more than {MAX_SUM_TWO_TYPES} robots of its two "
+                "most used types"
+            )
+        counts[new] -= 1
+        free = MAX_PLAYERS - len(types)
+        missing = max(0, MIN_ROBOT_TYPES - len([t for t, c in counts.items() if c > 0]))
+        if free <= missing and counts[new] > 0:
+            raise InitError(
+                f"team {team!r} must use at least {MIN_ROBOT_TYPES} robot types: type {new} "
+                "is already used and the remaining places are needed for other types"
+            )
+
+    def release(self, side: str, unum: int) -> None:
+        """Free a uniform number (the agent disconnected or was killed)."""
+        self.members[side].pop(unum, None)
+
+    def next_slot(self, side: str) -> tuple[float, float, float, float]:
+        """The sideline start slot of the next ``init`` of ``side``: (x, y, z, heading°)."""
+        n = self.init_count[side]
+        self.init_count[side] += 1
+        col, row = divmod(n, 17)
+        x = -FIELD_HALF_LENGTH + 2 * AGENT_RADIUS + 2 * AGENT_RADIUS * col
+        y = FIELD_HALF_WIDTH - 2 * AGENT_RADIUS - 3 * AGENT_RADIUS * row
+        if side == "right":
+            return (-x, y, AGENT_RADIUS, 180.0)
+        return (x, y, AGENT_RADIUS, 0.0)
+
+
+class Referee:
+    """Game flow on top of the World's play mode, clock and scores.
+
+    Args:
+        host: the world's host (the world may be replaced, so it is looked up every time).
+        rules: ``False`` switches the automatic referee off ("soccer rules" off in FC Portugal's
+            tools): play modes then change only by trainer command.
+        rng: for the coin toss of ``(kickOff None)``.
+        robot_types, type_limits: see :class:`TeamRegistry`.
+    """
+
+    def __init__(
+        self,
+        host: GameHost,
+        *,
+        rules: bool = True,
+        rng=None,
+        robot_types=(0, 1, 2, 3, 4),
+        type_limits: bool = True,
+    ) -> None:
+        self.host = host
+        self.rules = rules
+        self.rng = rng if rng is not None else np.random.default_rng()
+        self.teams = TeamRegistry(robot_types, type_limits)
+        self.half = 1
+        self.mode_cycles = 0
+        self.kickoffs_this_half = 0
+        self.last_touch: Player | None = None
+        """The player who touched the ball last (forgotten when that player leaves the game,
+        as rcssserver3d no longer finds the agent then)."""
+        self.touched_in_mode = False
+        self.spot: np.ndarray | None = None
+        self.last_inside_x = 0.0
+        self.pass_started: dict[str, float] = {}
+        self.players: list[Player] = []
+
+    # ------------------------------------------------------------------ state
+    @property
+    def play_mode(self) -> str:
+        return self.host.world.game.play_mode
+
+    @property
+    def game_time(self) -> float:
+        return self.host.world.game.game_time
+
+    @property
+    def mode_time(self) -> float:
+        """Seconds since the current play mode started (counted in cycles)."""
+        return self.mode_cycles * CYCLE_S
+
+    def set_play_mode(self, mode: str, *, spot: np.ndarray | None = None) -> None:
+        """Switch the play mode and restart its timer (trainer ``playMode`` and the rules)."""
+        if mode not in PLAY_MODES:
+            raise ValueError(f"unknown play mode {mode!r}")
+        if mode != self.play_mode:
+            log.info("play mode %s -> %s (t = %.2f)", self.play_mode, mode, self.game_time)
+        self.host.world.set_game(play_mode=mode)
+        self.mode_cycles = 0
+        self.touched_in_mode = False
+        if mode in _SET_PIECES:
+            self.spot = spot if spot is not None else self.host.ball_state()[0]
+        else:
+            self.spot = None
+
+    def kick_off(self, team: str = "None") -> None:
+        """Trainer ``(kickOff Left|Right|None)``: ball and robots are not moved by this."""
+        if team == "None":
+            if self.kickoffs_this_half == 0:
+                side = "left" if self.half == 1 else "right"
+            else:
+                side = "left" if self.rng.random() < 0.5 else "right"
+        else:
+            side = team.lower()
+        self.kickoffs_this_half += 1
+        self.set_play_mode("KickOff_Left" if side == "left" else "KickOff_Right")
+
+    # ------------------------------------------------------------------ actions
+    def drop_ball(self) -> None:
+        """Drop the ball where it is (out of the penalty areas, inside the side lines), clear a
+        2 m circle around it, PlayOn."""
+        p, _, _ = self.host.ball_state()
+        x, y = float(p[0]), float(p[1])
+        x = max(-FIELD_HALF_LENGTH, min(FIELD_HALF_LENGTH, x))
+        y = max(-FIELD_HALF_WIDTH, min(FIELD_HALF_WIDTH, y))
+        if abs(x) > PENALTY_X and abs(y) < PENALTY_HALF_WIDTH:
+            x = math.copysign(PENALTY_X, x)
+            y = math.copysign(PENALTY_HALF_WIDTH, y if y != 0 else 1.0)
+        self.host.set_ball((x, y, BALL_RADIUS), (0.0, 0.0, 0.0))
+        self._clear_circle(np.array([x, y]), FREE_KICK_DISTANCE, None)
+        self.set_play_mode("PlayOn")
+
+    def repos(self, player: Player) -> None:
+        """Trainer ``repos``: move a player to a free spot away from the ball."""
+        ball = self.host.ball_state()[0][:2]
+        own = -1.0 if player.side == "left" else 1.0
+        w = self.host.world
+        occupied = [w.torso_position(p.index)[:2] for p in self.players if p is not player]
+        for k in range(100):
+            x = own * (3.0 + 0.8 * (k % 12))
+            y = -FIELD_HALF_WIDTH + 1.0 + 1.2 * (k // 12)
+            cand = np.array([x, math.copysign(abs(y), 1.0 if ball[1] < 0 else -1.0)])
+            if np.hypot(*(cand - ball)) < 1.0:
+                continue
+            if all(np.hypot(*(cand - o)) >= 2 * AGENT_RADIUS for o in occupied):
+                self.host.teleport(player.index, (cand[0], cand[1], AGENT_RADIUS))
+                return
+
+    def request_pass(self, player: Player, touching: set[int]) -> bool:
+        """The agent's ``(pass)``: grant pass mode if all conditions of §4.5 hold."""
+        if not self.rules or self.play_mode != "PlayOn":
+            return False
+        side = player.side
+        last = self.pass_started.get(side)
+        if last is not None and self.game_time - last < PASS_MODE_RETRY:
+            return False
+        if any(p.index in touching for p in self.players if p.side == side):
+            return False
+        pos, vel, _ = self.host.ball_state()
+        if float(np.linalg.norm(vel)) > PASS_MODE_MAX_BALL_SPEED:
+            return False
+        w = self.host.world
+        if np.hypot(*(w.torso_position(player.index)[:2] - pos[:2])) > PASS_MODE_MAX_BALL_DIST:
+            return False
+        for p in self.players:
+            if p.side != side:
+                d = np.hypot(*(w.torso_position(p.index)[:2] - pos[:2]))
+                if d < PASS_MODE_MIN_OPP_DIST:
+                    return False
+        self.pass_started[side] = self.game_time
+        self.set_play_mode("pass_left" if side == "left" else "pass_right")
+        return True
+
+    # ------------------------------------------------------------------ per cycle
+    def update(self, players: list[Player]) -> None:
+        """Run the rules after a physics step (the game clock was already advanced)."""
+        self.players = players
+        self.mode_cycles += 1
+        touching = self.host.ball_touchers()
+        toucher = None
+        if touching:
+            by_index = {p.index: p for p in players}
+            toucher = next((by_index[i] for i in sorted(touching) if i in by_index), None)
+        if toucher is not None:
+            self.last_touch = toucher
+        elif self.last_touch is not None and all(p.key != self.last_touch.key for p in players):
+            self.last_touch = None
+            self.touched_in_mode = True
+        if not self.rules:
+            return
+        pm = self.play_mode
+        t = self.game_time
+        if pm != "GameOver" and pm != "BeforeKickOff":
+            if self.half == 1 and t >= HALF_TIME:
+                self.half = 2
+                self.kickoffs_this_half = 0
+                self.host.set_ball((0.0, 0.0, BALL_RADIUS), (0.0, 0.0, 0.0))
+                self.set_play_mode("BeforeKickOff")
+                return
+            if self.half == 2 and t >= 2 * HALF_TIME:
+                self.set_play_mode("GameOver")
+                return
+        pos = self.host.ball_position()
+        x, y = pos[0].item(), pos[1].item()
+        if abs(x) < FIELD_HALF_LENGTH and abs(y) < FIELD_HALF_WIDTH:
+            self.last_inside_x = x
+        if pm == "BeforeKickOff":
+            if players:
+                self._hold_ball((0.0, 0.0))
+                self._keep_in_halves()
+        elif pm in ("KickOff_Left", "KickOff_Right"):
+            kicker = "left" if pm == "KickOff_Left" else "right"
+            self._kickoff_clear(kicker)
+            if self.touched_in_mode:
+                self.set_play_mode("PlayOn")
+            elif self.mode_time >= DROP_BALL_TIME:
+                self.drop_ball()
+        elif pm == "PlayOn":
+            self._check_goal_and_out(pos)
+        elif pm in ("Goal_Left", "Goal_Right"):
+            conceding = "right" if pm == "Goal_Left" else "left"
+            self._kickoff_clear(conceding)
+            if self.mode_time >= GOAL_PAUSE:
+                self.host.set_ball((0.0, 0.0, BALL_RADIUS), (0.0, 0.0, 0.0))
+                self.kickoffs_this_half += 1
+                self.set_play_mode("KickOff_Left" if conceding == "left" else "KickOff_Right")
+        elif pm in ("pass_left", "pass_right"):
+            side = "left" if pm == "pass_left" else "right"
+            if self.touched_in_mode or self.mode_time >= PASS_MODE_DURATION:
+                self.set_play_mode("PlayOn")
+            else:
+                self._clear_circle(pos[:2], PASS_MODE_MIN_OPP_DIST, other(side), push=0.1)
+                self._check_goal_and_out(pos)
+        elif pm in _SET_PIECES:
+            self._set_piece(pm, _SET_PIECES[pm], pos)
+
+    def _check_goal_and_out(self, pos: np.ndarray) -> None:
+        x, y, z = (float(v) for v in pos)
+        if (
+            abs(x) >= FIELD_HALF_LENGTH + BALL_RADIUS
+            and abs(y) < GOAL_HALF_WIDTH
+            and z < GOAL_HEIGHT
+        ):
+            scorer = "left" if x > 0 else "right"
+            g = self.host.world.game
+            if scorer == "left":
+                self.host.world.set_game(score_left=g.score_left + 1)
+            else:
+                self.host.world.set_game(score_right=g.score_right + 1)
+            log.info("goal for the %s team: %d:%d", scorer, g.score_left, g.score_right)
+            self.set_play_mode("Goal_Left" if scorer == "left" else "Goal_Right")
+            return
+        if self.last_touch is None:
+            # rcssserver3d awards nothing for a ball off the field that no player touched (a
+            # trainer put it there): it lies where it is until it is moved or played
+            return
+        last = self.last_touch.side
+        if abs(y) >= FIELD_HALF_WIDTH + BALL_RADIUS + 0.001:
+            side = other(last)
+            spot_x = max(-FIELD_HALF_LENGTH, min(FIELD_HALF_LENGTH, self.last_inside_x))
+            spot = np.array([spot_x, math.copysign(FIELD_HALF_WIDTH - BALL_RADIUS, y), BALL_RADIUS])
+            self.set_play_mode("KickIn_Left" if side == "left" else "KickIn_Right", spot=spot)
+        elif abs(x) >= FIELD_HALF_LENGTH + BALL_RADIUS + 0.001:
+            defending = "right" if x > 0 else "left"
+            attackers = other(defending)
+            sx = math.copysign(1.0, x)
+            if last == defending:
+                spot = np.array(
+                    [sx * (FIELD_HALF_LENGTH - BALL_RADIUS), math.copysign(5.483, y), BALL_RADIUS]
+                )
+                self.set_play_mode(f"corner_kick_{attackers}", spot=spot)
+            else:
+                spot = np.array([sx * 14.0, 0.0, BALL_RADIUS])
+                self.set_play_mode(f"goal_kick_{defending}", spot=spot)
+
+    def _set_piece(self, pm: str, side: str, pos: np.ndarray) -> None:
+        if self.mode_time < KICK_IN_PAUSE:
+            self.touched_in_mode = False
+            return
+        spot = self.spot if self.spot is not None else pos
+        goal_kick = pm.startswith("goal_kick")
+        if not self.touched_in_mode:
+            if self.mode_time >= KICK_IN_PAUSE + DROP_BALL_TIME:
+                self.host.set_ball((spot[0], spot[1], BALL_RADIUS), (0.0, 0.0, 0.0))
+                self.drop_ball()
+                return
+            self._hold_ball(spot[:2])
+            self._clear_circle(spot[:2], FREE_KICK_DISTANCE, other(side))
+            return
+        if goal_kick:
+            in_area = abs(pos[0]) > PENALTY_X and abs(pos[1]) < PENALTY_HALF_WIDTH
+            if not in_area:
+                self.set_play_mode("PlayOn")
+            return
+        if self.mode_time >= KICK_IN_PAUSE + 0.03:
+            self.set_play_mode("PlayOn")
+
+    # ------------------------------------------------------------------ moving things
+    def _hold_ball(self, xy: np.ndarray | tuple[float, float]) -> None:
+        (px, py, _), (vx, vy, vz) = self.host.ball_pos_vel()
+        # a resting ball jitters by micrometres on its contact: only re-place a ball that moved
+        if (
+            abs(px - xy[0]) > 1e-3
+            or abs(py - xy[1]) > 1e-3
+            or abs(vx) > 1e-2
+            or abs(vy) > 1e-2
+            or abs(vz) > 1e-2
+        ):
+            self.host.set_ball((float(xy[0]), float(xy[1]), BALL_RADIUS), (0.0, 0.0, 0.0))
+
+    def _body_x_extent(self, index: int) -> tuple[float, float]:
+        w = self.host.world
+        xs = w.body_frames(index)[0][:, 0]
+        return float(xs.min()), float(xs.max())
+
+    def _keep_in_halves(self) -> None:
+        for p in self.players:
+            lo, hi = self._body_x_extent(p.index)
+            if p.side == "left" and hi > 0:
+                self._move_x(p.index, -FREE_KICK_MOVE)
+            elif p.side == "right" and lo < 0:
+                self._move_x(p.index, FREE_KICK_MOVE)
+
+    def _kickoff_clear(self, kicker: str) -> None:
+        w = self.host.world
+        for p in self.players:
+            lo, hi = self._body_x_extent(p.index)
+            own = -1.0 if p.side == "left" else 1.0
+            if p.side != kicker:
+                into_other = hi > 0 if p.side == "left" else lo < 0
+                xy = w.body_frames(p.index)[0][:, :2]
+                in_circle = bool(np.any(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
+                if into_other or in_circle:
+                    self._move_x(p.index, own * FREE_KICK_MOVE)
+            else:
+                into_other = hi > 0 if p.side == "left" else lo < 0
+                if into_other:
+                    xy = w.body_frames(p.index)[0][:, :2]
+                    inside = bool(np.all(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
+                    if not inside:
+                        self._move_x(p.index, own * FREE_KICK_MOVE)
+
+    def _move_x(self, index: int, x: float) -> None:
+        p = self.host.world.torso_position(index)
+        self.host.teleport(index, (x, p[1], p[2]))
+
+    def _clear_circle(
+        self, centre: np.ndarray, radius: float, side: str | None, push: float | None = None
+    ) -> None:
+        """Move robots (of ``side``, or all) whose torso is within ``radius`` of ``centre``
+        away from it: to ``radius + push`` (default: to 2.5 m)."""
+        w = self.host.world
+        target = FREE_KICK_MOVE if push is None else radius + push
+        for p in self.players:
+            if side is not None and p.side != side:
+                continue
+            t = w.torso_position(p.index)
+            d = t[:2] - centre[:2]
+            dist = float(np.hypot(*d))
+            if dist >= radius:
+                continue
+            if dist < 1e-6:
+                d = np.array([-1.0 if p.side == "left" else 1.0, 0.0])
+                dist = 1.0
+            new = centre[:2] + d / dist * target
+            new[0] = max(-FIELD_HALF_LENGTH, min(FIELD_HALF_LENGTH, new[0]))
+            new[1] = max(-FIELD_HALF_WIDTH, min(FIELD_HALF_WIDTH, new[1]))
+            self.host.teleport(p.index, (new[0], new[1], t[2]))
