@@ -23,7 +23,7 @@ import numpy as np
 from robocup_gym.protocol.constants import PLAY_MODES
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.field import FIELD_LENGTH, FIELD_WIDTH
-from robocup_gym.sim.physics import BALL_RADIUS, SURFACE_LAYER
+from robocup_gym.sim.physics import BALL_REST_Z
 
 __all__ = [
     "BALL_REST_Z",
@@ -36,8 +36,6 @@ __all__ = [
     "resolve_joints",
 ]
 
-BALL_REST_Z = BALL_RADIUS - SURFACE_LAYER
-"""Height of the centre of a ball resting on the ground, m (0.041: radius 0.042, sunk 1 mm)."""
 
 DEFAULT_OBSERVATIONS: tuple[str, ...] = (
     "joint_pos",

@@ -38,6 +38,8 @@ friction of a contact with a near-zero normal force (μ = 10 let a hopping robot
 where ODE's stays put)."""
 
 BALL_RADIUS = 0.042
+BALL_REST_Z = BALL_RADIUS - SURFACE_LAYER
+"""Height of the centre of a ball resting on the ground, m (0.041: radius 0.042, sunk 1 mm)."""
 BALL_MASS = 0.026
 BALL_LINEAR_DRAG = 0.01
 """N·s/m (reference §5)."""

@@ -1,0 +1,82 @@
+"""How fast do the soccer environments run? Agent steps and game cycles per second, against the
+world alone on the same robots, measured in the same run.
+
+* ``penalty_env_steps_per_s``: ``penalty_v0`` (2 players), random joint actions, resets
+  included (one step = one cycle, both agents act);
+* ``game_2v2_steps_per_s``: ``game_v0`` 2 against 2, random joint actions;
+* ``game_11v11_cycles_per_s``: ``game_v0`` 11 against 11, robot types 0–4 mixed, every player
+  acting every cycle with joint-level actions and observing (vision every third cycle);
+* ``physics_22_robots_cycles_per_s``: the same world stepped alone (no perception, no rules);
+* ``game_vs_physics``: their ratio.
+
+One core (the environments are single-process). ``--quick`` measures fewer cycles.
+
+    python benchmarks/soccer.py [--quick] [--engine ode|mujoco]
+
+Prints one line per measure and, last, one JSON object.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+from robocup_gym.soccer import game_v0, penalty_v0
+
+MIXED = (0, 1, 2, 3, 4, 0, 1, 2, 3, 4, 0)
+
+
+def _steps_per_s(env, cycles: int, seed: int = 0) -> float:
+    rng = np.random.default_rng(seed)
+    env.reset(seed=seed)
+    t0 = time.perf_counter()
+    for _ in range(cycles):
+        if not env.agents:
+            env.reset()
+        acts = {a: rng.uniform(-1, 1, env.action_space(a).shape) for a in env.agents}
+        env.step(acts)
+    return cycles / (time.perf_counter() - t0)
+
+
+def _physics_per_s(env, cycles: int) -> float:
+    world = env.game.world
+    env.reset(seed=0)
+    rng = np.random.default_rng(1)
+    for p in env.game.players:  # the robots move, as in the game
+        world.command(p.index, 0.2 * rng.uniform(-1, 1, len(world.robots[p.index].model.joints)))
+    t0 = time.perf_counter()
+    for _ in range(cycles):
+        world.step()
+    return cycles / (time.perf_counter() - t0)
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer cycles")
+    parser.add_argument("--engine", choices=("ode", "mujoco"), default="ode")
+    args = parser.parse_args(argv)
+    n = 200 if args.quick else 1000
+    out: dict = {"engine": args.engine, "quick": args.quick}
+    with penalty_v0.parallel_env(engine=args.engine) as env:
+        out["penalty_env_steps_per_s"] = round(_steps_per_s(env, n), 1)
+    with game_v0.parallel_env(engine=args.engine, left_types=(0, 1), right_types=(0, 1)) as env:
+        out["game_2v2_steps_per_s"] = round(_steps_per_s(env, n), 1)
+    with game_v0.parallel_env(
+        engine=args.engine, left_types=MIXED, right_types=MIXED, max_cycles=100_000
+    ) as env:
+        out["game_11v11_cycles_per_s"] = round(_steps_per_s(env, n // 2), 1)
+        out["physics_22_robots_cycles_per_s"] = round(_physics_per_s(env, n // 2), 1)
+    out["game_vs_physics"] = round(
+        out["game_11v11_cycles_per_s"] / out["physics_22_robots_cycles_per_s"], 3
+    )
+    for k, v in out.items():
+        print(f"{k:34s} {v}")
+    print(json.dumps(out))
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,14 @@
+"""RoboCup 3D soccer as multi-agent environments (PettingZoo): one module per scenario, each
+with ``env()`` (AEC) and ``parallel_env()`` (Parallel).
+
+* :mod:`~robocup_gym.soccer.penalty_v0`: one striker against one goalkeeper;
+* :mod:`~robocup_gym.soccer.keepaway_v0`: two attackers keep the ball from one defender;
+* :mod:`~robocup_gym.soccer.game_v0`: N against N (1–11), the full field and rules.
+
+They run in-process on the world of the single-agent environments with the referee of
+``robocup-gym serve`` (:mod:`robocup_gym.sim.referee`). Needs ``pettingzoo`` (the ``soccer``
+extra).
+"""
+
+SCENARIOS = ("penalty_v0", "keepaway_v0", "game_v0")
+"""The scenario modules of this package."""

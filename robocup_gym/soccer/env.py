@@ -1,0 +1,377 @@
+"""RoboCup 3D soccer as a PettingZoo Parallel environment; the scenarios (:mod:`.penalty_v0`,
+:mod:`.keepaway_v0`, :mod:`.game_v0`) say only where an episode starts, when it ends and what
+they reward beyond goals.
+
+Agents are named by team and uniform number (``left_1`` … ``right_11``). Every agent acts every
+step with joint-level actions, as :class:`robocup_gym.envs.BaseEnv` does: ``Box(-1, 1)``, one value
+per joint of its robot (22, 24 for type 4), as joint velocities (``action_mode="velocity"``: value
+× the joint's max speed, rad/s) or target angles over each joint's range (``"target_angle"``). A
+step is ``cycles_per_step`` 20 ms cycles with the same action. Observations:
+:mod:`robocup_gym.soccer.observations`.
+
+Rewards are team-shared and zero-sum: a goal pays ``reward_goal`` to every player of the
+scoring team and takes as much from every player of the other; the shaping terms below do the
+same with their weight (0 by default), and each scenario adds its own. ``info[agent]`` carries
+``play_mode``, ``score`` (own, opponent), the cycle's ``goal`` side, ``reward_terms`` (each
+term's share of this step's reward) and, when the simulation diverged, ``diverged`` (the reason;
+the episode then ends, truncated, for everyone).
+
+====================  =======  ===========================================================
+option                default  meaning
+====================  =======  ===========================================================
+``left_types``        (0,)     Nao type of each left player (uniform numbers 1, 2, …)
+``right_types``       (0,)     the right team's
+``engine``            "ode"    ``"ode"`` (SimSpark's physics) or ``"mujoco"``
+``max_cycles``        scenario episode length in cycles (truncation)
+``cycles_per_step``   1        cycles per step, the action held
+``action_mode``       velocity ``"velocity"`` or ``"target_angle"``
+``target_gain``       12.5     1/s, target-angle mode: velocity = gain × angle error
+``privileged``        False    add ground truth to the observations (training only)
+``vision_noise``      True     ``See`` with rcssserver3d's noise
+``rules``             True     the automatic referee
+``reward_goal``       1.0      per goal, to the scorers (minus to the others)
+``ball_progress``     0.0      per metre the ball moves toward the opponent goal
+``possession``        0.0      per step for the team whose player is nearest the ball
+====================  =======  ===========================================================
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields, replace
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+
+try:
+    from pettingzoo import ParallelEnv
+    from pettingzoo.utils import parallel_to_aec, wrappers
+except ImportError as exc:  # pragma: no cover - depends on the installation
+    raise ImportError(
+        f"the soccer environments need PettingZoo ({exc}): pip install 'robocup-gym[soccer]'"
+    ) from exc
+
+from robocup_gym.envs.actions import ActionMapper, ActionMode
+from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
+from robocup_gym.soccer.observations import PlayerObserver
+
+__all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel"]
+
+_ACTION_MODES = ("velocity", "target_angle")
+
+
+@dataclass(frozen=True)
+class SoccerConfig:
+    """The options of a soccer environment (see the module docstring)."""
+
+    left_types: tuple[int, ...] = (0,)
+    right_types: tuple[int, ...] = (0,)
+    engine: str = "ode"
+    max_cycles: int = 500
+    cycles_per_step: int = 1
+    action_mode: str = "velocity"
+    target_gain: float = 12.5
+    privileged: bool = False
+    vision_noise: bool = True
+    rules: bool = True
+    reward_goal: float = 1.0
+    ball_progress: float = 0.0
+    possession: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("left_types", "right_types"):
+            value = getattr(self, name)
+            if isinstance(value, int) or not isinstance(value, Sequence):
+                raise ValueError(f"{name} must be a sequence of Nao types 0-4, got {value!r}")
+            object.__setattr__(self, name, tuple(int(t) for t in value))
+            for t in getattr(self, name):
+                if t not in range(5):
+                    raise ValueError(f"{name}: {t} is not a Nao type (0-4)")
+            if len(getattr(self, name)) > 11:
+                raise ValueError(f"{name}: a team has at most 11 players")
+        if not self.left_types and not self.right_types:
+            raise ValueError("a game needs at least one player")
+        if self.engine not in ("ode", "mujoco"):
+            raise ValueError(f"engine must be 'ode' or 'mujoco', got {self.engine!r}")
+        if self.action_mode not in _ACTION_MODES:
+            raise ValueError(
+                f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
+            )
+        for name in ("max_cycles", "cycles_per_step"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name} must be a positive integer, got {value!r}")
+        for name in ("target_gain", "reward_goal", "ball_progress", "possession"):
+            value = getattr(self, name)
+            if not np.isfinite(float(value)):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
+
+    @classmethod
+    def with_options(cls, defaults: SoccerConfig, options: Mapping[str, Any]) -> SoccerConfig:
+        """``defaults`` with ``options`` over them.
+
+        Raises:
+            TypeError: an unknown option (the message lists the known ones).
+        """
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(options) - known)
+        if unknown:
+            raise TypeError(
+                f"unknown soccer option(s) {', '.join(unknown)}; "
+                f"options: {', '.join(sorted(known))}"
+            )
+        return replace(defaults, **options)
+
+
+class SoccerParallelEnv(ParallelEnv):
+    """The soccer environment of one scenario (subclasses say where an episode starts, when it
+    ends and what else they reward). Keyword arguments are :class:`SoccerConfig` fields."""
+
+    metadata: ClassVar[dict] = {
+        "name": "robocup_soccer_v0",
+        "render_modes": [],
+        "is_parallelizable": True,
+    }
+    default_config = SoccerConfig()
+
+    def __init__(self, render_mode: str | None = None, **options: Any) -> None:
+        if render_mode is not None:
+            raise ValueError(f"render_mode {render_mode!r} is not supported (none is)")
+        self.render_mode = None
+        self.config = SoccerConfig.with_options(self.default_config, options)
+        c = self.config
+        self.game = SoccerGame(
+            c.left_types,
+            c.right_types,
+            engine=c.engine,
+            rules=c.rules,
+            vision_noise=c.vision_noise,
+        )
+        self.possible_agents = list(self.game.names)
+        self.agents: list[str] = []
+        self._side = {n: p.side for n, p in zip(self.game.names, self.game.players, strict=True)}
+        world = self.game.world
+        self._observers: dict[str, PlayerObserver] = {}
+        self._mappers: dict[str, ActionMapper] = {}
+        for name, p in zip(self.game.names, self.game.players, strict=True):
+            model = world.robots[p.index].model
+            self._observers[name] = PlayerObserver(model, p.side, c.privileged)
+            self._mappers[name] = ActionMapper(
+                model,
+                np.arange(len(model.joints)),
+                ActionMode(c.action_mode),
+                c.target_gain,
+                stop_margin_deg=0.5 if c.action_mode == "target_angle" else 0.0,
+            )
+        self._angles: dict[str, np.ndarray] = {}
+        self._cycles = 0
+        self._rng = np.random.default_rng()
+        self._ball_x = 0.0
+
+    # ------------------------------------------------------------------ spaces
+    @functools.cache  # noqa: B019 (one space object per agent, as PettingZoo asks)
+    def observation_space(self, agent: str) -> gym.spaces.Box:
+        size = self._observer(agent).size
+        return gym.spaces.Box(-1.0, 1.0, (size,), np.float32)
+
+    @functools.cache  # noqa: B019
+    def action_space(self, agent: str) -> gym.spaces.Box:
+        size = self._mapper(agent).size
+        return gym.spaces.Box(-1.0, 1.0, (size,), np.float32)
+
+    def _observer(self, agent: str) -> PlayerObserver:
+        try:
+            return self._observers[agent]
+        except KeyError:
+            raise KeyError(
+                f"no agent {agent!r} in this game (agents: {', '.join(self.possible_agents)})"
+            ) from None
+
+    def _mapper(self, agent: str) -> ActionMapper:
+        self._observer(agent)
+        return self._mappers[agent]
+
+    # ------------------------------------------------------------------ scenario hooks
+    def _start(self, rng: np.random.Generator) -> Start:
+        """Where an episode starts."""
+        raise NotImplementedError
+
+    def _ended(self, report: CycleReport) -> str | None:
+        """Why the episode ends after this cycle (``None``: it goes on)."""
+        return "game over" if report.play_mode == "GameOver" else None
+
+    def _scenario_reward(self, report: CycleReport) -> dict[str, float]:
+        """The scenario's own reward terms for the left team this cycle (zero-sum: the right
+        team gets the negatives), by term name."""
+        return {}
+
+    # ------------------------------------------------------------------ the API
+    def reset(
+        self, seed: int | None = None, options: dict | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, dict]]:
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        start = self._start(self._rng)
+        self.game.reset(start, seed=None if seed is None else int(seed))
+        self.agents = list(self.possible_agents)
+        self._cycles = 0
+        self._ball_x = float(self.game.ball_position()[0])
+        obs, infos = {}, {}
+        for name in self.agents:
+            self._observers[name].reset()
+            p = self._perceive(name)
+            obs[name] = self._observers[name](p)
+            infos[name] = self._info(name, None, {})
+        return obs, infos
+
+    def step(self, actions: Mapping[str, np.ndarray]):
+        if not self.agents:
+            raise RuntimeError("the episode has ended: call reset() first")
+        commands = self._commands(actions)
+        report = CycleReport(play_mode=self.game.world.game.play_mode)
+        goal = None
+        terms = {"goal": 0.0, "ball_progress": 0.0, "possession": 0.0}
+        ended = None
+        for _ in range(self.config.cycles_per_step):
+            report = self.game.step(commands)
+            commands = {}  # the targets stay
+            self._cycles += 1
+            if report.diverged is not None:
+                break
+            goal = goal or report.goal
+            for k, v in self._cycle_terms(report).items():
+                terms[k] = terms.get(k, 0.0) + v
+            ended = self._ended(report)
+            if ended is not None:
+                break
+        truncated = report.diverged is not None or (
+            ended is None and self._cycles >= self.config.max_cycles
+        )
+        terminated = ended is not None and report.diverged is None
+        rewards, obs, infos = {}, {}, {}
+        left_reward = sum(terms.values())
+        for name in self.agents:
+            sign = 1.0 if self._side[name] == "left" else -1.0
+            rewards[name] = float(sign * left_reward)
+            if report.diverged is None:
+                obs[name] = self._observers[name](self._perceive(name))
+            else:
+                obs[name] = np.zeros(self._observers[name].size, np.float32)
+            info = self._info(name, goal, {k: sign * v for k, v in terms.items()})
+            if report.diverged is not None:
+                info["diverged"] = report.diverged
+            if ended is not None:
+                info["end"] = ended
+            infos[name] = info
+        terminations = {n: terminated for n in self.agents}
+        truncations = {n: truncated for n in self.agents}
+        if terminated or truncated:
+            self.agents = []
+        return obs, rewards, terminations, truncations, infos
+
+    def _cycle_terms(self, report: CycleReport) -> dict[str, float]:
+        """Every reward term of one cycle, for the left team."""
+        c = self.config
+        out: dict[str, float] = {}
+        if report.goal is not None:
+            out["goal"] = c.reward_goal if report.goal == "left" else -c.reward_goal
+        ball = self.game.ball_position()
+        if c.ball_progress:
+            out["ball_progress"] = c.ball_progress * (float(ball[0]) - self._ball_x)
+        self._ball_x = float(ball[0])
+        if c.possession:
+            nearest = self._nearest_side(ball)
+            if nearest is not None:
+                out["possession"] = c.possession if nearest == "left" else -c.possession
+        out.update(self._scenario_reward(report))
+        return out
+
+    def _nearest_side(self, ball: np.ndarray) -> str | None:
+        w = self.game.world
+        best, side = np.inf, None
+        for p in self.game.players:
+            d = float(np.hypot(*(w.torso_position(p.index)[:2] - ball[:2])))
+            if d < best:
+                best, side = d, p.side
+        return side
+
+    def _commands(self, actions: Mapping[str, np.ndarray]) -> dict[int, np.ndarray]:
+        unknown = [a for a in actions if a not in self.agents]
+        if unknown:
+            raise KeyError(
+                f"actions for {', '.join(map(repr, unknown))}, which "
+                f"{'is' if len(unknown) == 1 else 'are'} not playing "
+                f"(agents: {', '.join(self.agents)})"
+            )
+        commands: dict[int, np.ndarray] = {}
+        for name in self.agents:
+            if name not in actions:
+                raise KeyError(f"no action for {name!r} (every agent acts every step)")
+            mapper = self._mappers[name]
+            a = np.asarray(actions[name], dtype=float)
+            if a.shape != (mapper.size,):
+                raise ValueError(
+                    f"{name}: action of shape {a.shape}, expected ({mapper.size},) "
+                    f"(one value per joint of its type-{self._type(name)} robot)"
+                )
+            if not np.isfinite(a).all():
+                bad = int(np.flatnonzero(~np.isfinite(a))[0])
+                raise ValueError(
+                    f"{name}: action value {bad} ({mapper.labels()[bad]}) is {a[bad]}; "
+                    "actions must be finite"
+                )
+            a = np.clip(a, -1.0, 1.0)
+            commands[self.game.index(name)] = mapper.command(a, self._angles[name])
+        return commands
+
+    def _type(self, name: str) -> int:
+        return self.game.robot_types[self.game.index(name)]
+
+    def _perceive(self, name: str):
+        i = self.game.index(name)
+        p = self.game.world.perceive(i, ground_truth=self.config.privileged)
+        self._angles[name] = np.asarray(p.joint_angles_deg, float)
+        return p
+
+    def _info(self, name: str, goal: str | None, terms: dict[str, float]) -> dict[str, Any]:
+        g = self.game.world.game
+        side = self._side[name]
+        score = (g.score_left, g.score_right) if side == "left" else (g.score_right, g.score_left)
+        return {"play_mode": g.play_mode, "score": score, "goal": goal, "reward_terms": terms}
+
+    def render(self) -> None:
+        return None
+
+    def close(self) -> None:
+        self.game.close()
+
+    def __enter__(self) -> SoccerParallelEnv:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def state(self) -> np.ndarray:
+        """The global state: ball position and velocity, then each player's torso position, in
+        the world frame."""
+        w = self.game.world
+        parts = [w.ball_position(), w.ball_velocity()]
+        parts += [w.torso_position(p.index) for p in self.game.players]
+        return np.concatenate(parts).astype(np.float32)
+
+
+def aec_from_parallel(parallel: SoccerParallelEnv):
+    """The AEC form of a soccer environment (PettingZoo's own conversion and checks)."""
+    env = parallel_to_aec(parallel)
+    env = wrappers.OrderEnforcingWrapper(env)
+    return env
+
+
+def teams_of(config: SoccerConfig) -> dict[str, list[str]]:
+    """Agent names per side."""
+    return {
+        side: [f"{side}_{k + 1}" for k in range(len(types))]
+        for side, types in zip(SIDES, (config.left_types, config.right_types), strict=True)
+    }
