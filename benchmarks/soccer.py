@@ -4,10 +4,13 @@ world alone on the same robots, measured in the same run.
 * ``penalty_env_steps_per_s``: ``penalty_v0`` (2 players), random joint actions, resets
   included (one step = one cycle, both agents act);
 * ``game_2v2_steps_per_s``: ``game_v0`` 2 against 2, random joint actions;
-* ``game_11v11_cycles_per_s``: ``game_v0`` 11 against 11, robot types 0–4 mixed, every player
-  acting every cycle with joint-level actions and observing (vision every third cycle);
+* ``game_2v2_skill_steps_per_s``: agent decisions per second, 2 against 2 with skill actions
+  (random walk commands, a decision every 10 cycles; the skills' policies run every cycle);
+* ``game_11v11_cycles_per_s``: ``game_v0`` 11 against 11, robot types 0–4 mixed, every player's
+  skills running (random walk commands) and every player observing (vision every third cycle);
+* ``game_11v11_joint_cycles_per_s``: the same with joint-level actions every cycle;
 * ``physics_22_robots_cycles_per_s``: the same world stepped alone (no perception, no rules);
-* ``game_vs_physics``: their ratio.
+* ``game_vs_physics``: the skill game's cycles over the physics'.
 
 One core (the environments are single-process). ``--quick`` measures fewer cycles.
 
@@ -29,16 +32,21 @@ from robocup_gym.soccer import game_v0, penalty_v0
 MIXED = (0, 1, 2, 3, 4, 0, 1, 2, 3, 4, 0)
 
 
-def _steps_per_s(env, cycles: int, seed: int = 0) -> float:
+def _steps_per_s(env, steps: int, seed: int = 0) -> float:
+    """Steps per second (one step: every agent acts), random actions (skills: walk commands)."""
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)
+    skills = env.skills is not None
     t0 = time.perf_counter()
-    for _ in range(cycles):
+    for _ in range(steps):
         if not env.agents:
             env.reset()
         acts = {a: rng.uniform(-1, 1, env.action_space(a).shape) for a in env.agents}
+        if skills:
+            for a in acts.values():
+                a[3] = -1.0  # walk (kicks make robots fall: get-ups would dominate the figure)
         env.step(acts)
-    return cycles / (time.perf_counter() - t0)
+    return steps / (time.perf_counter() - t0)
 
 
 def _physics_per_s(env, cycles: int) -> float:
@@ -64,10 +72,15 @@ def main(argv: list[str] | None = None) -> dict:
         out["penalty_env_steps_per_s"] = round(_steps_per_s(env, n), 1)
     with game_v0.parallel_env(engine=args.engine, left_types=(0, 1), right_types=(0, 1)) as env:
         out["game_2v2_steps_per_s"] = round(_steps_per_s(env, n), 1)
-    with game_v0.parallel_env(
-        engine=args.engine, left_types=MIXED, right_types=MIXED, max_cycles=100_000
-    ) as env:
-        out["game_11v11_cycles_per_s"] = round(_steps_per_s(env, n // 2), 1)
+    two = {"left_types": (0, 1), "right_types": (0, 1)}
+    with game_v0.parallel_env(engine=args.engine, actions="skills", **two) as env:
+        decisions = _steps_per_s(env, n // 10) * 4  # four agents decide each step
+        out["game_2v2_skill_steps_per_s"] = round(decisions, 1)
+    eleven = {"left_types": MIXED, "right_types": MIXED, "max_cycles": 100_000}
+    with game_v0.parallel_env(engine=args.engine, actions="skills", **eleven) as env:
+        out["game_11v11_cycles_per_s"] = round(_steps_per_s(env, n // 20) * 10, 1)
+    with game_v0.parallel_env(engine=args.engine, **eleven) as env:
+        out["game_11v11_joint_cycles_per_s"] = round(_steps_per_s(env, n // 2), 1)
         out["physics_22_robots_cycles_per_s"] = round(_physics_per_s(env, n // 2), 1)
     out["game_vs_physics"] = round(
         out["game_11v11_cycles_per_s"] / out["physics_22_robots_cycles_per_s"], 3

@@ -619,6 +619,82 @@ if typer is not None:
             _fail(f"the server is not available in this installation (robocup_gym.server: {exc})")
         raise typer.Exit(server_main(list(ctx.args), prog="robocup-gym serve"))
 
+    # ------------------------------------------------------------------------------ match
+    @app.command()
+    def match(
+        team_a: Annotated[str, typer.Argument(help="A team: scripted or standing.")],
+        team_b: Annotated[str, typer.Argument(help="The other team.")],
+        games: Annotated[int, typer.Option(help="Games to play (sides change every game).")] = 20,
+        players: Annotated[int, typer.Option(help="Players a side (1-11).")] = 2,
+        seconds: Annotated[float, typer.Option(help="Game time of each game, s.")] = 120.0,
+        types: Annotated[
+            str | None,
+            typer.Option(help="Each team's robot types, e.g. 0,1 (default 0,1,2,3,4 in turn)."),
+        ] = None,
+        engine: Annotated[str, typer.Option(help="ode (SimSpark's physics) or mujoco.")] = "ode",
+        seed: Annotated[int, typer.Option(help="Game k is seeded with seed + k.")] = 0,
+    ) -> None:
+        """Play two teams against each other in-process (multi-agent soccer with skill
+        actions); a table, then one JSON object from the first team's side."""
+        import json
+
+        from rich.table import Table
+
+        try:
+            from robocup_gym.soccer.match import play_match
+        except ImportError as exc:
+            _fail(str(exc))
+        robot_types = None
+        if types is not None:
+            try:
+                robot_types = [int(t) for t in types.split(",")]
+            except ValueError:
+                _fail(f"--types expects numbers like 0,1,2, got {types!r}")
+        console = _console()
+
+        def progress(k: int, g) -> None:
+            console.print(
+                f"game {k + 1}/{games}: {team_a} ({g.a_side}) {g.goals_for} : "
+                f"{g.goals_against} {team_b}"
+                + (" (the simulation diverged)" if g.diverged else ""),
+                highlight=False,
+            )
+
+        try:
+            result = play_match(
+                team_a,
+                team_b,
+                games=games,
+                players=players,
+                seconds=seconds,
+                robot_types=robot_types,
+                engine=engine,
+                seed=seed,
+                on_game=progress,
+            )
+        except ValueError as exc:
+            _fail(str(exc))
+        summary = result.summary
+        table = Table(title=f"{team_a} against {team_b}: {players} a side, {seconds:g} s a game")
+        for col in ("games", "wins", "draws", "losses", "goals for", "goals against", "ci95"):
+            table.add_column(col, justify="right")
+        table.add_row(
+            *map(
+                str,
+                (
+                    summary["games"],
+                    summary["wins"],
+                    summary["draws"],
+                    summary["losses"],
+                    summary["goals_for"],
+                    summary["goals_against"],
+                    summary["goal_difference_ci95"],
+                ),
+            )
+        )
+        console.print(table)
+        print(json.dumps(summary))
+
     # ------------------------------------------------------------------------------ tasks
     @app.command()
     def tasks() -> None:

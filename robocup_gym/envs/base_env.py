@@ -54,7 +54,7 @@ from robocup_gym.envs.observations import (
     up_z,
 )
 from robocup_gym.sim.physics import CYCLE_S
-from robocup_gym.types import GroundTruth, Perception
+from robocup_gym.types import AgentCommand, GroundTruth, Perception
 
 __all__ = ["BaseEnv", "EpisodeStart"]
 
@@ -372,6 +372,10 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self._obs_noise = float(config.observation_noise_std)
         self._act_noise = float(config.action_noise_std)
         self._last_action = np.zeros(n_act)
+        self._acted = self._last_action.copy()
+        self.rewarded = True
+        """Compute rewards (a task run as a skill, whose reward nobody reads, turns this off)."""
+        """The action of the command :meth:`act` made last (clipped, noise included)."""
         self._vision_ball = np.zeros(4)
         self._needs_heading = "ball_rel" in config.observations or "ball_vel" in config.observations
         self._heading = (1.0, 0.0)
@@ -481,21 +485,40 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         ``wait_steps`` more cycles with zero joint velocities, then the final reward is computed
         (the returned observation is the one from before the wait, as in the paper; ``info``,
         ``fallen`` included, describes the world after the wait, as the reward does)."""
+        command = self.act(action)
+        try:
+            p = self.backend.step(command)
+        except BackendDivergedError as e:
+            return self._diverged(e)
+        return self.observe_step(p)
+
+    def act(self, action: Any) -> AgentCommand:
+        """The first half of :meth:`step`: the joint command of ``action`` (checked, noised and
+        clipped as a step does), without running a cycle. With :meth:`observe_step` this lets
+        a caller step the world itself, e.g. a game running many players' skills at once.
+
+        Raises:
+            RuntimeError: before :meth:`reset`, or after the episode ended.
+            ValueError: a bad action (its shape or a value that is not finite, named).
+        """
         self._refuse_if_closed("step")
         if not self._started:
             raise RuntimeError("call reset() before step()")
         if self.has_completed:
             raise RuntimeError("the episode is over (terminated or truncated); call reset()")
         a = self._check_action(action)
+        self._before_action()
         if self._act_noise:
             a = a + self.np_random.normal(0.0, self._act_noise, a.shape)
         np.minimum(a, 1.0, out=a)  # clip to [-1, 1] (cheaper than np.clip on small arrays)
         np.maximum(a, -1.0, out=a)
-        command = self._actions.agent_command(a, self._q)
-        try:
-            p = self.backend.step(command)
-        except BackendDivergedError as e:
-            return self._diverged(e)
+        self._acted = a
+        return self._actions.agent_command(a, self._q)
+
+    def observe_step(self, p: Perception) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """The second half of :meth:`step`: the cycle's perception ``p`` (after the command of
+        :meth:`act`) made into the step's observation, reward, end flags and info."""
+        a = self._acted
         self._last_action[:] = a
         self.episode_step += 1
         self._set_perception(p)
@@ -513,7 +536,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                     return self._diverged(e, terminated=terminated)
                 self._set_perception(p, cycles=n, episode_over=True)
                 cycles += n
-        reward = float(self._get_reward(a))
+        reward = float(self._get_reward(a)) if self.rewarded else 0.0
         info = self._info()
         info["cycles"] = cycles
         return obs, reward, terminated, truncated, info
@@ -538,6 +561,10 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             raise RuntimeError(f"{what}() on a closed environment; make a new one")
 
     # ================================================================== overridables
+    def _before_action(self) -> None:
+        """Called before each action becomes a command (tasks with a reference motion set its
+        targets for the step here)."""
+
     def _get_reward(self, action: np.ndarray) -> float:
         """The reward of the step just taken; tasks override this.
 

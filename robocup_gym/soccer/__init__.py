@@ -6,8 +6,10 @@ with ``env()`` (AEC) and ``parallel_env()`` (Parallel).
 * :mod:`~robocup_gym.soccer.game_v0`: N against N (1–11), the full field and rules.
 
 They run in-process on the world of the single-agent environments with the referee of
-``robocup-gym serve`` (:mod:`robocup_gym.sim.referee`). Needs ``pettingzoo`` (the ``soccer``
-extra).
+``robocup-gym serve`` (:mod:`robocup_gym.sim.referee`), with joint-level actions or skills as
+actions (:mod:`~robocup_gym.soccer.skills`: the shipped walk and get-up policies, the scripted
+kick). :mod:`~robocup_gym.soccer.scripted` has the scripted teams, :mod:`~robocup_gym.soccer.match`
+plays matches (``robocup-gym match``). Needs ``pettingzoo`` (the ``soccer`` extra).
 """
 
 SCENARIOS = ("penalty_v0", "keepaway_v0", "game_v0")

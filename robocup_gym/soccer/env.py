@@ -56,6 +56,7 @@ except ImportError as exc:  # pragma: no cover - depends on the installation
 from robocup_gym.envs.actions import ActionMapper, ActionMode
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
 from robocup_gym.soccer.observations import PlayerObserver
+from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, SkillSet
 
 __all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel"]
 
@@ -76,6 +77,8 @@ class SoccerConfig:
     privileged: bool = False
     vision_noise: bool = True
     rules: bool = True
+    actions: str = "joints"
+    skill_cycles: int = 10
     reward_goal: float = 1.0
     ball_progress: float = 0.0
     possession: float = 0.0
@@ -99,7 +102,9 @@ class SoccerConfig:
             raise ValueError(
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
-        for name in ("max_cycles", "cycles_per_step"):
+        if self.actions not in ("joints", "skills"):
+            raise ValueError(f"actions must be 'joints' or 'skills', got {self.actions!r}")
+        for name in ("max_cycles", "cycles_per_step", "skill_cycles"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
@@ -165,6 +170,7 @@ class SoccerParallelEnv(ParallelEnv):
                 c.target_gain,
                 stop_margin_deg=0.5 if c.action_mode == "target_angle" else 0.0,
             )
+        self.skills = SkillSet(self.game) if c.actions == "skills" else None
         self._angles: dict[str, np.ndarray] = {}
         self._cycles = 0
         self._rng = np.random.default_rng()
@@ -178,7 +184,7 @@ class SoccerParallelEnv(ParallelEnv):
 
     @functools.cache  # noqa: B019
     def action_space(self, agent: str) -> gym.spaces.Box:
-        size = self._mapper(agent).size
+        size = len(SKILL_ACTION_LABELS) if self.skills is not None else self._mapper(agent).size
         return gym.spaces.Box(-1.0, 1.0, (size,), np.float32)
 
     def _observer(self, agent: str) -> PlayerObserver:
@@ -218,12 +224,15 @@ class SoccerParallelEnv(ParallelEnv):
         self.agents = list(self.possible_agents)
         self._cycles = 0
         self._ball_x = float(self.game.ball_position()[0])
-        obs, infos = {}, {}
+        obs, infos, seen = {}, {}, {}
         for name in self.agents:
             self._observers[name].reset()
             p = self._perceive(name)
+            seen[self.game.index(name)] = p
             obs[name] = self._observers[name](p)
             infos[name] = self._info(name, None, {})
+        if self.skills is not None:
+            self.skills.reset(seen, None if seed is None else int(seed))
         return obs, infos
 
     def step(self, actions: Mapping[str, np.ndarray]):
@@ -234,12 +243,22 @@ class SoccerParallelEnv(ParallelEnv):
         goal = None
         terms = {"goal": 0.0, "ball_progress": 0.0, "possession": 0.0}
         ended = None
-        for _ in range(self.config.cycles_per_step):
+        skills = self.skills
+        seen: dict[str, np.ndarray] = {}
+        cycles = self.config.skill_cycles if skills is not None else self.config.cycles_per_step
+        for _ in range(cycles):
+            if skills is not None:
+                commands = skills.commands()
             report = self.game.step(commands)
             commands = {}  # the targets stay
             self._cycles += 1
             if report.diverged is not None:
                 break
+            if skills is not None:  # the skills (and vision) see every cycle
+                perceptions = {self.game.index(n): self._perceive(n) for n in self.agents}
+                skills.observe(perceptions)
+                for n in self.agents:
+                    seen[n] = self._observers[n](perceptions[self.game.index(n)])
             goal = goal or report.goal
             for k, v in self._cycle_terms(report).items():
                 terms[k] = terms.get(k, 0.0) + v
@@ -255,7 +274,9 @@ class SoccerParallelEnv(ParallelEnv):
         for name in self.agents:
             sign = 1.0 if self._side[name] == "left" else -1.0
             rewards[name] = float(sign * left_reward)
-            if report.diverged is None:
+            if name in seen:
+                obs[name] = seen[name]
+            elif report.diverged is None:
                 obs[name] = self._observers[name](self._perceive(name))
             else:
                 obs[name] = np.zeros(self._observers[name].size, np.float32)
@@ -305,33 +326,50 @@ class SoccerParallelEnv(ParallelEnv):
                 f"{'is' if len(unknown) == 1 else 'are'} not playing "
                 f"(agents: {', '.join(self.agents)})"
             )
-        commands: dict[int, np.ndarray] = {}
+        checked: dict[str, np.ndarray] = {}
         for name in self.agents:
             if name not in actions:
                 raise KeyError(f"no action for {name!r} (every agent acts every step)")
-            mapper = self._mappers[name]
+            if self.skills is not None:
+                labels, what = (
+                    list(SKILL_ACTION_LABELS),
+                    "a skill action: " + ", ".join(SKILL_ACTION_LABELS),
+                )
+            else:
+                labels = self._mappers[name].labels()
+                what = f"one value per joint of its type-{self._type(name)} robot"
             a = np.asarray(actions[name], dtype=float)
-            if a.shape != (mapper.size,):
+            if a.shape != (len(labels),):
                 raise ValueError(
-                    f"{name}: action of shape {a.shape}, expected ({mapper.size},) "
-                    f"(one value per joint of its type-{self._type(name)} robot)"
+                    f"{name}: action of shape {a.shape}, expected ({len(labels)},) ({what})"
                 )
             if not np.isfinite(a).all():
                 bad = int(np.flatnonzero(~np.isfinite(a))[0])
                 raise ValueError(
-                    f"{name}: action value {bad} ({mapper.labels()[bad]}) is {a[bad]}; "
+                    f"{name}: action value {bad} ({labels[bad]}) is {a[bad]}; "
                     "actions must be finite"
                 )
-            a = np.clip(a, -1.0, 1.0)
-            commands[self.game.index(name)] = mapper.command(a, self._angles[name])
+            checked[name] = np.clip(a, -1.0, 1.0)
+        commands: dict[int, np.ndarray] = {}
+        for name, a in checked.items():  # nothing is changed before every action is checked
+            if self.skills is not None:
+                self.skills.decide(self.game.index(name), a)
+            else:
+                commands[self.game.index(name)] = self._mappers[name].command(a, self._angles[name])
         return commands
+
+    def side_of(self, agent: str) -> str:
+        """``"left"`` or ``"right"``."""
+        self._observer(agent)
+        return self._side[agent]
 
     def _type(self, name: str) -> int:
         return self.game.robot_types[self.game.index(name)]
 
     def _perceive(self, name: str):
         i = self.game.index(name)
-        p = self.game.world.perceive(i, ground_truth=self.config.privileged)
+        gt = self.config.privileged or self.skills is not None  # (skills read it, as trained)
+        p = self.game.world.perceive(i, ground_truth=gt)
         self._angles[name] = np.asarray(p.joint_angles_deg, float)
         return p
 

@@ -246,7 +246,9 @@ def test_the_soccer_benchmark_reports_every_measure():
     for key in (
         "penalty_env_steps_per_s",
         "game_2v2_steps_per_s",
+        "game_2v2_skill_steps_per_s",
         "game_11v11_cycles_per_s",
+        "game_11v11_joint_cycles_per_s",
         "physics_22_robots_cycles_per_s",
     ):
         assert res[key] > 0, key

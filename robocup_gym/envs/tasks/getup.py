@@ -432,12 +432,11 @@ class GetUp(BaseEnv):
         start.settle_cycles = DROP_CYCLES
         return start
 
-    def step(self, action: Any):
+    def _before_action(self) -> None:
         if self._script is not None:
             self._actions.target_offset_deg[:] = scripted_target(
                 self._script[self.side], self.episode_step
             )
-        return super().step(action)
 
     def _is_up(self) -> bool:
         gt = self.ground_truth

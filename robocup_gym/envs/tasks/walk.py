@@ -428,7 +428,7 @@ class Walk(BaseEnv):
         out["reference_gait"] = False
         return out
 
-    def step(self, action: Any):
+    def _before_action(self) -> None:
         c = self.config
         self._phase_acted = self.gait_phase  # the phase the policy saw when choosing the action
         if self._gait_slots is not None:
@@ -453,7 +453,6 @@ class Walk(BaseEnv):
             and (self.episode_step % c.command_change_steps == 0)
         ):
             self._draw_command()
-        return super().step(action)
 
     def _get_reward(self, action: np.ndarray) -> float:
         gt = self.ground_truth

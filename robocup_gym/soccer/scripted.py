@@ -1,0 +1,139 @@
+"""Scripted teams over skill actions: every learnt team's first opponents and a check of the
+game.
+
+:class:`ScriptedTeam` plays the obvious football: the player nearest the ball walks to the spot
+from which the scripted kick sends the ball toward the opponent goal, turns, and kicks; the
+goalkeeper (uniform number 1) stays between the ball and the middle of its goal; the others
+follow the play 3 m behind the ball. It reads the positions of the ball and its own players
+from ground truth (a team on a real server would localise from vision). :class:`StandingTeam`
+stands still.
+
+A team is called with the environment and the names of its agents and returns their skill
+actions (``robocup_gym.soccer.skills.SKILL_ACTION_LABELS``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.envs.observations import heading_frame
+from robocup_gym.sim.field import FIELD_HALF_LENGTH
+from robocup_gym.soccer.skills import MAX_FORWARD_MPS, MAX_SIDEWAYS_MPS, MAX_TURN_DPS
+
+__all__ = ["KICK_SPOT_BEHIND_M", "KICK_SPOT_RIGHT_M", "TEAMS", "ScriptedTeam", "StandingTeam"]
+
+KICK_SPOT_BEHIND_M = 0.11
+"""Where the torso must be for the scripted kick: this far behind the ball, …"""
+KICK_SPOT_RIGHT_M = 0.055
+"""… and the ball this far to the torso's right (in front of the right foot)."""
+_APPROACH_M = 0.35
+"""The chaser first walks to this far behind the kicking spot, on the line to the goal."""
+_CREEP = 0.3
+"""Share of the walk's speeds for the last steps onto the kicking spot."""
+_GOALIE_DISTANCE_M = 1.2
+_SUPPORT_DISTANCE_M = 3.0
+
+
+def _walk_to(
+    pos: np.ndarray,
+    heading: tuple[float, float],
+    target: np.ndarray,
+    face: np.ndarray,
+    top: float = 1.0,
+) -> np.ndarray:
+    """A skill action walking from ``pos`` (heading (cos, sin)) to ``target``, turning to face
+    the point ``face`` on the way (all world frame), at most ``top`` of the walk's speeds."""
+    c, s = heading
+    d = target - pos
+    forward = c * d[0] + s * d[1]
+    left = -s * d[0] + c * d[1]
+    want = math.atan2(face[1] - pos[1], face[0] - pos[0])
+    err = math.degrees((want - math.atan2(s, c) + math.pi) % (2 * math.pi) - math.pi)
+    if abs(err) > 45.0:  # turn first: walking fast while turning hard falls
+        top = min(top, 0.3)
+    return np.array(
+        [
+            np.clip(1.5 * forward / MAX_FORWARD_MPS, -top, top),
+            np.clip(1.5 * left / MAX_SIDEWAYS_MPS, -top, top),
+            np.clip(1.5 * err / MAX_TURN_DPS, -1.0, 1.0),
+            -1.0,
+        ]
+    )
+
+
+def _in_kick_reach(
+    pos: np.ndarray, heading: tuple[float, float], ball: np.ndarray, to_goal: np.ndarray
+) -> bool:
+    """Whether the scripted kick from here sends the ball toward the goal: the ball 8–15 cm in
+    front of the torso and 2–10 cm to its right (where kick D reaches it from the walk's
+    stance), the robot facing the goal within 15°."""
+    c, s = heading
+    d = ball - pos
+    ahead, left = c * d[0] + s * d[1], -s * d[0] + c * d[1]
+    facing = c * to_goal[0] + s * to_goal[1] > math.cos(math.radians(15))
+    return bool(0.08 < ahead < 0.15 and -0.10 < left < -0.02 and facing)
+
+
+class StandingTeam:
+    """Every player stands where it is."""
+
+    name = "standing"
+
+    def __call__(self, env: Any, agents: list[str]) -> dict[str, np.ndarray]:
+        return {a: np.zeros(4) for a in agents}
+
+
+class ScriptedTeam:
+    """Go to the ball, turn, kick toward the goal; the goalkeeper guards the goal."""
+
+    name = "scripted"
+
+    def __call__(self, env: Any, agents: list[str]) -> dict[str, np.ndarray]:
+        game = env.game
+        world = game.world
+        ball = world.ball_position()[:2]
+        if not agents:
+            return {}
+        side = env.side_of(agents[0])
+        attack = 1.0 if side == "left" else -1.0
+        goal = np.array([attack * FIELD_HALF_LENGTH, 0.0])
+        own_goal = -goal
+        positions = {a: world.torso_position(game.index(a))[:2] for a in agents}
+        headings = {a: heading_frame(world.torso_quat(game.index(a))) for a in agents}
+        field_players = [a for a in agents if not a.endswith("_1") or len(agents) == 1]
+        chaser = min(field_players, key=lambda a: float(np.hypot(*(positions[a] - ball))))
+        out = {}
+        to_goal = (goal - ball) / max(float(np.hypot(*(goal - ball))), 1e-6)
+        right = np.array([to_goal[1], -to_goal[0]])  # the kicker's right, facing the goal
+        spot = ball - KICK_SPOT_BEHIND_M * to_goal - KICK_SPOT_RIGHT_M * right
+        for a in agents:
+            pos, heading = positions[a], headings[a]
+            if a == chaser:
+                # come from behind the ball (a robot in front of it walks round it), then
+                # creep onto the kicking spot slowly (the walk overshoots) and kick
+                approach = spot - _APPROACH_M * to_goal
+                behind = float(np.dot(pos - ball, to_goal)) < -0.05
+                off_line = abs(float(np.dot(pos - spot, right))) > 0.04
+                far = float(np.hypot(*(approach - pos))) > 0.6
+                if not behind or far or off_line:  # to the approach point, in line first
+                    act = _walk_to(pos, heading, approach, goal, top=1.0 if far else _CREEP)
+                else:
+                    act = _walk_to(pos, heading, spot, goal, top=_CREEP)
+                    if _in_kick_reach(pos, heading, ball, to_goal):
+                        act[3] = 1.0
+            elif a.endswith("_1"):  # the goalkeeper
+                d = ball - own_goal
+                guard = own_goal + _GOALIE_DISTANCE_M * d / max(float(np.hypot(*d)), 1e-6)
+                act = _walk_to(pos, heading, guard, ball)
+            else:
+                support = ball - _SUPPORT_DISTANCE_M * to_goal
+                act = _walk_to(pos, heading, support, ball)
+            out[a] = act
+        return out
+
+
+TEAMS = {"scripted": ScriptedTeam, "standing": StandingTeam}
+"""Built-in teams by name."""

@@ -1,0 +1,293 @@
+"""Skills as actions: every player walks at a commanded velocity with the shipped walk policy,
+kicks with the scripted kick, and gets up with the shipped get-up policy when it has fallen.
+
+Each skill is the single-agent task it was trained in (Walk, GetUp), run on the player's robot
+in the game through :class:`PlayerBackend` (which never moves or steps the world: the game does)
+with the exported policy's recorded options, so a skill sees exactly what it saw in training.
+Every cycle, the observations of all players in the same skill go through the policy in one
+batched inference. A robot of type 4 (toes: observations the policies were not trained with)
+plays the skills' reference motions alone (the walk's gait, the get-up's script), which is what a
+zero action of the policy plays.
+
+The kick is rcssserver3d's scripted kick D (the fixture ``kick_D.json``: 25 cycles of open-loop
+right hip and knee velocities; from a robot standing straight 0.2 m behind the ball it moves the
+ball 2.3 m), until a learnt kick ships; it kicks with the right foot in the direction the robot
+faces, then the robot usually falls and gets up.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.backends.base import Backend, EpisodeSetup
+from robocup_gym.envs.observations import up_z
+from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.sim.fidelity import load_data
+from robocup_gym.types import AgentCommand, Perception
+
+__all__ = [
+    "KICK_CYCLES",
+    "MAX_FORWARD_MPS",
+    "MAX_SIDEWAYS_MPS",
+    "MAX_TURN_DPS",
+    "SKILL_ACTION_LABELS",
+    "PlayerBackend",
+    "PlayerSkills",
+    "SkillSet",
+]
+
+MAX_FORWARD_MPS = 0.8
+"""Forward speed of a walk action of +1, m/s (−1: backwards at the same speed)."""
+MAX_SIDEWAYS_MPS = 0.3
+"""Leftward speed of a walk action of +1, m/s."""
+MAX_TURN_DPS = 30.0
+"""Counter-clockwise turn rate of a walk action of +1, deg/s."""
+SKILL_ACTION_LABELS = ("forward", "left", "turn", "kick")
+"""A skill action: the walk's velocity command, each in [-1, 1] (scaled by the maxima above),
+and a kick when the last value is above 0.5."""
+
+_FALLEN_UP_Z = 0.5
+"""A robot whose torso's up axis points less than 60° from the vertical (z below this) is down."""
+
+
+@functools.cache
+def _kick_blocks() -> tuple[tuple[int, tuple[tuple[str, float], ...]], ...]:
+    spec = load_data("kick_D.json")
+    out = []
+    for block in spec["command_sequence"]:
+        vel = tuple((name, float(v)) for name, v in block["velocities_rad_per_s"].items())
+        if vel:  # the motion itself, without the recording's idle cycles before and after
+            out.append((int(block["cycles"]), vel))
+    out.append((KICK_FOLLOW_THROUGH_CYCLES, ()))
+    return tuple(out)
+
+
+@functools.cache
+def kick_sequence(robot_type: int = 0) -> tuple[np.ndarray, ...]:
+    """The scripted kick's joint velocities per cycle (rad/s, in the effector order of a Nao of
+    ``robot_type``; every joint not in the script at 0)."""
+    names = nao_model(robot_type).effector_names
+    out = []
+    for cycles, vel in _kick_blocks():
+        v = dict(vel)
+        row = np.array([v.get(n, 0.0) for n in names])
+        row.flags.writeable = False
+        out += [row] * cycles
+    return tuple(out)
+
+
+KICK_FOLLOW_THROUGH_CYCLES = 15
+"""Cycles with the joints at rest after the kick's motion (the foot meets the ball 14 cycles
+after the motion starts)."""
+KICK_CYCLES = 25 + KICK_FOLLOW_THROUGH_CYCLES
+"""Cycles of the scripted kick: its 25 cycles of motion and the follow-through."""
+
+
+class PlayerBackend(Backend):
+    """A backend over one player of a running game: the world is moved and stepped by the game,
+    never by the task on top. :meth:`reset_episode` starts an episode where the player is (the
+    perception given to :meth:`see`), counting a start's settle cycles as run."""
+
+    name = "game-player"
+
+    def __init__(self, world: Any, index: int) -> None:
+        model = world.robots[index].model
+        super().__init__(robot_type=model.robot_type.index, seed=None, vision=False)
+        self._model = model
+        self.perception: Perception | None = None
+
+    @property
+    def robot_model(self) -> NaoModel:
+        return self._model
+
+    def see(self, p: Perception) -> None:
+        """The player's perception of the current cycle (perceived once, by the game)."""
+        self.perception = p
+
+    def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
+        if self.perception is None:
+            raise RuntimeError("the player has not perceived anything yet")
+        return self.perception, start.settle_cycles
+
+    def step(self, command: AgentCommand) -> Perception:
+        raise RuntimeError("a player's skill does not step the world; the game does")
+
+
+@dataclass
+class _Skill:
+    env: Any
+    """The task's environment (unwrapped) on the player's backend."""
+    obs: np.ndarray | None = None
+
+
+class PlayerSkills:
+    """One player's walk and get-up tasks and what it is doing (``mode``: walk, kick, get-up)."""
+
+    def __init__(self, world: Any, index: int, walk: Any, getup: Any) -> None:
+        self.index = index
+        self.backend = PlayerBackend(world, index)
+        self.walk = _Skill(walk(self.backend))
+        self.getup = _Skill(getup(self.backend))
+        self.mode = "walk"
+        self.kick_cycle = 0
+        self.failed_getups = 0
+        self.command = np.zeros(3)
+
+    def start(self, p: Perception, seed: int | None) -> None:
+        """A new episode: walking on the spot."""
+        self.backend.see(p)
+        self.command[:] = 0.0
+        self.walk.obs, _ = self.walk.env.reset(seed=seed, options={"velocity_command": (0, 0, 0)})
+        self.getup.env.reset(seed=None if seed is None else seed + 1000)
+        self.mode = "walk"
+        self.failed_getups = 0
+
+    def fallen(self, p: Perception) -> bool:
+        gt = p.ground_truth
+        return gt is not None and up_z(gt.torso_quat) < _FALLEN_UP_Z
+
+    def lying_side(self, p: Perception) -> str:
+        """``front`` when the torso's forward axis points down, else ``back``."""
+        w, x, y, z = (float(c) for c in p.ground_truth.torso_quat)
+        forward_z = 2.0 * (y * z + w * x)
+        return "front" if forward_z < 0.0 else "back"
+
+
+class SkillSet:
+    """The skills of every player of a game.
+
+    Args:
+        game: The :class:`~robocup_gym.soccer.game.SoccerGame`.
+        walk, getup: Names of the shipped policies that walk and get up.
+    """
+
+    def __init__(self, game: Any, walk: str = "walk", getup: str = "get-up") -> None:
+        from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
+
+        self.game = game
+        self.walk_policy = pretrained_policy(walk)
+        self.getup_policy = pretrained_policy(getup)
+        if len(kick_sequence()) != KICK_CYCLES:
+            raise RuntimeError(f"the scripted kick has {len(kick_sequence())} cycles")
+        world = game.world
+        self.players: list[PlayerSkills] = []
+        self.uses_policy: dict[str, set[int]] = {"walk": set(), "get-up": set()}
+        for p, t in zip(game.players, game.robot_types, strict=True):
+            made = {}
+            for skill, policy, extra in (
+                ("walk", self.walk_policy, {"command_change_steps": 0}),
+                ("get-up", self.getup_policy, {}),
+            ):
+                made[skill] = self._maker(pretrained_env, policy, skill, p.index, t, extra)
+            self.players.append(PlayerSkills(world, p.index, made["walk"], made["get-up"]))
+
+    def _maker(self, pretrained_env, policy, skill: str, index: int, robot_type: int, extra):
+        def make(backend: PlayerBackend):
+            overrides = {"robot_type": robot_type, "wait_steps": 0, **extra}
+            try:
+                env = pretrained_env(policy, backend, overrides)
+                self.uses_policy[skill].add(index)
+            except ValueError:  # another observation size (type 4): the reference motion alone
+                from robocup_gym.train.pretrained import recorded_env_options
+                from robocup_gym.train.tasks import make_env
+
+                meta = policy.metadata
+                options = {**recorded_env_options(meta), **overrides}
+                env = make_env(meta["env_id"], backend=backend, env_kwargs=options)
+            env = env.unwrapped
+            env.rewarded = False  # a skill's reward is read by nobody
+            return env
+
+        return make
+
+    # ------------------------------------------------------------------ the cycle
+    def reset(self, perceptions: dict[int, Perception], seed: int | None = None) -> None:
+        for k, s in enumerate(self.players):
+            s.start(perceptions[s.index], None if seed is None else seed + k)
+
+    def decide(self, index: int, action: np.ndarray) -> None:
+        """Player ``index``'s skill action (checked and clipped by the caller): a walk command,
+        or a kick (which runs to its end; a fallen player gets up first)."""
+        s = self.players[index]
+        s.command[:] = (
+            action[0] * MAX_FORWARD_MPS,
+            action[1] * MAX_SIDEWAYS_MPS,
+            action[2] * MAX_TURN_DPS,
+        )
+        if s.mode == "walk":
+            s.walk.env.velocity_command[:] = s.command
+            if action[3] > 0.5:
+                s.mode, s.kick_cycle = "kick", 0
+
+    def commands(self) -> dict[int, AgentCommand]:
+        """This cycle's joint command of every player (the policies batched)."""
+        out: dict[int, AgentCommand] = {}
+        for mode, policy in (("walk", self.walk_policy), ("get-up", self.getup_policy)):
+            group = [s for s in self.players if s.mode == mode]
+            if not group:
+                continue
+            skill = "walk" if mode == "walk" else "getup"
+            trained = [s for s in group if s.index in self.uses_policy[mode]]
+            actions = {}
+            if trained:
+                batch = np.stack([getattr(s, skill).obs for s in trained])
+                for s, a in zip(trained, policy(batch), strict=True):
+                    actions[s.index] = a
+            for s in group:
+                env = getattr(s, skill).env
+                a = actions.get(s.index)
+                if a is None:
+                    a = np.zeros(env.action_space.shape, np.float32)
+                out[s.index] = env.act(a)
+        for s, t in zip(self.players, self.game.robot_types, strict=True):
+            if s.mode == "kick":
+                out[s.index] = AgentCommand(kick_sequence(t)[s.kick_cycle])
+        return out
+
+    def observe(self, perceptions: dict[int, Perception]) -> None:
+        """After the cycle: every skill sees its player's perception; a player that fell gets
+        up, one that is up again walks, a kick that ended walks."""
+        for s in self.players:
+            p = perceptions[s.index]
+            s.backend.see(p)
+            if s.mode == "kick":
+                s.kick_cycle += 1
+                if s.kick_cycle >= KICK_CYCLES:
+                    self._walk_again(s)
+                continue
+            skill = s.walk if s.mode == "walk" else s.getup
+            obs, _, terminated, truncated, info = skill.env.observe_step(p)
+            skill.obs = obs
+            if s.mode == "walk":
+                if s.fallen(p):
+                    s.mode = "get-up"
+                    s.getup.obs, _ = s.getup.env.reset(options={"start_side": s.lying_side(p)})
+                elif terminated or truncated:
+                    self._walk_again(s)
+            elif info.get("success") or terminated or truncated:
+                if s.fallen(p):  # not up in time: try again, from the other side the next time
+                    s.failed_getups += 1
+                    side = s.lying_side(p)
+                    if s.failed_getups % 2 == 0:
+                        side = "back" if side == "front" else "front"
+                    s.getup.obs, _ = s.getup.env.reset(options={"start_side": side})
+                else:
+                    s.failed_getups = 0
+                    self._walk_again(s)
+
+    def _walk_again(self, s: PlayerSkills) -> None:
+        if s.fallen(s.backend.perception):
+            s.mode = "get-up"
+            side = s.lying_side(s.backend.perception)
+            s.getup.obs, _ = s.getup.env.reset(options={"start_side": side})
+            return
+        s.mode = "walk"
+        command = tuple(float(v) for v in s.command)
+        s.walk.obs, _ = s.walk.env.reset(options={"velocity_command": command})
+
+    def modes(self) -> list[str]:
+        return [s.mode for s in self.players]

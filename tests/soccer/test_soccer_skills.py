@@ -1,0 +1,101 @@
+"""Skills as actions: players walk at the commanded velocity with the shipped walk policy, kick
+with the scripted kick and get up by themselves with the shipped get-up policy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pettingzoo")
+pytest.importorskip("onnxruntime")
+
+from pettingzoo.test import parallel_api_test
+
+from robocup_gym.sim.engines.ode import available
+from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply, yaw_quat
+from robocup_gym.soccer import game_v0, penalty_v0
+from robocup_gym.soccer.skills import SKILL_ACTION_LABELS
+
+pytestmark = pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")
+
+
+@pytest.fixture
+def solo():
+    """One left player of type 0 with skill actions, nobody else."""
+    env = game_v0.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=10**5)
+    yield env
+    env.close()
+
+
+def test_skill_actions_pass_the_api_test_and_name_their_values():
+    env = penalty_v0.parallel_env(actions="skills", max_cycles=200)
+    assert env.action_space("left_1").shape == (len(SKILL_ACTION_LABELS),)
+    parallel_api_test(env, num_cycles=30)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"right_1: action value 3 \(kick\) is inf"):
+        env.step({"left_1": np.zeros(4), "right_1": np.array([0, 0, 0, np.inf])})
+    with pytest.raises(ValueError, match=r"expected \(4,\) \(a skill action: forward"):
+        env.step({"left_1": np.zeros(22), "right_1": np.zeros(4)})
+    env.close()
+
+
+def test_a_player_walks_where_it_is_told(solo):
+    solo.reset(seed=0)
+    w = solo.game.world
+    start = w.torso_position(0).copy()
+    for _ in range(25):  # 5 s at 0.5 m/s forward (the left team faces +x)
+        solo.step({"left_1": np.array([0.625, 0.0, 0.0, 0.0])})
+    moved = w.torso_position(0) - start
+    assert moved[0] > 2.0, moved
+    assert abs(moved[1]) < 1.0, moved
+    assert solo.skills.modes() == ["walk"]
+    assert w.torso_position(0)[2] > 0.3  # still up
+
+
+def test_a_player_kicks_a_ball_in_front_of_its_right_foot(solo):
+    solo.reset(seed=0)
+    w = solo.game.world
+    for _ in range(10):  # stand for 2 s
+        solo.step({"left_1": np.zeros(4)})
+    p = w.torso_position(0)
+    solo.game.host.set_ball((p[0] + 0.12, p[1] - 0.055, 0.041), (0.0, 0.0, 0.0))
+    before = w.ball_position().copy()
+    solo.step({"left_1": np.array([0.0, 0.0, 0.0, 1.0])})
+    assert solo.skills.modes() in (["kick"], ["get-up"], ["walk"])
+    for _ in range(15):
+        solo.step({"left_1": np.zeros(4)})
+    moved = w.ball_position() - before
+    assert moved[0] > 1.0, moved  # forward, as the robot faces
+
+
+def test_a_fallen_player_gets_up_by_itself(solo):
+    solo.reset(seed=0)
+    w = solo.game.world
+    lying = quat_multiply(yaw_quat(np.radians(-90.0)), axis_angle_quat((1, 0, 0), np.radians(-90)))
+    w.place_robot(0, -14.0, 0.0, z=0.1, quat=lying, joint_angles_deg=np.zeros(22))
+    heights, modes = [], []
+    for _ in range(20):  # 4 s, told to stand
+        solo.step({"left_1": np.zeros(4)})
+        heights.append(float(w.torso_position(0)[2]))
+        modes.append(solo.skills.modes()[0])
+    assert "get-up" in modes
+    assert min(heights) < 0.15 and heights[-1] > 0.3, heights
+    assert modes[-1] == "walk"
+
+
+def test_skill_games_repeat_from_their_seed():
+    def run():
+        env = game_v0.parallel_env(
+            actions="skills", left_types=(0, 4), right_types=(1,), max_cycles=200
+        )
+        rng = np.random.default_rng(1)
+        obs, _ = env.reset(seed=5)
+        out = [np.concatenate(list(obs.values()))]
+        while env.agents:
+            acts = {a: rng.uniform(-1, 1, 4) for a in env.agents}
+            obs, *_ = env.step(acts)
+            out.append(np.concatenate(list(obs.values())))
+        env.close()
+        return np.concatenate(out)
+
+    assert np.array_equal(run(), run())
