@@ -1,4 +1,4 @@
-"""A new task is one small class: subclass a RoboCup Gym environment and override _get_reward.
+"""A new task is one small class: subclass a RoboCup Gym environment and name its reward terms.
 
 python examples/custom_task.py
 """
@@ -27,10 +27,11 @@ class KickToTarget(BaseEnv):
 
     config_class = KickToTargetConfig
 
-    def _get_reward(self, action: np.ndarray) -> float:
+    def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         if not self.has_completed:
-            return 0.0
-        return -float(np.linalg.norm(self.ball_pos[:2] - np.array(self.config.target)))
+            return {}
+        miss = float(np.linalg.norm(self.ball_pos[:2] - np.array(self.config.target)))
+        return {"miss": -miss}
 
 
 if __name__ == "__main__":

@@ -374,6 +374,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self._last_action = np.zeros(n_act)
         self._acted = self._last_action.copy()
         self.rewarded = True
+        self.reward_terms: dict[str, float] = {}
+        """The last step's reward by term (:meth:`_reward_terms`)."""
         """Compute rewards (a task run as a skill, whose reward nobody reads, turns this off)."""
         """The action of the command :meth:`act` made last (clipped, noise included)."""
         self._vision_ball = np.zeros(4)
@@ -453,6 +455,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         bad = sorted(set(options) - valid)
         if bad:
             raise ValueError(f"unknown reset option(s) {bad}; valid: {', '.join(sorted(valid))}")
+        self.reward_terms = {}
         start = self._initial_state(options)
         backend_seed = int(self.np_random.integers(2**31 - 1)) if seed is not None else None
         p = self.backend.reset_episode(
@@ -566,7 +569,16 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         targets for the step here)."""
 
     def _get_reward(self, action: np.ndarray) -> float:
-        """The reward of the step just taken; tasks override this.
+        """The reward of the step just taken: the sum of the task's named terms
+        (:meth:`_reward_terms`, in their order), which are kept in :attr:`reward_terms` and
+        given in ``info["reward_terms"]`` (the trainer logs each term's episode sum)."""
+        terms = self._reward_terms(action)
+        self.reward_terms = terms
+        return float(sum(terms.values()))
+
+    def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
+        """The reward of the step just taken, as named terms (weights applied, a penalty
+        negative); tasks override this.
 
         Called once per step, after the episode-end bookkeeping: on the final step
         :attr:`has_completed` is True and the world has already run ``wait_steps`` more cycles.
@@ -574,7 +586,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         Args:
             action: The action as applied (clipped to [-1, 1], noise included).
         """
-        return 0.0
+        return {}
 
     def _is_terminated(self) -> bool:
         """True when the episode ends for a task reason (default: the robot has fallen and
@@ -825,6 +837,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             info["ball_distance"] = math.sqrt(disp[0] ** 2 + disp[1] ** 2 + disp[2] ** 2)
             info["ball_speed"] = math.sqrt(bv[0] ** 2 + bv[1] ** 2 + bv[2] ** 2)
             info["torso_pos"] = gt.torso_pos
+        if self.reward_terms:
+            info["reward_terms"] = dict(self.reward_terms)
         return info
 
     # ---- observation writers: each fills its slice of the raw frame

@@ -50,8 +50,9 @@ class EpisodeStatsCallback(BaseCallback):
     """Collects finished episodes (return, length, ball displacement, falls) from the infos.
 
     Keeps the most recent ``window`` episodes for running means, logs them to TensorBoard
-    (``kick/*``) and appends a row to ``curve_path`` (CSV: the learning curve against steps and
-    wall-clock) at most every ``curve_every`` steps.
+    (``kick/*``; each reward term's mean episode sum as ``reward/<term>``, from
+    ``info["reward_terms"]``) and appends a row to ``curve_path`` (CSV: the learning curve
+    against steps and wall-clock) at most every ``curve_every`` steps.
     """
 
     def __init__(
@@ -66,6 +67,9 @@ class EpisodeStatsCallback(BaseCallback):
         self.curve_path = curve_path
         self.curve_every = max(1, int(curve_every))
         self.recent: deque[dict[str, float]] = deque(maxlen=window)
+        self.recent_terms: deque[dict[str, float]] = deque(maxlen=window)
+        """Each recent episode's reward summed by term."""
+        self._ep_terms: list[dict[str, float]] = []
         self.episodes = int(episodes_offset)
         """Episodes finished in the whole run (a resumed run continues its earlier count)."""
         self.wall_offset_s = wall_offset_s
@@ -95,6 +99,14 @@ class EpisodeStatsCallback(BaseCallback):
         if rewards is not None and self._ep_returns is not None:
             self._ep_returns += np.asarray(rewards, dtype=float).reshape(-1)
             self._ep_lengths += 1
+        if len(self._ep_terms) < len(infos):
+            self._ep_terms += [{} for _ in range(len(infos) - len(self._ep_terms))]
+        for i, info in enumerate(infos):
+            terms = info.get("reward_terms") if isinstance(info, dict) else None
+            if terms:
+                sums = self._ep_terms[i]
+                for k, v in terms.items():
+                    sums[k] = sums.get(k, 0.0) + float(v)
         if dones is not None:
             for i in np.flatnonzero(np.asarray(dones)):
                 info = infos[i] if i < len(infos) else {}
@@ -102,6 +114,9 @@ class EpisodeStatsCallback(BaseCallback):
                 ret = ep.get("r", self._ep_returns[i] if self._ep_returns is not None else 0.0)
                 length = ep.get("l", self._ep_lengths[i] if self._ep_lengths is not None else 0)
                 self.recent.append(episode_record(info, ret, int(length)))
+                if i < len(self._ep_terms):
+                    self.recent_terms.append(self._ep_terms[i])
+                    self._ep_terms[i] = {}
                 self.episodes += 1
                 if self._ep_returns is not None:
                     self._ep_returns[i] = 0.0
@@ -116,12 +131,21 @@ class EpisodeStatsCallback(BaseCallback):
         for key in ("success_rate", "assist_share_mean"):  # GetUp; a run with an assist
             if s.get(key) is not None:
                 self.logger.record(f"train/{key}", s[key])
+        for term, mean in self.reward_term_means().items():
+            self.logger.record(f"reward/{term}", mean)
         if self.num_timesteps - self._last_row_steps >= self.curve_every:
             self.write_row()
 
     def _on_training_end(self) -> None:
         if self.num_timesteps != self._last_row_steps:
             self.write_row()
+
+    def reward_term_means(self) -> dict[str, float]:
+        """Each reward term's mean episode sum over the recent episodes (an episode without
+        the term counts 0)."""
+        eps = list(self.recent_terms)
+        names = sorted({k for e in eps for k in e})
+        return {k: float(np.mean([e.get(k, 0.0) for e in eps])) for k in names}
 
     # ------------------------------------------------------------------ helpers
     @property

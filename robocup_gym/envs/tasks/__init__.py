@@ -1,5 +1,5 @@
 """Ready-made tasks. A new task is one small file: subclass BaseEnv (or a task) and override
-``_get_reward``; see ``docs/environments.md``."""
+``_reward_terms``; see ``docs/environments.md``."""
 
 from robocup_gym.envs.tasks.getup import GetUp, GetUpConfig
 from robocup_gym.envs.tasks.simple_kick import SimpleKick, SimpleKickConfig

@@ -358,7 +358,6 @@ class GetUp(BaseEnv):
         self.success = False
         self._pay_bonus = False
         self.steps_to_up: int | None = None
-        self.reward_terms: dict[str, float] = {}
 
     # ------------------------------------------------------------------ lying poses
     def lying_pose(self, side: str, index: int = 0) -> tuple[float | None, np.ndarray, np.ndarray]:
@@ -425,7 +424,6 @@ class GetUp(BaseEnv):
         self.success = False
         self._pay_bonus = False
         self.steps_to_up = None
-        self.reward_terms = {}
         start.pose = RobotPose(
             start.pose.x, start.pose.y, joint_angles_deg=angles.copy(), z=z, quat=quat.copy()
         )
@@ -449,7 +447,7 @@ class GetUp(BaseEnv):
     def _is_terminated(self) -> bool:
         return self.success
 
-    def _get_reward(self, action: np.ndarray) -> float:
+    def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         c = self.config
         gt = self.ground_truth
         up = self._is_up()
@@ -465,8 +463,7 @@ class GetUp(BaseEnv):
             self._pay_bonus = False
             left = 1.0 - self.episode_step / c.max_episode_steps
             terms["success"] = c.success_bonus * (1.0 + left)
-        self.reward_terms = terms
-        return float(sum(terms.values()))
+        return terms
 
     def _set_perception(self, p, cycles: int = 1, episode_over: bool = False) -> None:
         super()._set_perception(p, cycles, episode_over)
@@ -487,8 +484,6 @@ class GetUp(BaseEnv):
         info["lying_pose"] = self.pose_index
         info["success"] = self.success
         info["steps_to_up"] = self.steps_to_up
-        if self.reward_terms:
-            info["reward_terms"] = dict(self.reward_terms)
         return info
 
 

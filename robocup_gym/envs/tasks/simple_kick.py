@@ -45,8 +45,8 @@ class SimpleKick(BaseEnv):
 
     config_class = SimpleKickConfig
 
-    def _get_reward(self, action: np.ndarray) -> float:
+    def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         if not self.has_completed:
-            return 0.0
+            return {}
         d = self.ball_pos - self.ball_spawn_pos
-        return math.sqrt(float(d @ d))
+        return {"distance": math.sqrt(float(d @ d))}

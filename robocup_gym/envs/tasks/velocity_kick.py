@@ -85,9 +85,9 @@ class VelocityKick(BaseEnv):
     config_class = VelocityKickConfig
     config: VelocityKickConfig
 
-    def _get_reward(self, action: np.ndarray) -> float:
+    def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         if not self.has_completed:
-            return 0.0
+            return {}
         c = self.config
         p, v = self.ball_pos, self.ball_vel
         s = self.ball_spawn_pos
@@ -99,7 +99,11 @@ class VelocityKick(BaseEnv):
             lateral += abs(float(v[1]))
         if c.square_lateral_penalty:
             lateral = lateral * lateral
-        reward = c.displacement_weight * dx + c.speed_weight * speed - c.lateral_weight * lateral
+        terms = {
+            "displacement": c.displacement_weight * dx,
+            "speed": c.speed_weight * speed,
+            "lateral": -(c.lateral_weight * lateral),
+        }
         if self.fallen:  # after the wait cycles, when the ball state is measured
-            reward -= c.fall_penalty
-        return reward
+            terms["fall"] = -c.fall_penalty
+        return terms

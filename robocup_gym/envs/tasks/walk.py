@@ -383,7 +383,6 @@ class Walk(BaseEnv):
             self._gait_slots = {names[j]: k for k, j in enumerate(self._actions.joints)}
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
-        self.reward_terms: dict[str, float] = {}
 
     def _draw_command(self) -> None:
         c, rng = self.config, self.np_random
@@ -400,7 +399,6 @@ class Walk(BaseEnv):
         start = super()._initial_state(options)
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
-        self.reward_terms = {}
         self._forward = [0.0, 0.0, 0]  # sum of forward speeds, of |forward error|, steps
         self.gait_clock = (float(self.np_random.uniform()), float(self.config.gait_frequency_hz))
         self._phase_acted = 0.0
@@ -454,7 +452,7 @@ class Walk(BaseEnv):
         ):
             self._draw_command()
 
-    def _get_reward(self, action: np.ndarray) -> float:
+    def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         gt = self.ground_truth
         cos, sin = heading_frame(gt.torso_quat)
         v = gt.torso_vel if gt.torso_vel is not None else np.zeros(3)
@@ -493,11 +491,10 @@ class Walk(BaseEnv):
             feet_down=(down[0], down[1]),
         )
         self._prev_action = np.array(action, dtype=float)
-        self.reward_terms = terms
         self._forward[0] += float(velocity[0])
         self._forward[1] += abs(float(velocity[0] - self.velocity_command[0]))
         self._forward[2] += 1
-        return float(sum(terms.values()))
+        return terms
 
     def _info(self) -> dict[str, Any]:
         info = super()._info()
@@ -506,6 +503,4 @@ class Walk(BaseEnv):
         if n:  # this episode's mean forward speed and forward tracking error so far
             info["forward_speed_mps"] = total / n
             info["forward_error_mps"] = error / n
-        if self.reward_terms:
-            info["reward_terms"] = dict(self.reward_terms)
         return info
