@@ -50,7 +50,6 @@ from robocup_gym.envs.observations import (
     COMPONENTS,
     ObservationContext,
     heading_frame,
-    torso_axes,
     up_z,
 )
 from robocup_gym.sim.physics import CYCLE_S
@@ -308,25 +307,6 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         # ---- observations
         ctx = ObservationContext(model, obs_joints, n_act, int(config.max_episode_steps))
         self._obs_joints = obs_joints
-        writers = {
-            "joint_pos": self._w_joint_pos,
-            "joint_vel": self._w_joint_vel,
-            "ball_rel": self._w_ball_rel,
-            "ball_vel": self._w_ball_vel,
-            "ball_vision": self._w_ball_vision,
-            "foot_force": self._w_foot_force,
-            "toe_force": self._w_toe_force,
-            "accel": self._w_accel,
-            "gyro": self._w_gyro,
-            "torso_orientation": self._w_torso_orientation,
-            "torso_height": self._w_torso_height,
-            "time": self._w_time,
-            "kick_target": self._w_kick_target,
-            "velocity_command": self._w_velocity_command,
-            "gait_phase": self._w_gait_phase,
-            "torso_velocity": self._w_torso_velocity,
-            "last_action": self._w_last_action,
-        }
         los, his, labels, sizes = [], [], [], []
         for c in comps:
             lo, hi = c.bounds(ctx)
@@ -340,7 +320,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self._writers = []
         start = 0
         for c, size in zip(comps, sizes, strict=True):
-            self._writers.append((writers[c.name], self._frame[start : start + size]))
+            self._writers.append((c.write, self._frame[start : start + size]))
             start += size
         self.component_slices: dict[str, slice] = {}
         start = 0
@@ -784,7 +764,7 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _build_frame(self) -> None:
         for write, out in self._writers:
-            write(out)
+            write(self, out)
         f = self._frame
         if self._scale is not None:
             f *= self._scale
@@ -841,94 +821,11 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             info["reward_terms"] = dict(self.reward_terms)
         return info
 
-    # ---- observation writers: each fills its slice of the raw frame
-    def _w_joint_pos(self, out: np.ndarray) -> None:
-        out[:] = self._q[self._obs_joints]
-
-    def _w_joint_vel(self, out: np.ndarray) -> None:
-        out[:] = self._qdot[self._obs_joints]
-
-    def _w_ball_rel(self, out: np.ndarray) -> None:
-        gt = self.ground_truth
-        c, s = self._heading
-        d = gt.ball_pos - gt.torso_pos
-        out[0] = c * d[0] + s * d[1]
-        out[1] = c * d[1] - s * d[0]
-        out[2] = d[2]
-
-    def _w_ball_vel(self, out: np.ndarray) -> None:
-        c, s = self._heading
-        v = self.ground_truth.ball_vel
-        out[0] = c * v[0] + s * v[1]
-        out[1] = c * v[1] - s * v[0]
-        out[2] = v[2]
-
-    def _w_ball_vision(self, out: np.ndarray) -> None:
-        out[:] = self._vision_ball
-
-    def _write_force_pair(self, out: np.ndarray, left: str, right: str) -> None:
-        """Point and force of two FRP sensors into ``out`` (12 values; zeros = no contact)."""
-        fs = self.perception.force_sensors
-        for k, name in ((0, left), (6, right)):
-            fr = fs.get(name)
-            if fr is None:
-                out[k : k + 6] = 0.0
-            else:
-                out[k : k + 3] = fr.point
-                out[k + 3 : k + 6] = fr.force
-
-    def _w_foot_force(self, out: np.ndarray) -> None:
-        self._write_force_pair(out, "lf", "rf")
-
-    def _w_toe_force(self, out: np.ndarray) -> None:
-        self._write_force_pair(out, "lf1", "rf1")
-
-    def _w_accel(self, out: np.ndarray) -> None:
-        out[:] = self.perception.accel
-
-    def _w_gyro(self, out: np.ndarray) -> None:
-        out[:] = self.perception.gyro
-
-    def _w_torso_orientation(self, out: np.ndarray) -> None:
-        out[:] = torso_axes(self.ground_truth.torso_quat)
-
-    def _w_torso_height(self, out: np.ndarray) -> None:
-        out[0] = self.ground_truth.torso_pos[2]
-
-    def _w_time(self, out: np.ndarray) -> None:
-        out[0] = self.episode_step
-
-    def _w_kick_target(self, out: np.ndarray) -> None:
-        out[:] = self.kick_target
-
-    def _w_velocity_command(self, out: np.ndarray) -> None:
-        out[:] = self.velocity_command
-
     @property
     def gait_phase(self) -> float:
         """The gait clock's phase now, in [0, 1) (see :attr:`gait_clock`)."""
         start, hz = self.gait_clock
         return (start + hz * CYCLE_S * self.episode_step) % 1.0
-
-    def _w_gait_phase(self, out: np.ndarray) -> None:
-        angle = 2.0 * math.pi * self.gait_phase
-        out[0] = math.sin(angle)
-        out[1] = math.cos(angle)
-
-    def _w_torso_velocity(self, out: np.ndarray) -> None:
-        gt = self.ground_truth
-        if gt.torso_vel is None or gt.torso_ang_vel is None:  # a backend without velocities
-            out[:] = 0.0
-            return
-        c, s = heading_frame(gt.torso_quat)
-        v = gt.torso_vel
-        out[0] = c * v[0] + s * v[1]
-        out[1] = c * v[1] - s * v[0]
-        out[2] = v[2]
-        out[3] = math.degrees(gt.torso_ang_vel[2])
-
-    def _w_last_action(self, out: np.ndarray) -> None:
-        out[:] = self._last_action
 
     # ================================================================== misc
     @property

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -47,6 +48,9 @@ class Component:
     range_doc: str
     bounds: Callable[[ObservationContext], tuple[np.ndarray, np.ndarray]]
     labels: Callable[[ObservationContext], list[str]]
+    write: Callable[[Any, np.ndarray], None] | None = None
+    """Fills the component's slice of an environment's raw frame: ``write(env, out)`` (raw
+    units, before normalisation), reading the environment's latest perception and state."""
     needs_ground_truth: bool = False
     needs_vision: bool = False
     needs_toes: bool = False
@@ -84,6 +88,110 @@ _FRP = ["cx", "cy", "cz", "fx", "fy", "fz"]
 _FRP_LO = [-0.1, -0.1, -0.1, -100.0, -100.0, -100.0]
 _FRP_HI = [0.1, 0.1, 0.1, 100.0, 100.0, 100.0]
 
+
+# ---- writers: each fills its component's slice of the raw frame from the environment
+
+
+def _write_joint_pos(env, out: np.ndarray) -> None:
+    out[:] = env._q[env._obs_joints]
+
+
+def _write_joint_vel(env, out: np.ndarray) -> None:
+    out[:] = env._qdot[env._obs_joints]
+
+
+def _write_ball_rel(env, out: np.ndarray) -> None:
+    gt = env.ground_truth
+    c, s = env._heading
+    d = gt.ball_pos - gt.torso_pos
+    out[0] = c * d[0] + s * d[1]
+    out[1] = c * d[1] - s * d[0]
+    out[2] = d[2]
+
+
+def _write_ball_vel(env, out: np.ndarray) -> None:
+    c, s = env._heading
+    v = env.ground_truth.ball_vel
+    out[0] = c * v[0] + s * v[1]
+    out[1] = c * v[1] - s * v[0]
+    out[2] = v[2]
+
+
+def _write_ball_vision(env, out: np.ndarray) -> None:
+    out[:] = env._vision_ball
+
+
+def _write_force_pair(env, out: np.ndarray, left: str, right: str) -> None:
+    """Point and force of two FRP sensors into ``out`` (12 values; zeros = no contact)."""
+    fs = env.perception.force_sensors
+    for k, name in ((0, left), (6, right)):
+        fr = fs.get(name)
+        if fr is None:
+            out[k : k + 6] = 0.0
+        else:
+            out[k : k + 3] = fr.point
+            out[k + 3 : k + 6] = fr.force
+
+
+def _write_foot_force(env, out: np.ndarray) -> None:
+    _write_force_pair(env, out, "lf", "rf")
+
+
+def _write_toe_force(env, out: np.ndarray) -> None:
+    _write_force_pair(env, out, "lf1", "rf1")
+
+
+def _write_accel(env, out: np.ndarray) -> None:
+    out[:] = env.perception.accel
+
+
+def _write_gyro(env, out: np.ndarray) -> None:
+    out[:] = env.perception.gyro
+
+
+def _write_torso_orientation(env, out: np.ndarray) -> None:
+    out[:] = torso_axes(env.ground_truth.torso_quat)
+
+
+def _write_torso_height(env, out: np.ndarray) -> None:
+    out[0] = env.ground_truth.torso_pos[2]
+
+
+def _write_time(env, out: np.ndarray) -> None:
+    out[0] = env.episode_step
+
+
+def _write_kick_target(env, out: np.ndarray) -> None:
+    out[:] = env.kick_target
+
+
+def _write_velocity_command(env, out: np.ndarray) -> None:
+    out[:] = env.velocity_command
+
+
+def _write_gait_phase(env, out: np.ndarray) -> None:
+    angle = 2.0 * math.pi * env.gait_phase
+    out[0] = math.sin(angle)
+    out[1] = math.cos(angle)
+
+
+def _write_torso_velocity(env, out: np.ndarray) -> None:
+    gt = env.ground_truth
+    if gt.torso_vel is None or gt.torso_ang_vel is None:  # a backend without velocities
+        out[:] = 0.0
+        return
+    c, s = heading_frame(gt.torso_quat)
+    v = gt.torso_vel
+    out[0] = c * v[0] + s * v[1]
+    out[1] = c * v[1] - s * v[0]
+    out[2] = v[2]
+    out[3] = math.degrees(gt.torso_ang_vel[2])
+
+
+def _write_last_action(env, out: np.ndarray) -> None:
+    out[:] = env._last_action
+
+
 COMPONENTS: dict[str, Component] = {
     c.name: c
     for c in [
@@ -94,6 +202,7 @@ COMPONENTS: dict[str, Component] = {
             "each joint's range [min, max]",
             _joint_pos_bounds,
             _joint_labels("joint_pos"),
+            write=_write_joint_pos,
         ),
         Component(
             "joint_vel",
@@ -103,6 +212,7 @@ COMPONENTS: dict[str, Component] = {
             "± each joint's max speed (6.14 rad/s; type 2 ankles: 8.81 pitch, 3.47 roll)",
             _joint_vel_bounds,
             _joint_labels("joint_vel"),
+            write=_write_joint_vel,
         ),
         Component(
             "ball_rel",
@@ -113,6 +223,7 @@ COMPONENTS: dict[str, Component] = {
             _const([-2.0] * 3, [2.0] * 3),
             _labels("ball_rel", ["x", "y", "z"]),
             needs_ground_truth=True,
+            write=_write_ball_rel,
         ),
         Component(
             "ball_vel",
@@ -122,6 +233,7 @@ COMPONENTS: dict[str, Component] = {
             _const([-10.0] * 3, [10.0] * 3),
             _labels("ball_vel", ["x", "y", "z"]),
             needs_ground_truth=True,
+            write=_write_ball_vel,
         ),
         Component(
             "ball_vision",
@@ -134,6 +246,7 @@ COMPONENTS: dict[str, Component] = {
             _const([0.0, -180.0, -90.0, 0.0], [20.0, 180.0, 90.0, 1.0]),
             _labels("ball_vision", ["distance", "horizontal", "vertical", "visible"]),
             needs_vision=True,
+            write=_write_ball_vision,
         ),
         Component(
             "foot_force",
@@ -144,6 +257,7 @@ COMPONENTS: dict[str, Component] = {
             "c: [-0.1, 0.1]; f: [-100, 100]",
             _const(_FRP_LO * 2, _FRP_HI * 2),
             _labels("foot_force", [f"lf_{n}" for n in _FRP] + [f"rf_{n}" for n in _FRP]),
+            write=_write_foot_force,
         ),
         Component(
             "toe_force",
@@ -153,6 +267,7 @@ COMPONENTS: dict[str, Component] = {
             _const(_FRP_LO * 2, _FRP_HI * 2),
             _labels("toe_force", [f"lf1_{n}" for n in _FRP] + [f"rf1_{n}" for n in _FRP]),
             needs_toes=True,
+            write=_write_toe_force,
         ),
         Component(
             "accel",
@@ -162,6 +277,7 @@ COMPONENTS: dict[str, Component] = {
             "[-50, 50] each",
             _const([-50.0] * 3, [50.0] * 3),
             _labels("accel", ["x", "y", "z"]),
+            write=_write_accel,
         ),
         Component(
             "gyro",
@@ -170,6 +286,7 @@ COMPONENTS: dict[str, Component] = {
             "[-500, 500] each",
             _const([-500.0] * 3, [500.0] * 3),
             _labels("gyro", ["x", "y", "z"]),
+            write=_write_gyro,
         ),
         Component(
             "torso_orientation",
@@ -181,6 +298,7 @@ COMPONENTS: dict[str, Component] = {
             _const([-1.0] * 6, [1.0] * 6),
             _labels("torso_orientation", ["fwd_x", "fwd_y", "fwd_z", "up_x", "up_y", "up_z"]),
             needs_ground_truth=True,
+            write=_write_torso_orientation,
         ),
         Component(
             "torso_height",
@@ -190,6 +308,7 @@ COMPONENTS: dict[str, Component] = {
             _const([0.0], [0.6]),
             _labels("torso_height", ["z"]),
             needs_ground_truth=True,
+            write=_write_torso_height,
         ),
         Component(
             "time",
@@ -198,6 +317,7 @@ COMPONENTS: dict[str, Component] = {
             "[0, max_episode_steps]",
             lambda ctx: (np.array([0.0]), np.array([float(ctx.max_episode_steps)])),
             _labels("time", ["step"]),
+            write=_write_time,
         ),
         Component(
             "kick_target",
@@ -207,6 +327,7 @@ COMPONENTS: dict[str, Component] = {
             "[0, 20], [-90, 90]",
             _const([0.0, -90.0], [20.0, 90.0]),
             _labels("kick_target", ["distance", "angle"]),
+            write=_write_kick_target,
         ),
         Component(
             "velocity_command",
@@ -216,6 +337,7 @@ COMPONENTS: dict[str, Component] = {
             "[-1, 1], [-1, 1], [-90, 90]",
             _const([-1.0, -1.0, -90.0], [1.0, 1.0, 90.0]),
             _labels("velocity_command", ["forward", "left", "turn"]),
+            write=_write_velocity_command,
         ),
         Component(
             "gait_phase",
@@ -226,6 +348,7 @@ COMPONENTS: dict[str, Component] = {
             "[-1, 1] each",
             _const([-1.0, -1.0], [1.0, 1.0]),
             _labels("gait_phase", ["sin", "cos"]),
+            write=_write_gait_phase,
         ),
         Component(
             "torso_velocity",
@@ -236,6 +359,7 @@ COMPONENTS: dict[str, Component] = {
             _const([-2.0, -2.0, -2.0, -360.0], [2.0, 2.0, 2.0, 360.0]),
             _labels("torso_velocity", ["forward", "left", "up", "turn"]),
             needs_ground_truth=True,
+            write=_write_torso_velocity,
         ),
         Component(
             "last_action",
@@ -245,6 +369,7 @@ COMPONENTS: dict[str, Component] = {
             "[-1, 1] each",
             lambda ctx: (-np.ones(ctx.n_action), np.ones(ctx.n_action)),
             lambda ctx: [f"last_action/{i}" for i in range(ctx.n_action)],
+            write=_write_last_action,
         ),
     ]
 }
