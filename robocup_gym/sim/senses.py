@@ -32,6 +32,7 @@ and the state the mixin keeps: ``robots`` (each an :class:`AgentState`), ``game`
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -213,8 +214,26 @@ class Senses:
             other.heard.append(HeardMessage(r.team_name, self.game.game_time, direction, message))
 
     # ------------------------------------------------------------------ perception
+    def perceive_all(
+        self, indices: Sequence[int], *, ground_truth: bool = True
+    ) -> list[Perception]:
+        """:meth:`perceive` of each robot in ``indices``, in that order (the same perceptions,
+        noise included, as calling it robot after robot), with what every robot's vision
+        needs computed once: where every player's visible parts are."""
+        interval = self.vision_config.interval
+        sees = any(
+            (c := self.robot(i).perception_counter) % interval == 0 and c > 0 for i in indices
+        )
+        players = self._seen_players() if sees else None
+        return [self.perceive(i, ground_truth=ground_truth, _players=players) for i in indices]
+
     def perceive(
-        self, index: int = 0, *, vision: bool | None = None, ground_truth: bool = True
+        self,
+        index: int = 0,
+        *,
+        vision: bool | None = None,
+        ground_truth: bool = True,
+        _players: list | None = None,
     ) -> Perception:
         """Robot ``index``'s perception of the current state, as rcssserver3d would send it.
 
@@ -238,7 +257,7 @@ class Senses:
             vision = (
                 r.perception_counter % self.vision_config.interval == 0 and r.perception_counter > 0
             )
-        vis = self.vision(index) if vision else None
+        vis = self.vision(index, _players) if vision else None
         heard = r.heard
         r.heard = []
         for k in r.hear_capacity:
@@ -256,14 +275,18 @@ class Senses:
             ground_truth=self.ground_truth(index) if ground_truth else None,
         )
 
-    def vision(self, index: int = 0):
-        """The ``See`` percept of robot ``index`` for the current state (ignores the interval)."""
-        r = self.robot(index)
-        players = [
+    def _seen_players(self) -> list:
+        """``(team name, unum, visible parts' world positions)`` of every robot with a team."""
+        return [
             (o.team_name, o.unum, self._part_positions(k))
             for k, o in enumerate(self.robots)
             if o.team_name is not None and o.unum is not None
         ]
+
+    def vision(self, index: int = 0, _players: list | None = None):
+        """The ``See`` percept of robot ``index`` for the current state (ignores the interval)."""
+        r = self.robot(index)
+        players = self._seen_players() if _players is None else _players
         head_pos, head_rot = self._head_pose(index)
         return see(
             head_pos=head_pos,

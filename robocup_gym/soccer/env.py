@@ -224,12 +224,11 @@ class SoccerParallelEnv(ParallelEnv):
         self.agents = list(self.possible_agents)
         self._cycles = 0
         self._ball_x = float(self.game.ball_position()[0])
-        obs, infos, seen = {}, {}, {}
+        obs, infos = {}, {}
+        seen = self._perceive_all()
         for name in self.agents:
             self._observers[name].reset()
-            p = self._perceive(name)
-            seen[self.game.index(name)] = p
-            obs[name] = self._observers[name](p)
+            obs[name] = self._observers[name](seen[self.game.index(name)])
             infos[name] = self._info(name, None, {})
         if self.skills is not None:
             self.skills.reset(seen, None if seed is None else int(seed))
@@ -255,7 +254,7 @@ class SoccerParallelEnv(ParallelEnv):
             if report.diverged is not None:
                 break
             if skills is not None:  # the skills (and vision) see every cycle
-                perceptions = {self.game.index(n): self._perceive(n) for n in self.agents}
+                perceptions = self._perceive_all()
                 skills.observe(perceptions)
                 for n in self.agents:
                     seen[n] = self._observers[n](perceptions[self.game.index(n)])
@@ -271,13 +270,14 @@ class SoccerParallelEnv(ParallelEnv):
         terminated = ended is not None and report.diverged is None
         rewards, obs, infos = {}, {}, {}
         left_reward = sum(terms.values())
+        last = self._perceive_all() if report.diverged is None and not seen else {}
         for name in self.agents:
             sign = 1.0 if self._side[name] == "left" else -1.0
             rewards[name] = float(sign * left_reward)
             if name in seen:
                 obs[name] = seen[name]
             elif report.diverged is None:
-                obs[name] = self._observers[name](self._perceive(name))
+                obs[name] = self._observers[name](last[self.game.index(name)])
             else:
                 obs[name] = np.zeros(self._observers[name].size, np.float32)
             info = self._info(name, goal, {k: sign * v for k, v in terms.items()})
@@ -366,12 +366,14 @@ class SoccerParallelEnv(ParallelEnv):
     def _type(self, name: str) -> int:
         return self.game.robot_types[self.game.index(name)]
 
-    def _perceive(self, name: str):
-        i = self.game.index(name)
-        gt = self.config.privileged or self.skills is not None  # (skills read it, as trained)
-        p = self.game.world.perceive(i, ground_truth=gt)
-        self._angles[name] = np.asarray(p.joint_angles_deg, float)
-        return p
+    def _perceive_all(self) -> dict[int, Any]:
+        """Every playing agent's perception, by world index (vision's shared work done once)."""
+        gt = self.config.privileged or self.skills is not None
+        idx = [self.game.index(n) for n in self.agents]
+        out = dict(zip(idx, self.game.world.perceive_all(idx, ground_truth=gt), strict=True))
+        for n, i in zip(self.agents, idx, strict=True):
+            self._angles[n] = np.asarray(out[i].joint_angles_deg, float)
+        return out
 
     def _info(self, name: str, goal: str | None, terms: dict[str, float]) -> dict[str, Any]:
         g = self.game.world.game
