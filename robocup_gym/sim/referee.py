@@ -21,7 +21,8 @@ from __future__ import annotations
 import logging
 import math
 from collections import Counter
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -194,13 +195,66 @@ class TeamRegistry:
         return (x, y, AGENT_RADIUS, 0.0)
 
 
+@dataclass(frozen=True)
+class Rules:
+    """Which of the referee's rules run: all, as on rcssserver3d, by default. A rule that is
+    off leaves its play modes alone (they change only by trainer command or another rule)."""
+
+    before_kickoff: bool = True
+    """BeforeKickOff: the ball held on the centre spot, each team kept in its own half."""
+    kickoff: bool = True
+    """A kick-off: opponents kept out of the centre circle and every player out of the other
+    half, the first touch starts play, a drop ball after 15 s."""
+    goals: bool = True
+    """A ball in a goal scores; the goal pause, then the conceding team's kick-off."""
+    ball_out: bool = True
+    """A ball over a side line gives a kick-in, over a goal line a corner or a goal kick."""
+    set_pieces: bool = True
+    """During a kick-in, corner or goal kick: the ball held at its spot, opponents 2 m away,
+    the first touch starts play, a drop ball after 15 s."""
+    half_time: bool = True
+    """300 s: the second half's BeforeKickOff; 600 s: game over."""
+    pass_mode: bool = True
+    """An agent's ``(pass)`` request is granted when its conditions hold."""
+
+    @property
+    def any(self) -> bool:
+        return any(getattr(self, f.name) for f in fields(self))
+
+    @classmethod
+    def of(cls, value: bool | Rules | Mapping[str, bool]) -> Rules:
+        """``True``: every rule; ``False``: none; a mapping: every rule, the named ones set.
+
+        Raises:
+            ValueError: an unknown rule (naming the rules) or a value that is not a bool.
+        """
+        if isinstance(value, Rules):
+            return value
+        if isinstance(value, bool | np.bool_):
+            return cls(**{f.name: bool(value) for f in fields(cls)})
+        if isinstance(value, Mapping):
+            known = {f.name for f in fields(cls)}
+            unknown = sorted(set(value) - known)
+            if unknown:
+                raise ValueError(
+                    f"unknown rule(s) {', '.join(unknown)}; rules: {', '.join(sorted(known))}"
+                )
+            for k, v in value.items():
+                if not isinstance(v, bool | np.bool_):
+                    raise ValueError(f"rule {k!r} must be true or false, got {v!r}")
+            return cls(**{k: bool(v) for k, v in value.items()})
+        raise ValueError(f"rules must be true, false or a mapping of rule names, got {value!r}")
+
+
 class Referee:
     """Game flow on top of the World's play mode, clock and scores.
 
     Args:
         host: the world's host (the world may be replaced, so it is looked up every time).
-        rules: ``False`` switches the automatic referee off ("soccer rules" off in FC Portugal's
-            tools): play modes then change only by trainer command.
+        rules: Which rules run (:class:`Rules`, ``True`` for all, ``False`` for none, or a
+            mapping of rule names to switch single ones): ``False`` switches the automatic
+            referee off ("soccer rules" off in FC Portugal's tools), play modes then change
+            only by trainer command.
         rng: for the coin toss of ``(kickOff None)``.
         robot_types, type_limits: see :class:`TeamRegistry`.
     """
@@ -209,13 +263,13 @@ class Referee:
         self,
         host: GameHost,
         *,
-        rules: bool = True,
+        rules: bool | Rules | Mapping[str, bool] = True,
         rng=None,
         robot_types=(0, 1, 2, 3, 4),
         type_limits: bool = True,
     ) -> None:
         self.host = host
-        self.rules = rules
+        self.rules = Rules.of(rules)
         self.rng = rng if rng is not None else np.random.default_rng()
         self.teams = TeamRegistry(robot_types, type_limits)
         self.half = 1
@@ -303,7 +357,7 @@ class Referee:
 
     def request_pass(self, player: Player, touching: set[int]) -> bool:
         """The agent's ``(pass)``: grant pass mode if all conditions of §4.5 hold."""
-        if not self.rules or self.play_mode != "PlayOn":
+        if not self.rules.pass_mode or self.play_mode != "PlayOn":
             return False
         side = player.side
         last = self.pass_started.get(side)
@@ -341,11 +395,12 @@ class Referee:
         elif self.last_touch is not None and all(p.key != self.last_touch.key for p in players):
             self.last_touch = None
             self.touched_in_mode = True
-        if not self.rules:
+        rules = self.rules
+        if not rules.any:
             return
         pm = self.play_mode
         t = self.game_time
-        if pm != "GameOver" and pm != "BeforeKickOff":
+        if rules.half_time and pm != "GameOver" and pm != "BeforeKickOff":
             if self.half == 1 and t >= HALF_TIME:
                 self.half = 2
                 self.kickoffs_this_half = 0
@@ -360,10 +415,12 @@ class Referee:
         if abs(x) < FIELD_HALF_LENGTH and abs(y) < FIELD_HALF_WIDTH:
             self.last_inside_x = x
         if pm == "BeforeKickOff":
-            if players:
+            if players and rules.before_kickoff:
                 self._hold_ball((0.0, 0.0))
                 self._keep_in_halves()
         elif pm in ("KickOff_Left", "KickOff_Right"):
+            if not rules.kickoff:
+                return
             kicker = "left" if pm == "KickOff_Left" else "right"
             self._kickoff_clear(kicker)
             if self.touched_in_mode:
@@ -373,6 +430,8 @@ class Referee:
         elif pm == "PlayOn":
             self._check_goal_and_out(pos)
         elif pm in ("Goal_Left", "Goal_Right"):
+            if not rules.goals:
+                return
             conceding = "right" if pm == "Goal_Left" else "left"
             self._kickoff_clear(conceding)
             if self.mode_time >= GOAL_PAUSE:
@@ -380,19 +439,22 @@ class Referee:
                 self.kickoffs_this_half += 1
                 self.set_play_mode("KickOff_Left" if conceding == "left" else "KickOff_Right")
         elif pm in ("pass_left", "pass_right"):
+            if not rules.pass_mode:
+                return
             side = "left" if pm == "pass_left" else "right"
             if self.touched_in_mode or self.mode_time >= PASS_MODE_DURATION:
                 self.set_play_mode("PlayOn")
             else:
                 self._clear_circle(pos[:2], PASS_MODE_MIN_OPP_DIST, other(side), push=0.1)
                 self._check_goal_and_out(pos)
-        elif pm in _SET_PIECES:
+        elif pm in _SET_PIECES and rules.set_pieces:
             self._set_piece(pm, _SET_PIECES[pm], pos)
 
     def _check_goal_and_out(self, pos: np.ndarray) -> None:
         x, y, z = (float(v) for v in pos)
         if (
-            abs(x) >= FIELD_HALF_LENGTH + BALL_RADIUS
+            self.rules.goals
+            and abs(x) >= FIELD_HALF_LENGTH + BALL_RADIUS
             and abs(y) < GOAL_HALF_WIDTH
             and z < GOAL_HEIGHT
         ):
@@ -405,7 +467,7 @@ class Referee:
             log.info("goal for the %s team: %d:%d", scorer, g.score_left, g.score_right)
             self.set_play_mode("Goal_Left" if scorer == "left" else "Goal_Right")
             return
-        if self.last_touch is None:
+        if self.last_touch is None or not self.rules.ball_out:
             # rcssserver3d awards nothing for a ball off the field that no player touched (a
             # trainer put it there): it lies where it is until it is moved or played
             return

@@ -28,7 +28,10 @@ option                default  meaning
 ``target_gain``       12.5     1/s, target-angle mode: velocity = gain × angle error
 ``privileged``        False    add ground truth to the observations (training only)
 ``vision_noise``      True     ``See`` with rcssserver3d's noise
-``rules``             True     the automatic referee
+``rules``             True     the referee's rules: all, none (False) or single ones
+                               switched (``{"ball_out": False}``; see ``sim.referee.Rules``)
+``actions``           joints   ``"joints"`` or ``"skills"`` (:mod:`robocup_gym.soccer.skills`)
+``skill_cycles``      10       cycles per step with skill actions
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
 ``ball_progress``     0.0      per metre the ball moves toward the opponent goal
 ``possession``        0.0      per step for the team whose player is nearest the ball
@@ -54,6 +57,7 @@ except ImportError as exc:  # pragma: no cover - depends on the installation
     ) from exc
 
 from robocup_gym.envs.actions import ActionMapper, ActionMode
+from robocup_gym.sim.referee import Rules
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
 from robocup_gym.soccer.observations import PlayerObserver
 from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, SkillSet
@@ -76,7 +80,7 @@ class SoccerConfig:
     target_gain: float = 12.5
     privileged: bool = False
     vision_noise: bool = True
-    rules: bool = True
+    rules: bool | Mapping[str, bool] = True
     actions: str = "joints"
     skill_cycles: int = 10
     reward_goal: float = 1.0
@@ -102,6 +106,7 @@ class SoccerConfig:
             raise ValueError(
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
+        Rules.of(self.rules)  # an unknown rule or a value that is not a bool: a clear error
         if self.actions not in ("joints", "skills"):
             raise ValueError(f"actions must be 'joints' or 'skills', got {self.actions!r}")
         for name in ("max_cycles", "cycles_per_step", "skill_cycles"):

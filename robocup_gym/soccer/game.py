@@ -18,7 +18,7 @@ import numpy as np
 from robocup_gym.sim import SimulationDivergedError, make_world
 from robocup_gym.sim.game_host import GameHost
 from robocup_gym.sim.physics import BALL_REST_Z
-from robocup_gym.sim.referee import Player, Referee
+from robocup_gym.sim.referee import Player, Referee, Rules
 from robocup_gym.sim.vision import VisionConfig
 from robocup_gym.types import PLAY_MODES
 
@@ -73,8 +73,9 @@ class SoccerGame:
         left_types, right_types: Nao type (0–4) of each player of the team, uniform numbers
             1, 2, … in this order. Either may be empty.
         engine: ``"ode"`` (SimSpark's physics, the default) or ``"mujoco"``.
-        rules: Run the automatic referee (goals, kick-offs, ball out and set pieces, half time,
-            …); ``False``: the play mode stays where it is put.
+        rules: Which rules the referee runs (:class:`~robocup_gym.sim.referee.Rules`): ``True``
+            all (goals, kick-offs, ball out and set pieces, half time, …), ``False`` none (the
+            play mode stays where it is put), or a mapping that switches single rules.
         vision_noise: ``See`` with rcssserver3d's noise (as on a real server).
         team_names: The two teams' names (seen by the players' vision).
         seed: Seeds vision noise and calibration offsets.
@@ -87,7 +88,7 @@ class SoccerGame:
         right_types: Sequence[int] = (0,),
         *,
         engine: str = "ode",
-        rules: bool = True,
+        rules: bool | Rules | Mapping[str, bool] = True,
         vision_noise: bool = True,
         team_names: tuple[str, str] = ("Left", "Right"),
         seed: int | None = None,
@@ -104,7 +105,7 @@ class SoccerGame:
         if team_names[0] == team_names[1]:
             raise ValueError(f"the teams need two different names, got {team_names!r}")
         self.engine = engine
-        self.rules = bool(rules)
+        self.rules = Rules.of(rules)
         self.team_names = tuple(team_names)
         self.players: list[Player] = []
         """Every player, left team first (``index`` = the robot's index in the world)."""

@@ -254,3 +254,36 @@ def test_the_soccer_benchmark_reports_every_measure():
         assert res[key] > 0, key
     ratio = res["game_11v11_cycles_per_s"] / res["physics_22_robots_cycles_per_s"]
     assert res["game_vs_physics"] == pytest.approx(ratio, abs=1e-3)
+
+
+def test_single_rules_can_be_switched_off(make):
+    # without the ball-out rule a ball over the side line is not a kick-in: play goes on
+    env = make(game_v0, left_types=(0,), right_types=(0,), rules={"ball_out": False})
+    env.reset(seed=0)
+    env.game.referee.set_play_mode("PlayOn")
+    env.game.referee.last_touch = env.game.players[0]
+    env.game.host.set_ball((0.0, 9.9, 0.041), (0.0, 2.0, 0.0))
+    for _ in range(30):
+        *_, info = env.step(_zero(env))
+    assert info["left_1"]["play_mode"] == "PlayOn"
+    assert env.game.ball_position()[1] > 10.1  # out, and nobody said so
+    # with every rule it is
+    env = make(game_v0, left_types=(0,), right_types=(0,))
+    env.reset(seed=0)
+    env.game.referee.set_play_mode("PlayOn")
+    env.game.referee.last_touch = env.game.players[0]
+    env.game.host.set_ball((0.0, 9.9, 0.041), (0.0, 2.0, 0.0))
+    for _ in range(30):
+        *_, info = env.step(_zero(env))
+    assert info["left_1"]["play_mode"] == "KickIn_Right"
+    # without goals a ball in the goal scores nothing
+    env = make(penalty_v0, rules={"goals": False}, max_cycles=60)
+    env.reset(seed=0)
+    env.game.host.set_ball((14.5, 0.8, 0.041), (3.0, 0.0, 0.0))
+    rewards = []
+    while env.agents:
+        _, rew, *_ = env.step(_zero(env))
+        rewards.append(rew["left_1"])
+    assert env.game.world.game.score_left == 0 and sum(rewards) == 0.0
+    with pytest.raises(ValueError, match=r"unknown rule.*offside.*rules: ball_out"):
+        game_v0.parallel_env(rules={"offside": False})
