@@ -35,7 +35,7 @@ import signal
 import socket
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import ClassVar
 
 import numpy as np
@@ -91,7 +91,9 @@ class SimServer(AgentMessages, TrainerCommands):
         view_cone_deg: vision opening (120; 360 = "full vision").
         field_lines: field lines in ``See`` (``L``), as upstream rcssserver3d 0.7.3; the SPL
             fork sends none (``False`` with ``decimals=3`` gives the fork's percepts).
-        rules: automatic referee on (``False`` = play modes only by trainer command).
+        rules: the automatic referee: ``True`` every rule, ``False`` none (play modes only by
+            trainer command), or a mapping that switches single rules
+            (:class:`robocup_gym.sim.referee.Rules`).
         monitor_interval: cycles per monitor frame (2 = 25 Hz as rcssserver3d; 1 = 50 Hz).
         sync_timeout: seconds a sync-mode cycle waits for a silent agent before closing its
             connection (``None`` = wait forever, as rcssserver3d).
@@ -118,7 +120,7 @@ class SimServer(AgentMessages, TrainerCommands):
         vision_noise: bool = True,
         view_cone_deg: float = 120.0,
         field_lines: bool = True,
-        rules: bool = True,
+        rules: bool | Mapping[str, bool] = True,
         monitor_interval: int = 2,
         sync_timeout: float | None = None,
         seed: int | None = None,

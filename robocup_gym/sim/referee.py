@@ -59,6 +59,19 @@ MIN_ROBOT_TYPES = 3
 MAX_SUM_TWO_TYPES = 9
 
 BEAM_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
+PAUSED_MODES = ("BeforeKickOff", "GameOver")
+"""Play modes in which the game clock stands still and the players' fouls are not counted."""
+NOT_STANDING_Z = 0.25
+"""A robot whose torso centre is lower than this (m) is not standing (reference §9.5)."""
+ON_GROUND_Z = 0.15
+"""… and lower than this, on the ground."""
+STANDING_AGAIN_S = 0.5
+"""Standing this long clears a robot's time not standing."""
+INCAPABLE_S = {"ground": (15.0, 30.0), "not_standing": (30.0, 60.0)}
+"""How long (s) a field player / the goalkeeper may be on the ground or not standing before it
+is taken off the field."""
+FOUL_HOLD_S = 0.5
+"""A penalised robot is held in the air this long, then put beside the field."""
 _SET_PIECES = {
     "KickIn_Left": "left",
     "KickIn_Right": "right",
@@ -216,6 +229,9 @@ class Rules:
     """300 s: the second half's BeforeKickOff; 600 s: game over."""
     pass_mode: bool = True
     """An agent's ``(pass)`` request is granted when its conditions hold."""
+    fallen_robots: bool = True
+    """While the game runs, a robot on the ground for 15 s (goalkeeper 30 s) or not standing for
+    30 s (60 s) is lifted for 0.5 s and put beside the field (reference §9.5)."""
 
     @property
     def any(self) -> bool:
@@ -244,6 +260,18 @@ class Rules:
                     raise ValueError(f"rule {k!r} must be true or false, got {v!r}")
             return cls(**{k: bool(v) for k, v in value.items()})
         raise ValueError(f"rules must be true, false or a mapping of rule names, got {value!r}")
+
+
+@dataclass
+class _Posture:
+    """How long (cycles) a player has not stood, been on the ground, stood again."""
+
+    not_standing: int = 0
+    ground: int = 0
+    standing: int = 0
+    held: int = 0
+    """Cycles the penalised robot has been held in the air (0: not penalised)."""
+    why: str = ""
 
 
 class Referee:
@@ -283,6 +311,8 @@ class Referee:
         self.last_inside_x = 0.0
         self.pass_started: dict[str, float] = {}
         self.players: list[Player] = []
+        self.posture: dict[int, _Posture] = {}
+        """Each player's standing counters (by :attr:`Player.key`)."""
 
     # ------------------------------------------------------------------ state
     @property
@@ -400,6 +430,10 @@ class Referee:
             return
         pm = self.play_mode
         t = self.game_time
+        if pm in PAUSED_MODES:
+            self.posture.clear()
+        elif rules.fallen_robots:
+            self._take_off_fallen(players)
         if rules.half_time and pm != "GameOver" and pm != "BeforeKickOff":
             if self.half == 1 and t >= HALF_TIME:
                 self.half = 2
@@ -556,6 +590,43 @@ class Referee:
                     inside = bool(np.all(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
                     if not inside:
                         self._move_x(p.index, own * FREE_KICK_MOVE)
+
+    def _take_off_fallen(self, players: list[Player]) -> None:
+        """Count how long each player has not stood; lift one that stayed down too long for
+        :data:`FOUL_HOLD_S`, then put it beside the field, on the far side from the ball."""
+        w = self.host.world
+        cycles = {k: (a / CYCLE_S, b / CYCLE_S) for k, (a, b) in INCAPABLE_S.items()}
+        for p in players:
+            s = self.posture.setdefault(p.key, _Posture())
+            pos = w.torso_position(p.index)
+            if s.held:
+                s.held += 1
+                if s.held > FOUL_HOLD_S / CYCLE_S:
+                    ball_y = float(self.host.ball_position()[1])
+                    x = (-0.6 if p.side == "left" else 0.6) * (7 - p.unum)
+                    y = (FIELD_HALF_WIDTH + 0.5) * (1.0 if ball_y < 0 else -1.0)
+                    self.host.teleport(p.index, (x, y, AGENT_RADIUS))
+                    log.info("%s #%d taken off the field (%s)", p.side, p.unum, s.why)
+                    self.posture[p.key] = _Posture()
+                else:
+                    self.host.teleport(p.index, (pos[0], pos[1], 1.0 + s.held * 0.01))
+                continue
+            z, in_field = float(pos[2]), abs(float(pos[1])) < FIELD_HALF_WIDTH + 0.1
+            if z < NOT_STANDING_Z and in_field:
+                s.not_standing += 1
+                s.standing = 0
+            if z < ON_GROUND_Z and in_field:
+                s.ground += 1
+            if z >= NOT_STANDING_Z:
+                s.standing += 1
+                s.ground = 0
+            if s.standing > STANDING_AGAIN_S / CYCLE_S:
+                s.not_standing = 0
+            keeper = int(p.unum == 1)
+            if s.ground > cycles["ground"][keeper]:
+                s.held, s.why = 1, "on the ground too long"
+            elif s.not_standing > cycles["not_standing"][keeper]:
+                s.held, s.why = 1, "not standing too long"
 
     def _move_x(self, index: int, x: float) -> None:
         p = self.host.world.torso_position(index)

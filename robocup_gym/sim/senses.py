@@ -37,13 +37,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robocup_gym.sim.referee import BEAM_MODES
+from robocup_gym.sim.referee import BEAM_MODES, PAUSED_MODES
 from robocup_gym.sim.vision import CALIBRATION_ERROR_M, see
 from robocup_gym.types import GameState, HeardMessage, Perception
 
 __all__ = ["HEARING_RANGE_M", "PAUSED_MODES", "SAY_MAX_CHARS", "AgentState", "Senses"]
 
-PAUSED_MODES = ("BeforeKickOff", "GameOver")
 """Play modes in which the game clock stands still."""
 SAY_MAX_CHARS = 20
 """Longest ``say`` message, characters (reference §4.8)."""
