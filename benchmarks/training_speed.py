@@ -13,7 +13,14 @@
   ``workers_cpu_share`` (everything else the machine did: the environment workers, on a quiet
   machine), ``idle_share`` (cores × wall − both), each a share of cores × wall (Linux).
 
-    python benchmarks/training_speed.py [--task velocity-kick] [--timesteps 61440] [--quick]
+With ``--ray`` the same PPO run also goes through Ray actors (:mod:`robocup_gym.train.ray_vecenv`):
+``ray_train_steps_per_s`` on an embedded Ray over this machine's cores and ``ray_vs_local``
+against ``train_steps_per_s``; then ``ray_nodes``: the run on a Ray cluster of 1, 2 and 4
+simulated nodes on this machine (``ray.cluster_utils.Cluster``; the nodes share its cores, so
+this shows the overhead of more nodes, not a speed-up), each node ``max(1, cores // nodes)`` CPUs
+and one actor per CPU.
+
+    python benchmarks/training_speed.py [--task velocity-kick] [--timesteps 61440] [--quick] [--ray]
 
 Prints one line per measure and, last, one JSON object.
 """
@@ -80,12 +87,17 @@ def vectorised(env_id: str, n_envs: int, steps: int) -> float:
         venv.close()
 
 
-def training(task: str, timesteps: int) -> dict:
+def training(task: str, timesteps: int, **placement) -> dict:
     from robocup_gym.train.config import TrainConfig
     from robocup_gym.train.trainer import train
 
     cfg = TrainConfig(
-        task=task, timesteps=timesteps, eval_freq=0, checkpoint_freq=0, checkpoint_every_s=0
+        task=task,
+        timesteps=timesteps,
+        eval_freq=0,
+        checkpoint_freq=0,
+        checkpoint_every_s=0,
+        **placement,
     )
     self0, busy0 = _cpu(resource.RUSAGE_SELF), _machine_busy_s()
     with tempfile.TemporaryDirectory() as out:
@@ -101,11 +113,30 @@ def training(task: str, timesteps: int) -> dict:
     }
 
 
+def on_cluster(task: str, timesteps: int, nodes: int, cores: int) -> float:
+    """``train_steps_per_s`` of the run on Ray actors over ``nodes`` simulated nodes."""
+    import ray
+    from ray.cluster_utils import Cluster
+
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 0})
+    per_node = max(1, cores // nodes)
+    for _ in range(nodes):
+        cluster.add_node(num_cpus=per_node)
+    cluster.wait_for_nodes()
+    ray.init(address=cluster.address, include_dashboard=False, logging_level="ERROR")
+    try:
+        return training(task, timesteps, vec_env="ray")["steps_per_s"]
+    finally:
+        ray.shutdown()
+        cluster.shutdown()
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--task", default="velocity-kick")
     parser.add_argument("--timesteps", type=int, default=61_440)
     parser.add_argument("--quick", action="store_true", help="short measurements")
+    parser.add_argument("--ray", action="store_true", help="also the run on Ray actors")
     args = parser.parse_args(argv)
     from robocup_gym.train.config import TrainConfig
     from robocup_gym.train.tasks import resolve_task
@@ -139,6 +170,13 @@ def main(argv: list[str] | None = None) -> dict:
         out["workers_cpu_share"] = round(run["workers_cpu_s"] / capacity, 3)
         busy = run["learner_cpu_s"] + run["workers_cpu_s"]
         out["idle_share"] = round(max(0.0, 1.0 - busy / capacity), 3)
+    if args.ray:
+        ray_run = training(args.task, timesteps, vec_env="ray")
+        out["ray_train_steps_per_s"] = round(ray_run["steps_per_s"], 1)
+        out["ray_vs_local"] = round(ray_run["steps_per_s"] / run["steps_per_s"], 3)
+        out["ray_nodes"] = {
+            str(n): round(on_cluster(args.task, timesteps, n, cores), 1) for n in (1, 2, 4)
+        }
     for k, v in out.items():
         print(f"{k:34s} {v}")
     print(json.dumps(out))

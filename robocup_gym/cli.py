@@ -55,9 +55,10 @@ def _usage_error(message: str) -> Exception:
 
 def _fail(message: str, code: int = 1):
     from rich.console import Console
+    from rich.markup import escape
 
     Console(stderr=True, soft_wrap=True).print(
-        f"[bold red]error:[/bold red] {message}", highlight=False
+        f"[bold red]error:[/bold red] {escape(message)}", highlight=False
     )
     raise typer.Exit(code)
 
@@ -79,6 +80,29 @@ def _backend(backend: str | None, engine: str | None) -> str | None:
         return resolve_backend(backend, engine)
     except BackendNotAvailableError as exc:
         _fail(str(exc))
+
+
+def _placement(ray: bool | None, ray_address: str | None, n_workers: int | None) -> dict[str, Any]:
+    """Where a run's environments step (``--ray/--no-ray``, ``--ray-address``, ``--n-workers``),
+    as TrainConfig fields; only those given. Without Ray installed, ``--ray`` says how to get
+    it."""
+    out: dict[str, Any] = {}
+    if n_workers is not None:
+        out["n_workers"] = n_workers
+    if ray is False:
+        if ray_address:
+            _fail("--no-ray and --ray-address contradict each other")
+        out["vec_env"], out["ray_address"] = "auto", ""
+    elif ray or ray_address:
+        from robocup_gym.train.ray_vecenv import import_ray
+
+        try:
+            import_ray()
+        except ImportError as exc:
+            _fail(str(exc))
+        out["vec_env"] = "ray"
+        out["ray_address"] = ray_address or ""
+    return out
 
 
 def _parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
@@ -173,7 +197,28 @@ if typer is not None:
         ] = None,
         n_workers: Annotated[
             int | None,
-            typer.Option("--n-workers", help="Worker processes (default: one per CPU core)."),
+            typer.Option(
+                "--n-workers",
+                help="Worker processes or Ray actors (default: one per CPU core; with Ray, one "
+                "per CPU of the cluster).",
+            ),
+        ] = None,
+        ray: Annotated[
+            bool | None,
+            typer.Option(
+                "--ray/--no-ray",
+                help="Run the environment workers as Ray actors (an embedded Ray on this "
+                "machine; needs the ray extra); --no-ray resumes a Ray run on local workers.",
+                show_default=False,
+            ),
+        ] = None,
+        ray_address: Annotated[
+            str | None,
+            typer.Option(
+                "--ray-address",
+                help="Join this Ray cluster (auto, or HOST:PORT of `ray start --head`); implies "
+                "--ray.",
+            ),
         ] = None,
         checkpoint_freq: Annotated[
             int | None, typer.Option(help="Steps between checkpoints (0 = none).")
@@ -254,7 +299,11 @@ if typer is not None:
                         "give no TASK/--config/--init-from/--assist-*"
                     )
                 result = run_training(
-                    resume=resume, extra_timesteps=timesteps, console=console, progress=progress
+                    resume=resume,
+                    extra_timesteps=timesteps,
+                    console=console,
+                    progress=progress,
+                    placement=_placement(ray, ray_address, n_workers),
                 )
             else:
                 cfg = TrainConfig.load(config) if config is not None else TrainConfig()
@@ -270,7 +319,6 @@ if typer is not None:
                     timesteps=timesteps,
                     seed=seed,
                     backend=_backend(backend, engine),
-                    n_workers=n_workers,
                     checkpoint_freq=checkpoint_freq,
                     checkpoint_every_s=checkpoint_every_s,
                     eval_freq=eval_freq,
@@ -281,9 +329,12 @@ if typer is not None:
                     assist_steps=assist_steps,
                     assist_max_tilt_deg=assist_max_tilt,
                     assist_schedule=assist_schedule,
+                    **_placement(ray, ray_address, n_workers),
                 )
                 result = run_training(cfg, out=out, console=console, progress=progress)
-        except (ValueError, FileNotFoundError, RuntimeError, OSError) as exc:
+        except typer.Exit:
+            raise
+        except (ValueError, FileNotFoundError, RuntimeError, OSError, ImportError) as exc:
             _fail(str(exc))
         if result.interrupted:  # 128 + the signal, as a shell reports a process it stopped
             raise typer.Exit(128 + (result.signal or 2))
@@ -366,6 +417,8 @@ if typer is not None:
                     checkpoint=checkpoint,
                     backend=_backend(backend, engine),
                 )
+        except typer.Exit:
+            raise
         except (ValueError, FileNotFoundError, RuntimeError) as exc:
             _fail(str(exc))
         table = Table(
@@ -410,6 +463,8 @@ if typer is not None:
         try:
             with console.status(f"evaluating the shipped policy {name} ({episodes} episodes)…"):
                 summary = evaluate_pretrained(name, episodes=episodes, seed=seed, backend=backend)
+        except typer.Exit:
+            raise
         except (ValueError, FileNotFoundError, RuntimeError) as exc:
             _fail(str(exc))
         keys = (

@@ -136,6 +136,10 @@ def default_n_envs() -> int:
     return DEFAULT_N_ENVS
 
 
+VEC_ENVS = ("auto", "subproc", "dummy", "ray")
+"""How the environments of a run are stepped (:attr:`TrainConfig.vec_env`)."""
+
+
 @dataclass
 class TrainConfig:
     """Everything that defines a training run (saved as ``config.yaml`` in the run folder)."""
@@ -203,10 +207,18 @@ class TrainConfig:
     """Push only while the torso is inclined less than this from the vertical (180: always);
     e.g. 60 makes the robot sit or kneel up by itself before the push helps."""
     vec_env: str = "auto"
-    """``auto`` (subprocesses when n_envs > 1), ``subproc`` or ``dummy``."""
+    """``auto`` (subprocesses when n_envs > 1), ``subproc``, ``dummy``, or ``ray``: the workers
+    as Ray actors, on this machine or a cluster (:mod:`robocup_gym.train.ray_vecenv`)."""
+    ray_address: str = ""
+    """With ``vec_env="ray"``: the Ray cluster to join (``auto``, or ``HOST:PORT`` of its head);
+    empty: an embedded Ray on this machine, ended with the run."""
+    ray_start_timeout_s: float = 60.0
+    """With ``vec_env="ray"``: how long an actor may take to start, also one started again after
+    its node was lost; when none can start in time the run saves and stops."""
     n_workers: int = 0
-    """Worker processes for the environments (0 = one per CPU core, at most n_envs); each worker
-    steps a block of n_envs / n_workers environments."""
+    """Worker processes (or Ray actors) for the environments (0 = one per CPU core, with Ray one
+    per CPU of the cluster; at most n_envs); each steps a block of n_envs / n_workers
+    environments."""
     start_method: str = ""
     """multiprocessing start method for subprocess envs ('' = forkserver where available)."""
 
@@ -261,8 +273,10 @@ class TrainConfig:
                 )
         elif int(self.assist_steps) < 0:
             raise ValueError(f"assist_steps must be >= 0, got {self.assist_steps}")
-        if self.vec_env not in ("auto", "subproc", "dummy"):
-            raise ValueError(f"vec_env must be auto, subproc or dummy, got {self.vec_env!r}")
+        if self.vec_env not in VEC_ENVS:
+            raise ValueError(f"vec_env must be one of {', '.join(VEC_ENVS)}, got {self.vec_env!r}")
+        if self.ray_address and self.vec_env != "ray":
+            raise ValueError(f"ray_address {self.ray_address!r} needs vec_env='ray'")
 
     # ------------------------------------------------------------------ derived
     def resolved_algo_kwargs(self) -> dict[str, Any]:

@@ -8,7 +8,7 @@ step on average, but the learner waits 10.7 ms, because episode ends — a reset
 cycles — make one worker's step much longer than the other's, and the policy's forward pass
 runs while both workers wait).
 
-:class:`PipelinedPPO` keeps each worker (:class:`~robocup_gym.train.vecenv.BatchedSubprocVecEnv`
+:class:`PipelinedPPO` keeps each worker (:class:`~robocup_gym.train.vecenv.BlockVecEnv`
 block) on its own clock: whenever a worker returns a step, the policy computes that block's
 next actions at once and sends them back, while the other workers are still stepping. The
 rollout ends when every block has ``n_steps`` steps; the per-step callbacks then run in step
@@ -26,6 +26,10 @@ What is, and is not, the same as SB3's loop:
   rollout), so a run is reproducible from its seed.
 * The callbacks' ``on_step`` runs after the rollout instead of between steps (progress bars and
   checkpoints then move once per rollout, ~1 s); a callback that stops training still stops it.
+
+On Ray actors (:class:`~robocup_gym.train.ray_vecenv.RayVecEnv`) the same rollout is played by
+each actor with a copy of the policy and the same noise (one round trip per rollout, not per
+step), with the same numbers.
 
 Any other setting (one worker, a wrapped vector env such as ``VecNormalize``, a non-Box action
 space, gSDE with ``sde_sample_freq > 0``) uses SB3's own loop unchanged.
@@ -58,7 +62,8 @@ from stable_baselines3.common.distributions import (
 )
 from stable_baselines3.common.utils import obs_as_tensor
 
-from robocup_gym.train.vecenv import BatchedSubprocVecEnv
+from robocup_gym.train.ray_vecenv import RayVecEnv
+from robocup_gym.train.vecenv import BlockVecEnv
 
 
 class PipelinedPPO(PPO):
@@ -146,7 +151,7 @@ class PipelinedPPO(PPO):
         dist = self.policy.action_dist
         return (
             self.pipeline_rollouts
-            and isinstance(env, BatchedSubprocVecEnv)
+            and isinstance(env, BlockVecEnv)
             and len(env.blocks) > 1
             and isinstance(self.action_space, spaces.Box)
             and isinstance(self.observation_space, spaces.Box)
@@ -182,41 +187,56 @@ class PipelinedPPO(PPO):
         infos: list[list] = [[None] * n_envs for _ in range(steps)]
         low, high = self.action_space.low, self.action_space.high
 
-        blocks = env.blocks
-        step_of = [0] * len(blocks)
+        restarted = None
+        if isinstance(env, RayVecEnv):
+            # each actor plays its block's whole rollout with a copy of the policy
+            mats = policy.action_dist.exploration_matrices if eps is None else None
+            got = env.rollout(policy, steps, obs[0], eps, mats)
+            obs[:] = got["obs"]
+            actions[:] = got["actions"]
+            clipped[:] = got["clipped"]
+            values[:] = th.as_tensor(got["values"])
+            log_probs[:] = th.as_tensor(got["log_probs"])
+            rewards[:] = got["rewards"]
+            dones[:] = got["dones"]
+            infos = got["infos"]
+            restarted = got["restarted"]
+        else:
+            blocks = env.blocks
+            step_of = [0] * len(blocks)
 
-        def act(w: int) -> None:
-            t, b = step_of[w], blocks[w]
-            with th.no_grad():
-                a, v, lp = self._block_forward(
-                    policy,
-                    obs[t, b.start : b.stop],
-                    b,
-                    None if eps is None else eps[t, b.start : b.stop],
-                )
-            a = a.cpu().numpy()
-            actions[t, b.start : b.stop] = a
-            clipped[t, b.start : b.stop] = np.clip(a, low, high)
-            values[t, b.start : b.stop] = v.flatten()
-            log_probs[t, b.start : b.stop] = lp
-            env.step_block_async(w, clipped[t, b.start : b.stop])
-
-        for w in range(len(blocks)):
-            act(w)
-        running = list(range(len(blocks)))
-        while running:
-            for w in env.ready_blocks(running):
+            def act(w: int) -> None:
                 t, b = step_of[w], blocks[w]
-                o, r, d, info = env.step_block_wait(w)
-                obs[t + 1, b.start : b.stop] = o
-                rewards[t, b.start : b.stop] = r
-                dones[t, b.start : b.stop] = d
-                infos[t][b.start : b.stop] = info
-                step_of[w] = t + 1
-                if t + 1 < steps:
-                    act(w)
-                else:
-                    running.remove(w)
+                with th.no_grad():
+                    a, v, lp = self._block_forward(
+                        policy,
+                        obs[t, b.start : b.stop],
+                        b,
+                        None if eps is None else eps[t, b.start : b.stop],
+                    )
+                a = a.cpu().numpy()
+                actions[t, b.start : b.stop] = a
+                clipped[t, b.start : b.stop] = np.clip(a, low, high)
+                values[t, b.start : b.stop] = v.flatten()
+                log_probs[t, b.start : b.stop] = lp
+                env.step_block_async(w, clipped[t, b.start : b.stop])
+
+            for w in range(len(blocks)):
+                act(w)
+            running = list(range(len(blocks)))
+            while running:
+                for w in env.ready_blocks(running):
+                    t, b = step_of[w], blocks[w]
+                    o, r, d, info = env.step_block_wait(w)
+                    obs[t + 1, b.start : b.stop] = o
+                    rewards[t, b.start : b.stop] = r
+                    dones[t, b.start : b.stop] = d
+                    infos[t][b.start : b.stop] = info
+                    step_of[w] = t + 1
+                    if t + 1 < steps:
+                        act(w)
+                    else:
+                        running.remove(w)
 
         # Truncated episodes: bootstrap with the value of their last observation (SB3 #633).
         cut = [
@@ -240,6 +260,8 @@ class PipelinedPPO(PPO):
         rollout_buffer.reset()
         # Replay the steps in order: callbacks, episode statistics and the buffer, as SB3 does.
         episode_starts = self._last_episode_starts
+        if restarted is not None and restarted.any():  # a lost actor's block started afresh
+            episode_starts = np.where(restarted, True, episode_starts)
         for t in range(steps):
             self.num_timesteps += n_envs
             callback.update_locals(
@@ -279,19 +301,30 @@ class PipelinedPPO(PPO):
     def _block_forward(self, policy, obs: np.ndarray, block: range, eps: th.Tensor | None):
         """``(actions, values, log_probs)`` of one worker's environments (``block``) under
         ``policy``."""
-        obs_tensor = obs_as_tensor(obs, self.device)
+        mats = None
         if eps is None:  # gSDE: this block's rows of the rollout's per-environment matrices
-            dist = policy.action_dist
-            full_mats, full_mat = dist.exploration_matrices, dist.exploration_mat
-            if len(block) == 1:  # SB3 uses the single matrix for a batch of one
-                dist.exploration_mat = full_mats[block.start]
-            else:
-                dist.exploration_matrices = full_mats[block.start : block.stop]
-            try:
-                return policy(obs_tensor)
-            finally:
-                dist.exploration_matrices, dist.exploration_mat = full_mats, full_mat
-        distribution = policy.get_distribution(obs_tensor)
-        normal = distribution.distribution
-        a = normal.mean + normal.stddev * eps
-        return a, policy.predict_values(obs_tensor), distribution.log_prob(a)
+            mats = policy.action_dist.exploration_matrices[block.start : block.stop]
+        return block_forward(policy, obs, self.device, mats, eps)
+
+
+def block_forward(policy, obs: np.ndarray, device, mats: th.Tensor | None, eps: th.Tensor | None):
+    """``(actions, values, log_probs)`` of a block of environments under ``policy``: with gSDE
+    (``eps`` None) the block's exploration matrices ``mats`` (one per environment), else the
+    Gaussian noise ``eps`` drawn for them. The same numbers wherever it runs (the learner, or a
+    Ray actor with a copy of the policy)."""
+    obs_tensor = obs_as_tensor(obs, device)
+    if eps is None:
+        dist = policy.action_dist
+        saved = getattr(dist, "exploration_matrices", None), getattr(dist, "exploration_mat", None)
+        if len(mats) == 1:  # SB3 uses the single matrix for a batch of one
+            dist.exploration_mat = mats[0]
+        else:
+            dist.exploration_matrices = mats
+        try:
+            return policy(obs_tensor)
+        finally:
+            dist.exploration_matrices, dist.exploration_mat = saved
+    distribution = policy.get_distribution(obs_tensor)
+    normal = distribution.distribution
+    a = normal.mean + normal.stddev * eps
+    return a, policy.predict_values(obs_tensor), distribution.log_prob(a)

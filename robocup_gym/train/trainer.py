@@ -14,6 +14,7 @@ from typing import Any
 
 from robocup_gym.train.algos import algo_class, validate_algo_kwargs
 from robocup_gym.train.config import TrainConfig
+from robocup_gym.train.ray_vecenv import WorkersLostError
 from robocup_gym.train.run import checkpoints, curve_so_far, load_run, new_run_dir
 from robocup_gym.train.tasks import make_env, resolve_task, resolved_env_config, task_name
 
@@ -122,6 +123,7 @@ def train(
     progress: bool = True,
     log_every_s: float = 30.0,
     curve_every: int | None = None,
+    placement: dict[str, Any] | None = None,
 ) -> TrainResult:
     """Train a policy; returns where it went and how it did.
 
@@ -133,14 +135,20 @@ def train(
             ``timesteps`` (or ``timesteps`` given in ``extra_timesteps``, as the new total).
         progress: Show the rich progress bar (or periodic lines when not on a terminal).
         curve_every: Steps between rows of ``progress.csv`` (default: 1/200 of the run, >= 1000).
+        placement: With ``resume``: where the environments step now (``vec_env``,
+            ``ray_address``, ``n_workers``), over the run's own config; what a run learns does not
+            depend on it.
     """
     console = _console(console)
     created = False
     if resume is not None:
         info = load_run(resume)
         cfg, path = info.config, info.path
-        if extra_timesteps is not None:
-            cfg = cfg.merged(timesteps=extra_timesteps)
+        if extra_timesteps is not None or placement:
+            unknown = set(placement or {}) - {"vec_env", "ray_address", "n_workers"}
+            if unknown:
+                raise ValueError(f"placement takes vec_env, ray_address, n_workers: {unknown}")
+            cfg = cfg.merged(timesteps=extra_timesteps, **(placement or {}))
             cfg.save(path / "config.yaml")
         start_from = info.latest_model_path()
     else:
@@ -239,6 +247,7 @@ def train(
         callbacks.append(evaluator)
 
     interrupted = False
+    lost: WorkersLostError | None = None
     t0 = time.perf_counter()
     try:
         with _stop_on_signals(stopper):
@@ -251,6 +260,8 @@ def train(
     except KeyboardInterrupt:
         interrupted = True
         say("[yellow]interrupted (Ctrl-C): saving the model…[/yellow]")
+    except WorkersLostError as exc:
+        lost = exc
     finally:
         model.save(path / "model.zip")
         vn = model.get_vec_normalize_env()
@@ -258,6 +269,11 @@ def train(
             vn.save(str(path / "vecnormalize.pkl"))
         with contextlib.suppress(Exception):
             venv.close()
+    if lost is not None:
+        raise WorkersLostError(
+            f"{lost}; the model is saved ({model.num_timesteps:,} steps): continue with "
+            f"robocup-gym train --resume {path}"
+        ) from None
     stopped_by = stopper.signal
     if stopped_by is not None:
         interrupted = True
@@ -319,6 +335,8 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
             kind=cfg.vec_env,
             start_method=cfg.start_method,
             n_workers=cfg.n_workers,
+            ray_address=cfg.ray_address,
+            ray_start_timeout_s=cfg.ray_start_timeout_s,
             assist={
                 "share": cfg.assist_force,
                 "decay_steps": cfg.assist_steps,

@@ -95,13 +95,17 @@ def make_vec_env(
     start_method: str = "",
     n_workers: int = 0,
     assist: dict[str, Any] | None = None,
+    ray_address: str = "",
+    ray_start_timeout_s: float = 60.0,
 ):
     """A vectorised environment of the task.
 
-    ``kind``: ``"dummy"`` (all in this process), ``"subproc"`` (worker processes) or ``"auto"``
-    (dummy for one environment, else subprocesses). ``n_workers`` (0 = one per CPU core, capped at
-    ``n_envs``) is the number of worker processes. Every environment is wrapped in SB3's
-    ``Monitor`` (episode return/length for the logs). ``assist``: see :func:`env_factories`.
+    ``kind``: ``"dummy"`` (all in this process), ``"subproc"`` (worker processes), ``"auto"``
+    (dummy for one environment, else subprocesses) or ``"ray"`` (Ray actors on this machine, or
+    on the cluster at ``ray_address``: :class:`~robocup_gym.train.ray_vecenv.RayVecEnv`).
+    ``n_workers`` (0 = one per CPU core, with Ray one per CPU of the cluster; capped at
+    ``n_envs``) is the number of workers. Every environment is wrapped in SB3's ``Monitor``
+    (episode return/length for the logs). ``assist``: see :func:`env_factories`.
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
@@ -109,6 +113,15 @@ def make_vec_env(
         env_id, n_envs, backend=backend, env_kwargs=env_kwargs, seed=seed, assist=assist
     )
     wrapped = [_Monitored(f) for f in factories]
+    if kind == "ray":
+        from robocup_gym.train.ray_vecenv import RayVecEnv
+
+        return RayVecEnv(
+            wrapped,
+            n_workers=n_workers,
+            address=ray_address or None,
+            start_timeout_s=ray_start_timeout_s,
+        )
     if kind == "dummy" or (kind == "auto" and n_envs == 1):
         return DummyVecEnv(wrapped)
     workers = resolve_n_workers(n_envs, n_workers)
@@ -142,13 +155,102 @@ def _worker_failed(result: Any) -> Any:
     return result
 
 
-def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0) -> None:
-    """Hosts a block of environments (global indices ``first_index``…); every command addresses
-    the whole block. An exception in an environment is sent back (and raised by the parent)
-    naming the environment, instead of killing the worker."""
-    from stable_baselines3.common.env_util import is_wrapped
-    from stable_baselines3.common.vec_env.patch_gym import _patch_env
+class EnvBlock:
+    """A block of environments (global indices ``first_index``…) stepped together: what one
+    worker process or Ray actor hosts. :meth:`handle` answers one command for the whole block;
+    an exception in an environment comes back as a :class:`_WorkerError` naming the
+    environment instead of ending the worker."""
 
+    def __init__(self, env_fns: Sequence[Callable[[], gym.Env]], first_index: int = 0) -> None:
+        from stable_baselines3.common.vec_env.patch_gym import _patch_env
+
+        self.first_index = first_index
+        self.envs: list = []
+        self.broken: _WorkerError | None = None
+        for k, fn in enumerate(env_fns):
+            try:
+                self.envs.append(_patch_env(fn()))
+            except Exception as e:  # reported to the parent at its first command
+                self.broken = _WorkerError(
+                    f"creating environment {first_index + k} failed: {type(e).__name__}: {e}"
+                )
+                break
+
+    def close(self) -> None:
+        for env in self.envs:  # those created before a failure, too
+            env.close()
+
+    def handle(self, cmd: str, data: Any) -> Any:
+        """The answer to one command (``step``, ``reset``, ``get_spaces``, ``env_method``,
+        ``get_attr``, ``has_attr``, ``set_attr``, ``is_wrapped``, ``render``)."""
+        if self.broken is not None:
+            return self.broken
+        envs = self.envs
+        if cmd in ("step", "reset") and len(data) != len(envs):
+            return _WorkerError(f"{cmd}: {len(data)} entries for {len(envs)} environments")
+        k = 0
+        try:
+            if cmd == "step":
+                # the block's answer as one array per quantity (one pickle each, not one per
+                # environment): obs, rewards, dones, infos, reset infos
+                n = len(envs)
+                obs_block: list = [None] * n
+                rewards = np.empty(n)
+                dones = np.empty(n, dtype=bool)
+                infos: list = [None] * n
+                reset_infos: list = [{} for _ in range(n)]
+                for k in range(n):
+                    env = envs[k]
+                    obs, reward, terminated, truncated, info = env.step(data[k])
+                    done = terminated or truncated
+                    info["TimeLimit.truncated"] = truncated and not terminated
+                    if done:
+                        info["terminal_observation"] = obs
+                        obs, reset_infos[k] = env.reset()
+                    obs_block[k], rewards[k], dones[k], infos[k] = obs, reward, done, info
+                return np.stack(obs_block), rewards, dones, infos, reset_infos
+            if cmd == "reset":
+                out = []
+                for k in range(len(envs)):
+                    seed, options = data[k]
+                    kw = {"options": options} if options else {}
+                    out.append(envs[k].reset(seed=seed, **kw))
+                return out
+            if cmd == "get_spaces":
+                return envs[0].observation_space, envs[0].action_space
+            if cmd == "env_method":
+                k, name, args, kwargs = data
+                return envs[k].get_wrapper_attr(name)(*args, **kwargs)
+            if cmd == "get_attr":
+                k, name = data
+                return envs[k].get_wrapper_attr(name)
+            if cmd == "has_attr":
+                try:
+                    envs[0].get_wrapper_attr(data)
+                    return True
+                except AttributeError:
+                    return False
+            if cmd == "set_attr":
+                k, name, value = data
+                return setattr(envs[k], name, value)
+            if cmd == "is_wrapped":
+                from stable_baselines3.common.env_util import is_wrapped
+
+                k, cls = data
+                return is_wrapped(envs[k], cls)
+            if cmd == "render":
+                k = data
+                return envs[k].render()
+            return _WorkerError(f"unknown worker command {cmd!r}")
+        except Exception as e:
+            return _WorkerError(
+                f"{cmd} failed in environment {self.first_index + k}: {type(e).__name__}: {e}"
+            )
+
+
+def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0) -> None:
+    """A worker process: hosts an :class:`EnvBlock` and answers the parent's commands over its
+    pipe until ``close`` (or the pipe's end)."""
     parent_remote.close()
     # SIGTERM/SIGHUP sent to the whole process group (a job scheduler, a closed terminal) are
     # the parent's to handle: it saves the run and then closes the workers. A worker whose
@@ -156,99 +258,18 @@ def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0
     for name in ("SIGTERM", "SIGHUP"):
         if hasattr(signal, name):
             signal.signal(getattr(signal, name), signal.SIG_IGN)
-    envs: list = []
-    broken: _WorkerError | None = None
-    for k, fn in enumerate(env_fns_wrapper.var):
-        try:
-            envs.append(_patch_env(fn()))
-        except Exception as e:  # reported to the parent at its first command
-            broken = _WorkerError(
-                f"creating environment {first_index + k} failed: {type(e).__name__}: {e}"
-            )
-            break
+    block = EnvBlock(env_fns_wrapper.var, first_index)
     try:
         while True:
             try:
                 cmd, data = remote.recv()
             except (EOFError, KeyboardInterrupt):
                 break
-            if broken is not None:
-                if cmd == "close":
-                    for env in envs:  # those created before the failure
-                        env.close()
-                    remote.close()
-                    break
-                remote.send(broken)
-                continue
-            if cmd in ("step", "reset") and len(data) != len(envs):
-                remote.send(
-                    _WorkerError(f"{cmd}: {len(data)} entries for {len(envs)} environments")
-                )
-                continue
-            k = 0
-            try:
-                if cmd == "step":
-                    # the block's answer as one array per quantity (one pickle each, not one
-                    # per environment): obs, rewards, dones, infos, reset infos
-                    n = len(envs)
-                    obs_block: list = [None] * n
-                    rewards = np.empty(n)
-                    dones = np.empty(n, dtype=bool)
-                    infos: list = [None] * n
-                    reset_infos: list = [{} for _ in range(n)]
-                    for k in range(n):
-                        env = envs[k]
-                        obs, reward, terminated, truncated, info = env.step(data[k])
-                        done = terminated or truncated
-                        info["TimeLimit.truncated"] = truncated and not terminated
-                        if done:
-                            info["terminal_observation"] = obs
-                            obs, reset_infos[k] = env.reset()
-                        obs_block[k], rewards[k], dones[k], infos[k] = obs, reward, done, info
-                    remote.send((np.stack(obs_block), rewards, dones, infos, reset_infos))
-                elif cmd == "reset":
-                    out = []
-                    for k in range(len(envs)):
-                        seed, options = data[k]
-                        kw = {"options": options} if options else {}
-                        out.append(envs[k].reset(seed=seed, **kw))
-                    remote.send(out)
-                elif cmd == "close":
-                    for env in envs:
-                        env.close()
-                    remote.close()
-                    break
-                elif cmd == "get_spaces":
-                    remote.send((envs[0].observation_space, envs[0].action_space))
-                elif cmd == "env_method":
-                    k, name, args, kwargs = data
-                    remote.send(envs[k].get_wrapper_attr(name)(*args, **kwargs))
-                elif cmd == "get_attr":
-                    k, name = data
-                    remote.send(envs[k].get_wrapper_attr(name))
-                elif cmd == "has_attr":
-                    try:
-                        envs[0].get_wrapper_attr(data)
-                        remote.send(True)
-                    except AttributeError:
-                        remote.send(False)
-                elif cmd == "set_attr":
-                    k, name, value = data
-                    remote.send(setattr(envs[k], name, value))
-                elif cmd == "is_wrapped":
-                    k, cls = data
-                    remote.send(is_wrapped(envs[k], cls))
-                elif cmd == "render":
-                    k = data
-                    remote.send(envs[k].render())
-                else:
-                    remote.send(_WorkerError(f"unknown worker command {cmd!r}"))
-            except Exception as e:
-                remote.send(
-                    _WorkerError(
-                        f"{cmd} failed in environment {first_index + k}: {type(e).__name__}: {e}"
-                    )
-                )
+            if cmd == "close":
+                block.close()
+                remote.close()
+                break
+            remote.send(block.handle(cmd, data))
     except KeyboardInterrupt:
         pass
 
@@ -264,58 +285,40 @@ def _split(n: int, parts: int) -> list[range]:
     return out
 
 
-class BatchedSubprocVecEnv(VecEnv):
-    """Like SB3's ``SubprocVecEnv``, but each worker process steps a block of environments.
+class BlockVecEnv(VecEnv):
+    """A vector environment whose environments live in blocks (``blocks[w]``, contiguous
+    indices), each hosted by one worker (:class:`EnvBlock` in a process or a Ray actor) that
+    steps its block on its own clock: :meth:`step_block_async`, :meth:`ready_blocks` and
+    :meth:`step_block_wait` let a learner send a block its actions as soon as that block's last
+    step is back (:class:`~robocup_gym.train.pipelined.PipelinedPPO`).
 
-    Same semantics (auto-reset with ``terminal_observation`` in the info, seeds and options
-    passed on the next reset); environment ``i`` lives in the worker whose block contains ``i``.
+    Same semantics as SB3's ``SubprocVecEnv`` (auto-reset with ``terminal_observation`` in the
+    info, seeds and options passed on the next reset). A subclass sends a command to a worker
+    (:meth:`_send`), receives its answer (:meth:`_recv`) and waits for any of several
+    (:meth:`ready_blocks`).
     """
 
-    def __init__(
-        self,
-        env_fns: list[Callable[[], gym.Env]],
-        n_workers: int,
-        start_method: str | None = None,
-    ) -> None:
-        from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper
+    blocks: list[range]
 
-        self.closed = False
-        n_envs = len(env_fns)
+    def _start_blocks(self, n_envs: int, n_workers: int) -> None:
         self.blocks = _split(n_envs, max(1, min(n_workers, n_envs)))
-        ctx = mp.get_context(start_method or default_start_method())
-        self.remotes, work_remotes = zip(*[ctx.Pipe() for _ in self.blocks], strict=True)
-        self.processes = []
-        for work_remote, remote, block in zip(work_remotes, self.remotes, self.blocks, strict=True):
-            fns = CloudpickleWrapper([env_fns[i] for i in block])
-            process = ctx.Process(
-                target=_batched_worker,
-                args=(work_remote, remote, fns, block.start),
-                daemon=True,
-            )
-            process.start()
-            self.processes.append(process)
-            work_remote.close()
         self._where = [(w, k) for w, block in enumerate(self.blocks) for k in range(len(block))]
         self._block_pending = [False] * len(self.blocks)
-        try:  # every worker answers: a failed start is raised here, naming the environment
-            for remote in self.remotes:
-                remote.send(("get_spaces", None))
-            spaces = [remote.recv() for remote in self.remotes]
-            for answer in spaces:
-                _worker_failed(answer)
-        except (EOFError, ConnectionError) as e:
-            self._abort()
-            raise RuntimeError(
-                "an environment worker process died while starting (its traceback is printed "
-                "above; with the spawn/forkserver start method the environment factory must be "
-                "importable from a module, not defined in a script read from stdin)"
-            ) from e
-        except BaseException:
-            self._abort()
-            raise
-        observation_space, action_space = spaces[0]
-        super().__init__(n_envs, observation_space, action_space)
 
+    # ------------------------------------------------------------------ for subclasses
+    def _send(self, worker: int, cmd: str, data: Any) -> None:
+        raise NotImplementedError
+
+    def _recv(self, worker: int) -> Any:
+        """Worker ``worker``'s answer to its last command (a :class:`_WorkerError` as it came)."""
+        raise NotImplementedError
+
+    def ready_blocks(self, workers: Sequence[int]) -> list[int]:
+        """Block until at least one of ``workers`` (each stepping) has its result; returns those
+        that have, in ascending order."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ stepping
     def step_async(self, actions: np.ndarray) -> None:
         for w, block in enumerate(self.blocks):
             self.step_block_async(w, actions[block.start : block.stop])
@@ -330,26 +333,20 @@ class BatchedSubprocVecEnv(VecEnv):
             tuple(i for block_infos in infos for i in block_infos),
         )
 
-    # -------------------------------------------------------------- one block at a time
     def step_block_async(self, worker: int, actions: np.ndarray) -> None:
         """Send one step's actions to worker ``worker`` only (its block of environments,
         ``blocks[worker]``, in order); the other workers are not touched. Collect the result with
         :meth:`step_block_wait` (or wait for any worker with :meth:`ready_blocks`)."""
         if self._block_pending[worker]:
             raise RuntimeError(f"worker {worker} is still stepping; call step_block_wait first")
-        self.remotes[worker].send(("step", np.asarray(actions)))
+        self._send(worker, "step", np.asarray(actions))
         self._block_pending[worker] = True
 
     def step_block_wait(self, worker: int):
         """``(obs, rewards, dones, infos)`` of worker ``worker``'s block, as :meth:`step_wait`
         returns them for all environments (auto-reset, ``terminal_observation`` in the info)."""
         try:
-            results = _worker_failed(self.remotes[worker].recv())
-        except (EOFError, ConnectionError):
-            raise RuntimeError(
-                f"environment worker {worker} (environments {self.blocks[worker].start}–"
-                f"{self.blocks[worker].stop - 1}) died"
-            ) from None
+            results = _worker_failed(self._recv(worker))
         finally:
             self._block_pending[worker] = False
         obs, rews, dones, infos, reset_infos = results
@@ -357,16 +354,10 @@ class BatchedSubprocVecEnv(VecEnv):
         self.reset_infos[block.start : block.stop] = reset_infos
         return obs, rews, dones, tuple(infos)
 
-    def ready_blocks(self, workers: Sequence[int]) -> list[int]:
-        """Block until at least one of ``workers`` (each stepping) has its result; returns those
-        that have, in ascending order."""
-        conns = {self.remotes[w]: w for w in workers}
-        return sorted(conns[c] for c in mp_connection.wait(list(conns)))
-
     def reset(self):
-        for remote, block in zip(self.remotes, self.blocks, strict=True):
-            remote.send(("reset", [(self._seeds[i], self._options[i]) for i in block]))
-        answers = self._from_every_worker(lambda w: _worker_failed(self.remotes[w].recv()))
+        for w, block in enumerate(self.blocks):
+            self._send(w, "reset", [(self._seeds[i], self._options[i]) for i in block])
+        answers = self._from_every_worker(lambda w: _worker_failed(self._recv(w)))
         results = [r for answer in answers for r in answer]
         obs, reset_infos = zip(*results, strict=True)
         self.reset_infos = list(reset_infos)
@@ -374,24 +365,9 @@ class BatchedSubprocVecEnv(VecEnv):
         self._reset_options()
         return np.stack(obs)
 
-    def close(self) -> None:
-        if self.closed:
-            return
-        for remote, pending in zip(self.remotes, self._block_pending, strict=True):
-            if pending:
-                with contextlib.suppress(EOFError, OSError):
-                    remote.recv()
-        for remote in self.remotes:
-            remote.send(("close", None))
-        for process in self.processes:
-            process.join()
-        for remote in self.remotes:
-            remote.close()
-        self.closed = True
-
     def _from_every_worker(self, receive: Callable[[int], Any]) -> list[Any]:
         """``receive(w)`` for every worker; a worker's error is raised only after every answer
-        is read (so that no answer is left in a pipe to be mistaken for the next one)."""
+        is read (so that no answer is left waiting to be mistaken for the next one)."""
         answers, error = [], None
         for w in range(len(self.blocks)):
             try:
@@ -402,34 +378,22 @@ class BatchedSubprocVecEnv(VecEnv):
             raise error
         return answers
 
-    def _abort(self) -> None:
-        """Stop every worker at once (construction failed)."""
-        for remote in self.remotes:
-            with contextlib.suppress(OSError):
-                remote.send(("close", None))
-        for process in self.processes:
-            process.join(timeout=5)
-            if process.is_alive():
-                process.terminate()
-                process.join()
-        for remote in self.remotes:
-            remote.close()
-        self.closed = True
-
+    # ------------------------------------------------------------------ one environment
     def _targets(self, indices) -> list[tuple[int, int]]:
         return [self._where[i] for i in self._get_indices(indices)]
 
     def _ask(self, cmd: str, targets: list[tuple[int, int]], payload) -> list[Any]:
+        out = []
         for w, k in targets:
-            self.remotes[w].send((cmd, payload(k)))
-        return [_worker_failed(self.remotes[w].recv()) for w, _ in targets]
+            self._send(w, cmd, payload(k))
+            out.append(_worker_failed(self._recv(w)))
+        return out
 
     def get_images(self) -> Sequence[np.ndarray | None]:
         return self._ask("render", self._targets(None), lambda k: k)
 
     def has_attr(self, attr_name: str) -> bool:
-        self.remotes[0].send(("has_attr", attr_name))
-        return bool(_worker_failed(self.remotes[0].recv()))
+        return bool(self._ask("has_attr", [(0, 0)], lambda k: attr_name)[0])
 
     def get_attr(self, attr_name: str, indices=None) -> list[Any]:
         return self._ask("get_attr", self._targets(indices), lambda k: (k, attr_name))
@@ -446,6 +410,97 @@ class BatchedSubprocVecEnv(VecEnv):
 
     def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
         return self._ask("is_wrapped", self._targets(indices), lambda k: (k, wrapper_class))
+
+
+class BatchedSubprocVecEnv(BlockVecEnv):
+    """Like SB3's ``SubprocVecEnv``, but each worker process steps a block of environments;
+    environment ``i`` lives in the worker whose block contains ``i``."""
+
+    def __init__(
+        self,
+        env_fns: list[Callable[[], gym.Env]],
+        n_workers: int,
+        start_method: str | None = None,
+    ) -> None:
+        from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper
+
+        self.closed = False
+        n_envs = len(env_fns)
+        self._start_blocks(n_envs, n_workers)
+        ctx = mp.get_context(start_method or default_start_method())
+        self.remotes, work_remotes = zip(*[ctx.Pipe() for _ in self.blocks], strict=True)
+        self.processes = []
+        for work_remote, remote, block in zip(work_remotes, self.remotes, self.blocks, strict=True):
+            fns = CloudpickleWrapper([env_fns[i] for i in block])
+            process = ctx.Process(
+                target=_batched_worker,
+                args=(work_remote, remote, fns, block.start),
+                daemon=True,
+            )
+            process.start()
+            self.processes.append(process)
+            work_remote.close()
+        try:  # every worker answers: a failed start is raised here, naming the environment
+            for w in range(len(self.blocks)):
+                self._send(w, "get_spaces", None)
+            spaces = self._from_every_worker(lambda w: _worker_failed(self._recv(w)))
+        except BaseException:
+            self._abort()
+            raise
+        observation_space, action_space = spaces[0]
+        super().__init__(n_envs, observation_space, action_space)
+
+    def _send(self, worker: int, cmd: str, data: Any) -> None:
+        self.remotes[worker].send((cmd, data))
+
+    def _recv(self, worker: int) -> Any:
+        try:
+            return self.remotes[worker].recv()
+        except (EOFError, ConnectionError):
+            block = self.blocks[worker]
+            if not hasattr(self, "observation_space"):  # still starting
+                return _WorkerError(
+                    "an environment worker process died while starting (its traceback is "
+                    "printed above; with the spawn/forkserver start method the environment "
+                    "factory must be importable from a module, not defined in a script read "
+                    "from stdin)"
+                )
+            return _WorkerError(
+                f"environment worker {worker} (environments {block.start}–{block.stop - 1}) died"
+            )
+
+    def ready_blocks(self, workers: Sequence[int]) -> list[int]:
+        conns = {self.remotes[w]: w for w in workers}
+        return sorted(conns[c] for c in mp_connection.wait(list(conns)))
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        for remote, pending in zip(self.remotes, self._block_pending, strict=True):
+            if pending:
+                with contextlib.suppress(EOFError, OSError):
+                    remote.recv()
+        for remote in self.remotes:
+            remote.send(("close", None))
+        for process in self.processes:
+            process.join()
+        for remote in self.remotes:
+            remote.close()
+        self.closed = True
+
+    def _abort(self) -> None:
+        """Stop every worker at once (construction failed)."""
+        for remote in self.remotes:
+            with contextlib.suppress(OSError):
+                remote.send(("close", None))
+        for process in self.processes:
+            process.join(timeout=5)
+            if process.is_alive():
+                process.terminate()
+                process.join()
+        for remote in self.remotes:
+            remote.close()
+        self.closed = True
 
 
 class _Monitored:

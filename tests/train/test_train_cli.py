@@ -309,6 +309,18 @@ def test_serve_missing_module_is_a_clear_error(monkeypatch):
     assert "server is not available" in result.output
 
 
+def test_ray_without_the_ray_package_says_how_to_install_it(monkeypatch, tmp_path):
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails as where it is missing
+    result = CliRunner().invoke(app, ["train", "velocity-kick", "--ray", "--out", str(tmp_path)])
+    assert result.exit_code == 1
+    assert "pip install 'robocup-gym[ray]'" in result.output
+    assert not list(tmp_path.iterdir())  # no run folder started
+
+
 def test_unknown_task_is_a_clear_error(tmp_path):
     from typer.testing import CliRunner
 

@@ -1,0 +1,382 @@
+"""Environment workers as Ray actors: training beyond one machine.
+
+:class:`RayVecEnv` is the vector environment of ``robocup-gym train --ray``: each Ray actor
+hosts a block of environments (:class:`~robocup_gym.train.vecenv.EnvBlock`, exactly what a local
+worker process hosts). :class:`~robocup_gym.train.pipelined.PipelinedPPO` has every actor play
+its block's whole rollout with a copy of the policy (its weights and the rollout's noise sent
+once per rollout): one round trip per actor and rollout instead of one per step, which is what
+lets actors on other machines keep up, and the same numbers as local workers (a run learns the
+same policy bit for bit). Updates overlap the next rollout as they do locally. The learner stays
+in the process that runs the command; :meth:`RayVecEnv.step` still works step by step (SB3's
+own loop, evaluation), one round trip per step.
+
+Where the actors run: ``address=None`` starts an embedded Ray on this machine with one CPU per
+core (and ends it on :meth:`RayVecEnv.close`); ``address="auto"`` or ``"HOST:PORT"`` joins a
+running cluster (``ray start --head`` on one machine, ``ray start --address HOST:PORT`` on the
+others), whose nodes must have the package installed. Each actor asks Ray for one CPU.
+
+A lost actor or node does not hang a run: the block's environments start again in a new actor on
+whatever resources remain (Ray places it). A rollout it was playing is played again by the new
+actor from a reset (``restarted`` marks those environments, whose episodes then start afresh); a
+step it was taking comes back as the end of an episode for each of its environments (``dones``
+set, ``TimeLimit.truncated``, the last observation the learner saw as ``terminal_observation``,
+reward 0, ``info["worker_restarted"]``). When no new actor can start within
+``start_timeout_s`` (no resources left), :class:`WorkersLostError` says so, and the trainer saves
+the model and stops.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from robocup_gym.train.vecenv import (
+    BlockVecEnv,
+    EnvBlock,
+    _worker_failed,
+    _WorkerError,
+    resolve_n_workers,
+)
+
+__all__ = ["RAY_MISSING", "RayVecEnv", "WorkersLostError", "import_ray"]
+
+RAY_MISSING = (
+    "training on Ray needs the ray package: pip install 'robocup-gym[ray]' (or pip install ray)"
+)
+
+
+class WorkersLostError(RuntimeError):
+    """Environment workers were lost and none could be started again."""
+
+
+def import_ray():
+    """The ``ray`` module, or an ``ImportError`` that says how to install it."""
+    try:
+        import ray
+    except ImportError as e:
+        raise ImportError(RAY_MISSING) from e
+    return ray
+
+
+class _BlockActor:
+    """The body of a Ray actor: one or more :class:`EnvBlock`, by block number. Ray runs an
+    actor's calls one at a time in the order they were sent, so while the learner computes one
+    block's actions the actor already steps its next block."""
+
+    def __init__(self, blocks: dict[int, tuple[list[Callable[[], gym.Env]], int]]) -> None:
+        self.blocks = {b: EnvBlock(fns, first) for b, (fns, first) in blocks.items()}
+        self._spec: Any = None
+        self._policy: Any = None
+
+    def handle(self, block: int, cmd: str, data: Any) -> Any:
+        return self.blocks[block].handle(cmd, data)
+
+    def rollout(self, block: int, spec: Any, state: dict, steps: int, obs0, eps, mats) -> Any:
+        """Block ``block`` plays ``steps`` steps with the policy ``spec`` (a key and, in a list,
+        the object reference of its class and constructor parameters; built once per key) in the
+        state ``state``, from the observations
+        ``obs0``, with the rollout's noise for these environments (``eps``, or gSDE's ``mats``);
+        returns the fragment's arrays (or the block's error)."""
+        import torch as th
+
+        from robocup_gym.train.pipelined import block_forward
+
+        key, ref = spec
+        if self._spec != key:
+            import ray
+
+            th.set_num_threads(1)
+            cls, kwargs = ray.get(ref[0])
+            self._policy = cls(**kwargs)
+            self._policy.set_training_mode(False)
+            self._spec = key
+        policy = self._policy
+        policy.load_state_dict(state)
+        envs = self.blocks[block]
+        n = len(obs0)
+        space = policy.action_space
+        obs = np.empty((steps + 1, *obs0.shape), dtype=obs0.dtype)
+        obs[0] = obs0
+        actions = np.empty((steps, n, *space.shape), dtype=np.float32)
+        values = np.empty((steps, n), dtype=np.float32)
+        log_probs = np.empty((steps, n), dtype=np.float32)
+        rewards = np.empty((steps, n))
+        dones = np.empty((steps, n), dtype=bool)
+        infos: list = [None] * steps
+        reset_infos: list = []
+        for t in range(steps):
+            noise = None if eps is None else eps[t]
+            with th.no_grad():
+                a, v, lp = block_forward(policy, obs[t], "cpu", mats, noise)
+            actions[t] = a.numpy()
+            values[t] = v.flatten().numpy()
+            log_probs[t] = lp.numpy()
+            answer = envs.handle("step", np.clip(actions[t], space.low, space.high))
+            if isinstance(answer, _WorkerError):
+                return answer
+            obs[t + 1], rewards[t], dones[t], infos[t], reset_infos = answer
+        return {
+            "obs": obs,
+            "actions": actions,
+            "values": values,
+            "log_probs": log_probs,
+            "rewards": rewards,
+            "dones": dones,
+            "infos": infos,
+            "reset_infos": reset_infos,
+        }
+
+    def node(self) -> str:
+        import ray
+
+        return ray.get_runtime_context().get_node_id()
+
+    def close(self) -> None:
+        for block in self.blocks.values():
+            block.close()
+
+
+class RayVecEnv(BlockVecEnv):
+    """``n_envs`` environments in ``n_workers`` Ray actors (module docstring).
+
+    Each actor hosts one block of environments (``blocks[w]`` on ``actors[w]``). Stepped step
+    by step (:meth:`step_block_async`, as a local worker), every step is a round trip to the
+    actor; :meth:`rollout` has each actor play a whole rollout with a copy of the policy
+    instead, one round trip per rollout (what
+    :class:`~robocup_gym.train.pipelined.PipelinedPPO` uses).
+
+    Args:
+        env_fns: One constructor per environment (picklable; shipped to the actors).
+        n_workers: Actors (0 = one per CPU Ray reports, at most one per environment).
+        address: ``None``: an embedded Ray on this machine; else the cluster to join.
+        start_timeout_s: How long a (new) actor may take to start before the run gives up.
+    """
+
+    def __init__(
+        self,
+        env_fns: list[Callable[[], gym.Env]],
+        n_workers: int = 0,
+        address: str | None = None,
+        start_timeout_s: float = 60.0,
+    ) -> None:
+        ray = import_ray()
+        self._ray = ray
+        self.closed = False
+        self.start_timeout_s = float(start_timeout_s)
+        self.restarts = 0
+        """Actors started again after one was lost."""
+        self._owns_ray = False
+        if not ray.is_initialized():
+            kwargs: dict[str, Any] = {
+                "include_dashboard": False,
+                "logging_level": "ERROR",
+                "log_to_driver": True,
+            }
+            if address:
+                kwargs["address"] = address
+            else:
+                kwargs["num_cpus"] = resolve_n_workers(1 << 30)  # every core here
+            try:
+                ray.init(**kwargs)
+            except ConnectionError as e:
+                raise ConnectionError(
+                    f"could not join the Ray cluster at {address!r}: {e} (start it with "
+                    "`ray start --head`, or leave out --ray-address for Ray on this machine)"
+                ) from None
+            self._owns_ray = True
+        self._env_fns = list(env_fns)
+        self._last_obs: np.ndarray | None = None
+        n_envs = len(self._env_fns)
+        if n_workers <= 0:
+            n_workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
+        n_actors = max(1, min(n_workers, n_envs))
+        self._start_blocks(n_envs, n_actors)
+        self._actor_of = list(range(n_actors))
+        """The actor (index into :attr:`actors`) hosting each block."""
+        self._generation = [0] * n_actors
+        """How many times each actor was started again (a lost call of an older one needs no
+        new actor)."""
+        self._actor_class = ray.remote(num_cpus=1, max_restarts=0)(_BlockActor)
+        self._pending: list[tuple[str, Any, Any, int] | None] = [None] * len(self.blocks)
+        self._ref_block: dict[Any, int] = {}
+        self.actors: list[Any] = []
+        try:
+            self.actors = [self._new_actor(a) for a in range(n_actors)]
+            for w in range(len(self.blocks)):
+                self._send(w, "get_spaces", None)
+            spaces = self._from_every_worker(lambda w: _worker_failed(self._recv(w)))
+        except BaseException:
+            self.close()
+            raise
+        observation_space, action_space = spaces[0]
+        super().__init__(n_envs, observation_space, action_space)
+
+    # ------------------------------------------------------------------ actors
+    def _hosted(self, actor: int) -> list[int]:
+        return [b for b, a in enumerate(self._actor_of) if a == actor]
+
+    def _new_actor(self, actor: int):
+        hosted = self._hosted(actor)
+        blocks = {
+            b: ([self._env_fns[i] for i in self.blocks[b]], self.blocks[b].start) for b in hosted
+        }
+        handle = self._actor_class.remote(blocks)
+        try:
+            self._ray.get(handle.node.remote(), timeout=self.start_timeout_s)
+        except self._ray.exceptions.GetTimeoutError:
+            self._ray.kill(handle)
+            first, last = self.blocks[hosted[0]].start, self.blocks[hosted[-1]].stop - 1
+            raise WorkersLostError(
+                f"no Ray worker for environments {first}–{last} could start within "
+                f"{self.start_timeout_s:g} s: the cluster has no free CPU left "
+                f"({self._ray.available_resources().get('CPU', 0):g} available)"
+            ) from None
+        return handle
+
+    def actor_nodes(self) -> list[str]:
+        """The Ray node id of each actor (``actors[a]`` hosts the blocks ``b`` with
+        ``actor_of(b) == a``)."""
+        return self._ray.get([a.node.remote() for a in self.actors])
+
+    def actor_of(self, block: int) -> int:
+        """The actor hosting block ``block``."""
+        return self._actor_of[block]
+
+    # ------------------------------------------------------------------ BlockVecEnv
+    def _send(self, worker: int, cmd: str, data: Any) -> None:
+        actor = self._actor_of[worker]
+        ref = self.actors[actor].handle.remote(worker, cmd, data)
+        self._pending[worker] = (cmd, data, ref, self._generation[actor])
+        self._ref_block[ref] = worker
+
+    def _recv(self, worker: int) -> Any:
+        pending = self._pending[worker]
+        if pending is None:
+            return _WorkerError(f"worker {worker} was asked nothing")
+        cmd, data, ref, generation = pending
+        self._pending[worker] = None
+        self._ref_block.pop(ref, None)
+        try:
+            answer = self._ray.get(ref)
+        except (self._ray.exceptions.RayActorError, self._ray.exceptions.ObjectLostError):
+            return self._replace(worker, cmd, data, generation)
+        if cmd == "step" and not isinstance(answer, _WorkerError):
+            self._remember(worker, answer[0])
+        elif cmd == "reset" and not isinstance(answer, _WorkerError):
+            self._remember(worker, np.stack([obs for obs, _ in answer]))
+        return answer
+
+    def ready_blocks(self, workers: Sequence[int]) -> list[int]:
+        refs = [self._pending[w][2] for w in workers if self._pending[w] is not None]
+        self._ray.wait(refs, num_returns=1)
+        ready, _ = self._ray.wait(refs, num_returns=len(refs), timeout=0)
+        return sorted(self._ref_block[r] for r in ready)
+
+    # ------------------------------------------------------------------ whole rollouts
+    def rollout(self, policy, steps: int, obs0: np.ndarray, eps, mats) -> dict[str, Any]:
+        """Every actor plays its block's next ``steps`` steps with a copy of ``policy`` (the
+        learner's, as it is now), from the observations ``obs0`` (one per environment), with
+        the rollout's noise: ``eps`` (``(steps, n_envs, action_dim)``) or, with gSDE, the
+        per-environment exploration matrices ``mats``. Returns the whole rollout's ``obs``
+        (``steps + 1`` rows), ``actions`` (unclipped), ``clipped``, ``values``, ``log_probs``,
+        ``rewards``, ``dones``, ``infos`` (``[step][env]``) and ``restarted`` (per environment:
+        its actor was lost and its block played the rollout afresh from a reset)."""
+        ray = self._ray
+        if getattr(self, "_spec_of", None) is not policy:
+            spec = (type(policy), policy._get_constructor_parameters())
+            self._spec_ref = [ray.put(spec)]
+            self._spec_key = f"{id(policy)}-{id(self._spec_ref[0])}"
+            self._spec_of = policy
+        state = ray.put({k: v.detach().cpu() for k, v in policy.state_dict().items()})
+        n = self.num_envs
+        restarted = np.zeros(n, dtype=bool)
+
+        def submit(w: int, start_obs: np.ndarray):
+            b = self.blocks[w]
+            noise = None if eps is None else eps[:, b.start : b.stop].cpu()
+            block_mats = None if mats is None else mats[b.start : b.stop].detach().cpu()
+            ref = self.actors[w].rollout.remote(
+                w, (self._spec_key, self._spec_ref), state, steps, start_obs, noise, block_mats
+            )
+            return ref, self._generation[w]
+
+        refs = {w: submit(w, obs0[b.start : b.stop]) for w, b in enumerate(self.blocks)}
+        parts = {}
+        for w, b in enumerate(self.blocks):
+            ref, generation = refs[w]
+            while True:
+                try:
+                    part = ray.get(ref)
+                    break
+                except (ray.exceptions.RayActorError, ray.exceptions.ObjectLostError):
+                    if generation == self._generation[w]:
+                        self.restarts += 1
+                        self._generation[w] += 1
+                        self.actors[w] = self._new_actor(w)
+                    self._send(w, "reset", [(None, None)] * len(b))
+                    fresh = _worker_failed(self._recv(w))
+                    restarted[b.start : b.stop] = True
+                    ref, generation = submit(w, np.stack([o for o, _ in fresh]))
+            parts[w] = _worker_failed(part)
+        out: dict[str, Any] = {}
+        for key in ("obs", "actions", "values", "log_probs", "rewards", "dones"):
+            out[key] = np.concatenate([parts[w][key] for w in range(len(self.blocks))], axis=1)
+        out["clipped"] = np.clip(out["actions"], self.action_space.low, self.action_space.high)
+        out["infos"] = [
+            [info for w in range(len(self.blocks)) for info in parts[w]["infos"][t]]
+            for t in range(steps)
+        ]
+        out["restarted"] = restarted
+        self.reset_infos = [i for w in range(len(self.blocks)) for i in parts[w]["reset_infos"]]
+        self._last_obs = out["obs"][-1].copy()
+        return out
+
+    def _remember(self, worker: int, obs: np.ndarray) -> None:
+        block = self.blocks[worker]
+        if self._last_obs is None:
+            self._last_obs = np.zeros((self.num_envs, *obs.shape[1:]), dtype=obs.dtype)
+        self._last_obs[block.start : block.stop] = obs
+
+    def _replace(self, worker: int, cmd: str, data: Any, generation: int) -> Any:
+        """Block ``worker``'s actor is gone: start its blocks again in a new actor (unless that
+        was done since the lost call was sent) and answer ``cmd`` as well as can be (a lost
+        step ends every episode of the block)."""
+        actor = self._actor_of[worker]
+        if generation == self._generation[actor]:
+            self.restarts += 1
+            self._generation[actor] += 1
+            self.actors[actor] = self._new_actor(actor)
+        block = self.blocks[worker]
+        if cmd != "step":
+            self._send(worker, cmd, data)
+            return self._recv(worker)
+        self._send(worker, "reset", [(None, None)] * len(block))
+        answer = self._recv(worker)
+        if isinstance(answer, _WorkerError):
+            return answer
+        obs = np.stack([o for o, _ in answer])
+        reset_infos = [info for _, info in answer]
+        infos = []
+        for i in block:
+            info: dict[str, Any] = {"TimeLimit.truncated": True, "worker_restarted": True}
+            if self._last_obs is not None:
+                info["terminal_observation"] = self._last_obs[i].copy()
+            infos.append(info)
+        self._remember(worker, obs)
+        return obs, np.zeros(len(block)), np.ones(len(block), dtype=bool), infos, reset_infos
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        ray = self._ray
+        for actor in self.actors:
+            with contextlib.suppress(Exception):  # a lost actor has nothing to close
+                ray.get(actor.close.remote(), timeout=30)
+            ray.kill(actor)
+        if self._owns_ray:
+            ray.shutdown()
