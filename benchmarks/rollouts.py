@@ -1,18 +1,20 @@
-"""Lock-step vs pipelined vs overlapped PPO: where a PPO run's time goes, measured in one run.
+"""PPO's rollout schedules side by side: where a PPO run's time goes, measured in one run.
 
 Trains PPO (the paper's hyperparameters, 16 VelocityKick environments in one worker per core)
 for a few rollouts with each schedule in turn — SB3's lock-step loop (``pipeline_rollouts``
-off), :class:`robocup_gym.train.pipelined.PipelinedPPO`'s pipelined rollouts, and pipelined
-rollouts with overlapped updates (``overlap_updates``, the default of ``robocup-gym train``) —
-alternating A/B/C/A/B/C so that all see the same machine load. Prints per schedule the mean wall
+off); :class:`robocup_gym.train.pipelined.PipelinedPPO`'s pipelined rollouts with the learner
+computing every step's actions (``worker_rollouts`` off); the same with overlapped updates
+(``overlap_updates``); and the workers playing whole rollouts with a copy of the policy, updates
+overlapped (``workers``, the default of ``robocup-gym train``) — alternating A/B/C/D/A/B/C/D so
+that all see the same machine load. Prints per schedule the mean wall
 time of a rollout (1,024 steps) and of the update (the gradient steps; with overlapped updates
 the update runs during the next rollout, whose time then includes any wait for it, and
 "update" is only the time to start it), then, as
-the LAST line, one JSON object with all of them and the ratios ``pipelined_vs_lockstep`` and
-``overlapped_vs_lockstep`` of the steps per second.
+the LAST line, one JSON object with all of them and the ratios ``pipelined_vs_lockstep``,
+``overlapped_vs_lockstep`` and ``workers_vs_lockstep`` of the steps per second.
 
-    python benchmarks/rollouts.py            # 3 × 2 runs of 30,720 steps, ~4 minutes
-    python benchmarks/rollouts.py --quick    # 3 × 1 run of 3,072 steps (smoke test)
+    python benchmarks/rollouts.py            # 4 × 2 runs of 30,720 steps, ~5 minutes
+    python benchmarks/rollouts.py --quick    # 4 × 1 run of 3,072 steps (smoke test)
 """
 
 from __future__ import annotations
@@ -27,8 +29,9 @@ import numpy as np
 
 SCHEDULES = {
     "lockstep": {"pipeline_rollouts": False, "overlap_updates": False},
-    "pipelined": {"pipeline_rollouts": True, "overlap_updates": False},
-    "overlapped": {"pipeline_rollouts": True, "overlap_updates": True},
+    "pipelined": {"pipeline_rollouts": True, "overlap_updates": False, "worker_rollouts": False},
+    "overlapped": {"pipeline_rollouts": True, "overlap_updates": True, "worker_rollouts": False},
+    "workers": {"pipeline_rollouts": True, "overlap_updates": True, "worker_rollouts": True},
 }
 
 
@@ -111,7 +114,7 @@ def main(argv: list[str] | None = None) -> dict:
     for name, runs in results.items():
         for key in ("rollout_s", "update_s", "steps_per_s"):
             out[f"{name}_{key}"] = round(float(np.mean([r[key] for r in runs])), 4)
-    for name in ("pipelined", "overlapped"):
+    for name in ("pipelined", "overlapped", "workers"):
         out[f"{name}_vs_lockstep"] = round(
             out[f"{name}_steps_per_s"] / out["lockstep_steps_per_s"], 3
         )

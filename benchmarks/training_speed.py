@@ -8,6 +8,11 @@
   ``robocup-gym train`` (the whole run, set-up excluded);
 * ``train_vs_limit``: ``train_steps_per_s / (cores × env_agent_steps_per_s_one_core)``, and
   ``vec_vs_limit`` likewise;
+* ``env_agent_steps_per_s_one_core_policy``: one worker's block of environments (``n_envs /
+  cores``) stepped in this process with the actions of a fresh policy of the run's defaults:
+  the episodes training plays, which end, reset and wait at another rate than under random
+  actions (more often, on VelocityKick: each end costs a reset and 20 wait cycles), so this is
+  the rate one core can give a run; ``train_vs_policy_limit`` = train / (cores × that);
 * where the training run's time went, from CPU times: ``learner_cpu_share`` (the learner
   process: policy forward passes, updates, the vector environment's plumbing),
   ``workers_cpu_share`` (everything else the machine did: the environment workers, on a quiet
@@ -69,6 +74,48 @@ def one_core(env_id: str, steps: int, seed: int = 0) -> float:
     dt = time.perf_counter() - t0
     env.close()
     return steps / dt
+
+
+def one_core_policy(env_id: str, n_envs: int, steps: int, seed: int = 0) -> float:
+    """Agent steps per second of a block of ``n_envs`` environments stepped in this process
+    with the actions of a fresh PPO policy (the run's defaults, its exploration noise): the
+    episodes a run plays at its start, which end (fall, time limit; then a reset and the wait
+    cycles) at another rate than under random actions."""
+    import cloudpickle
+    import torch
+
+    from robocup_gym.train.config import TrainConfig
+    from robocup_gym.train.pipelined import PipelinedPPO
+    from robocup_gym.train.vecenv import EnvBlock, env_factories, make_vec_env
+
+    torch.set_num_threads(1)
+    kwargs = TrainConfig(task="velocity-kick").resolved_algo_kwargs()
+    kwargs.pop("overlap_updates", None)
+    template = make_vec_env(env_id, 1, seed=seed, kind="dummy")
+    model = PipelinedPPO("MlpPolicy", template, seed=seed, device="cpu", **kwargs)
+    template.close()
+    policy = model.policy
+    mats = None
+    if model.use_sde:
+        policy.reset_noise(n_envs)
+        mats = policy.action_dist.exploration_matrices
+    block = EnvBlock(env_factories(env_id, n_envs, seed=seed))
+    obs = np.stack([o for o, _ in block.handle("reset", [(None, None)] * n_envs)])
+    spec = cloudpickle.dumps((type(policy), policy._get_constructor_parameters()))
+    per_call = max(1, steps // n_envs // 4)
+    rng = torch.Generator().manual_seed(seed)
+    t0 = time.perf_counter()
+    for _ in range(4):
+        eps = None
+        if mats is None:
+            eps = torch.randn((per_call, n_envs, *policy.action_space.shape), generator=rng)
+        got = block.handle("rollout", ("p", spec, policy.state_dict(), per_call, obs, eps, mats))
+        if not isinstance(got, dict):
+            raise RuntimeError(got.message)
+        obs = got["obs"][-1]
+    dt = time.perf_counter() - t0
+    block.close()
+    return 4 * per_call * n_envs / dt
 
 
 def vectorised(env_id: str, n_envs: int, steps: int) -> float:
@@ -147,6 +194,8 @@ def main(argv: list[str] | None = None) -> dict:
     steps = 500 if args.quick else 5_000
     timesteps = 4_096 if args.quick else args.timesteps
     one = one_core(env_id, steps)
+    per_worker = max(1, cfg.n_envs // cores)
+    one_policy = one_core_policy(env_id, per_worker, steps)
     vec = vectorised(env_id, cfg.n_envs, steps * 2)
     run = training(args.task, timesteps)
     limit = cores * one
@@ -160,6 +209,8 @@ def main(argv: list[str] | None = None) -> dict:
         "vec_vs_limit": round(vec / limit, 3),
         "train_steps_per_s": round(run["steps_per_s"], 1),
         "train_vs_limit": round(run["steps_per_s"] / limit, 3),
+        "env_agent_steps_per_s_one_core_policy": round(one_policy, 1),
+        "train_vs_policy_limit": round(run["steps_per_s"] / (cores * one_policy), 3),
         "train_timesteps": timesteps,
         "learner_cpu_share": round(run["learner_cpu_s"] / capacity, 3),
         "workers_cpu_share": None,

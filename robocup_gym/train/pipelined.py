@@ -1,4 +1,4 @@
-"""PPO with pipelined rollouts: each worker's environments step as soon as their actions exist.
+"""PPO with pipelined rollouts: each worker steps its environments on its own clock.
 
 Stable-Baselines3's PPO collects a rollout in lock-step: the policy computes actions for all
 environments, every worker steps its block, the learner waits for the *slowest* worker, and
@@ -9,10 +9,16 @@ cycles — make one worker's step much longer than the other's, and the policy's
 runs while both workers wait).
 
 :class:`PipelinedPPO` keeps each worker (:class:`~robocup_gym.train.vecenv.BlockVecEnv`
-block) on its own clock: whenever a worker returns a step, the policy computes that block's
-next actions at once and sends them back, while the other workers are still stepping. The
-rollout ends when every block has ``n_steps`` steps; the per-step callbacks then run in step
-order with what SB3 would have given them, and the buffer, returns and advantages are the same.
+block) on its own clock. By default (``worker_rollouts``) each worker plays its block's whole
+rollout with a copy of the policy: the learner sends the policy's weights and the rollout's noise
+once, every worker steps its environments and computes their actions without waiting for anyone,
+and sends the rollout back (one round trip per rollout, on local workers and on Ray actors
+alike). With ``worker_rollouts=False`` the learner computes the actions: whenever a worker
+returns a step, the policy computes that block's next actions at once and sends them back, while
+the other workers are still stepping. Either way the rollout ends when every block has
+``n_steps`` steps; the per-step callbacks then run in step order with what SB3 would have given
+them, and the buffer, returns and advantages are the same, to the bit: a worker computes its
+block's actions exactly as the learner would (the same block, the same noise, one torch thread).
 
 What is, and is not, the same as SB3's loop:
 
@@ -26,10 +32,6 @@ What is, and is not, the same as SB3's loop:
   rollout), so a run is reproducible from its seed.
 * The callbacks' ``on_step`` runs after the rollout instead of between steps (progress bars and
   checkpoints then move once per rollout, ~1 s); a callback that stops training still stops it.
-
-On Ray actors (:class:`~robocup_gym.train.ray_vecenv.RayVecEnv`) the same rollout is played by
-each actor with a copy of the policy and the same noise (one round trip per rollout, not per
-step), with the same numbers.
 
 Any other setting (one worker, a wrapped vector env such as ``VecNormalize``, a non-Box action
 space, gSDE with ``sde_sample_freq > 0``) uses SB3's own loop unchanged.
@@ -62,7 +64,6 @@ from stable_baselines3.common.distributions import (
 )
 from stable_baselines3.common.utils import obs_as_tensor
 
-from robocup_gym.train.ray_vecenv import RayVecEnv
 from robocup_gym.train.vecenv import BlockVecEnv
 
 
@@ -73,14 +74,23 @@ class PipelinedPPO(PPO):
         pipeline_rollouts: ``False`` collects rollouts with SB3's lock-step loop.
         overlap_updates: run each update in the background while the next rollout is collected
             with the previous policy (module docstring; needs pipelined rollouts, else ignored).
+        worker_rollouts: each worker plays its block's whole rollout with a copy of the policy
+            (one round trip per rollout); ``False``: the learner computes every step's actions
+            and sends them to the worker whose step came back (one round trip per step).
         *args, **kwargs: As :class:`stable_baselines3.PPO`.
     """
 
     def __init__(
-        self, *args, pipeline_rollouts: bool = True, overlap_updates: bool = False, **kwargs
+        self,
+        *args,
+        pipeline_rollouts: bool = True,
+        overlap_updates: bool = False,
+        worker_rollouts: bool = True,
+        **kwargs,
     ) -> None:
         self.pipeline_rollouts = pipeline_rollouts
         self.overlap_updates = overlap_updates
+        self.worker_rollouts = worker_rollouts
         self._update_thread: threading.Thread | None = None
         self._update_error: BaseException | None = None
         self._behaviour = None
@@ -188,8 +198,8 @@ class PipelinedPPO(PPO):
         low, high = self.action_space.low, self.action_space.high
 
         restarted = None
-        if isinstance(env, RayVecEnv):
-            # each actor plays its block's whole rollout with a copy of the policy
+        if self.worker_rollouts:
+            # each worker plays its block's whole rollout with a copy of the policy
             mats = policy.action_dist.exploration_matrices if eps is None else None
             got = env.rollout(policy, steps, obs[0], eps, mats)
             obs[:] = got["obs"]

@@ -69,66 +69,9 @@ class _BlockActor:
 
     def __init__(self, blocks: dict[int, tuple[list[Callable[[], gym.Env]], int]]) -> None:
         self.blocks = {b: EnvBlock(fns, first) for b, (fns, first) in blocks.items()}
-        self._spec: Any = None
-        self._policy: Any = None
 
     def handle(self, block: int, cmd: str, data: Any) -> Any:
         return self.blocks[block].handle(cmd, data)
-
-    def rollout(self, block: int, spec: Any, state: dict, steps: int, obs0, eps, mats) -> Any:
-        """Block ``block`` plays ``steps`` steps with the policy ``spec`` (a key and, in a list,
-        the object reference of its class and constructor parameters; built once per key) in the
-        state ``state``, from the observations
-        ``obs0``, with the rollout's noise for these environments (``eps``, or gSDE's ``mats``);
-        returns the fragment's arrays (or the block's error)."""
-        import torch as th
-
-        from robocup_gym.train.pipelined import block_forward
-
-        key, ref = spec
-        if self._spec != key:
-            import ray
-
-            th.set_num_threads(1)
-            cls, kwargs = ray.get(ref[0])
-            self._policy = cls(**kwargs)
-            self._policy.set_training_mode(False)
-            self._spec = key
-        policy = self._policy
-        policy.load_state_dict(state)
-        envs = self.blocks[block]
-        n = len(obs0)
-        space = policy.action_space
-        obs = np.empty((steps + 1, *obs0.shape), dtype=obs0.dtype)
-        obs[0] = obs0
-        actions = np.empty((steps, n, *space.shape), dtype=np.float32)
-        values = np.empty((steps, n), dtype=np.float32)
-        log_probs = np.empty((steps, n), dtype=np.float32)
-        rewards = np.empty((steps, n))
-        dones = np.empty((steps, n), dtype=bool)
-        infos: list = [None] * steps
-        reset_infos: list = []
-        for t in range(steps):
-            noise = None if eps is None else eps[t]
-            with th.no_grad():
-                a, v, lp = block_forward(policy, obs[t], "cpu", mats, noise)
-            actions[t] = a.numpy()
-            values[t] = v.flatten().numpy()
-            log_probs[t] = lp.numpy()
-            answer = envs.handle("step", np.clip(actions[t], space.low, space.high))
-            if isinstance(answer, _WorkerError):
-                return answer
-            obs[t + 1], rewards[t], dones[t], infos[t], reset_infos = answer
-        return {
-            "obs": obs,
-            "actions": actions,
-            "values": values,
-            "log_probs": log_probs,
-            "rewards": rewards,
-            "dones": dones,
-            "infos": infos,
-            "reset_infos": reset_infos,
-        }
 
     def node(self) -> str:
         import ray
@@ -268,6 +211,8 @@ class RayVecEnv(BlockVecEnv):
             self._remember(worker, answer[0])
         elif cmd == "reset" and not isinstance(answer, _WorkerError):
             self._remember(worker, np.stack([obs for obs, _ in answer]))
+        elif cmd == "rollout" and not isinstance(answer, _WorkerError):
+            self._remember(worker, answer["obs"][-1])
         return answer
 
     def ready_blocks(self, workers: Sequence[int]) -> list[int]:
@@ -275,65 +220,6 @@ class RayVecEnv(BlockVecEnv):
         self._ray.wait(refs, num_returns=1)
         ready, _ = self._ray.wait(refs, num_returns=len(refs), timeout=0)
         return sorted(self._ref_block[r] for r in ready)
-
-    # ------------------------------------------------------------------ whole rollouts
-    def rollout(self, policy, steps: int, obs0: np.ndarray, eps, mats) -> dict[str, Any]:
-        """Every actor plays its block's next ``steps`` steps with a copy of ``policy`` (the
-        learner's, as it is now), from the observations ``obs0`` (one per environment), with
-        the rollout's noise: ``eps`` (``(steps, n_envs, action_dim)``) or, with gSDE, the
-        per-environment exploration matrices ``mats``. Returns the whole rollout's ``obs``
-        (``steps + 1`` rows), ``actions`` (unclipped), ``clipped``, ``values``, ``log_probs``,
-        ``rewards``, ``dones``, ``infos`` (``[step][env]``) and ``restarted`` (per environment:
-        its actor was lost and its block played the rollout afresh from a reset)."""
-        ray = self._ray
-        if getattr(self, "_spec_of", None) is not policy:
-            spec = (type(policy), policy._get_constructor_parameters())
-            self._spec_ref = [ray.put(spec)]
-            self._spec_key = f"{id(policy)}-{id(self._spec_ref[0])}"
-            self._spec_of = policy
-        state = ray.put({k: v.detach().cpu() for k, v in policy.state_dict().items()})
-        n = self.num_envs
-        restarted = np.zeros(n, dtype=bool)
-
-        def submit(w: int, start_obs: np.ndarray):
-            b = self.blocks[w]
-            noise = None if eps is None else eps[:, b.start : b.stop].cpu()
-            block_mats = None if mats is None else mats[b.start : b.stop].detach().cpu()
-            ref = self.actors[w].rollout.remote(
-                w, (self._spec_key, self._spec_ref), state, steps, start_obs, noise, block_mats
-            )
-            return ref, self._generation[w]
-
-        refs = {w: submit(w, obs0[b.start : b.stop]) for w, b in enumerate(self.blocks)}
-        parts = {}
-        for w, b in enumerate(self.blocks):
-            ref, generation = refs[w]
-            while True:
-                try:
-                    part = ray.get(ref)
-                    break
-                except (ray.exceptions.RayActorError, ray.exceptions.ObjectLostError):
-                    if generation == self._generation[w]:
-                        self.restarts += 1
-                        self._generation[w] += 1
-                        self.actors[w] = self._new_actor(w)
-                    self._send(w, "reset", [(None, None)] * len(b))
-                    fresh = _worker_failed(self._recv(w))
-                    restarted[b.start : b.stop] = True
-                    ref, generation = submit(w, np.stack([o for o, _ in fresh]))
-            parts[w] = _worker_failed(part)
-        out: dict[str, Any] = {}
-        for key in ("obs", "actions", "values", "log_probs", "rewards", "dones"):
-            out[key] = np.concatenate([parts[w][key] for w in range(len(self.blocks))], axis=1)
-        out["clipped"] = np.clip(out["actions"], self.action_space.low, self.action_space.high)
-        out["infos"] = [
-            [info for w in range(len(self.blocks)) for info in parts[w]["infos"][t]]
-            for t in range(steps)
-        ]
-        out["restarted"] = restarted
-        self.reset_infos = [i for w in range(len(self.blocks)) for i in parts[w]["reset_infos"]]
-        self._last_obs = out["obs"][-1].copy()
-        return out
 
     def _remember(self, worker: int, obs: np.ndarray) -> None:
         block = self.blocks[worker]
@@ -351,6 +237,17 @@ class RayVecEnv(BlockVecEnv):
             self._generation[actor] += 1
             self.actors[actor] = self._new_actor(actor)
         block = self.blocks[worker]
+        if cmd == "rollout":  # played again from a reset
+            self._send(worker, "reset", [(None, None)] * len(block))
+            fresh = self._recv(worker)
+            if isinstance(fresh, _WorkerError):
+                return fresh
+            obs0 = np.stack([o for o, _ in fresh])
+            self._send(worker, cmd, (*data[:4], obs0, *data[5:]))
+            answer = self._recv(worker)
+            if isinstance(answer, dict):
+                answer["restarted"] = True
+            return answer
         if cmd != "step":
             self._send(worker, cmd, data)
             return self._recv(worker)

@@ -167,6 +167,8 @@ class EnvBlock:
         self.first_index = first_index
         self.envs: list = []
         self.broken: _WorkerError | None = None
+        self._policy_key: str | None = None
+        self._policy: Any = None
         for k, fn in enumerate(env_fns):
             try:
                 self.envs.append(_patch_env(fn()))
@@ -216,6 +218,8 @@ class EnvBlock:
                     kw = {"options": options} if options else {}
                     out.append(envs[k].reset(seed=seed, **kw))
                 return out
+            if cmd == "rollout":
+                return self.rollout(*data)
             if cmd == "get_spaces":
                 return envs[0].observation_space, envs[0].action_space
             if cmd == "env_method":
@@ -246,6 +250,59 @@ class EnvBlock:
             return _WorkerError(
                 f"{cmd} failed in environment {self.first_index + k}: {type(e).__name__}: {e}"
             )
+
+    def rollout(self, key: str, spec: bytes, state: dict, steps: int, obs0, eps, mats) -> Any:
+        """The block plays ``steps`` steps with a policy: ``spec`` is its class and constructor
+        parameters (cloudpickled; built once per ``key``), ``state`` its weights now. From the
+        observations ``obs0``, with the rollout's noise for these environments (``eps``, or
+        gSDE's exploration matrices ``mats``). Returns the fragment's arrays (``obs`` with
+        ``steps + 1`` rows, ``actions``, ``values``, ``log_probs``, ``rewards``, ``dones``,
+        ``infos``, ``reset_infos`` of the last step), or the block's error."""
+        import cloudpickle
+        import torch as th
+
+        from robocup_gym.train.pipelined import block_forward
+
+        if self._policy_key != key:
+            th.set_num_threads(1)  # as the learner acts: the same numbers
+            cls, kwargs = cloudpickle.loads(spec)
+            self._policy = cls(**kwargs)
+            self._policy.set_training_mode(False)
+            self._policy_key = key
+        policy = self._policy
+        policy.load_state_dict(state)
+        n = len(obs0)
+        space = policy.action_space
+        obs = np.empty((steps + 1, *obs0.shape), dtype=obs0.dtype)
+        obs[0] = obs0
+        actions = np.empty((steps, n, *space.shape), dtype=np.float32)
+        values = np.empty((steps, n), dtype=np.float32)
+        log_probs = np.empty((steps, n), dtype=np.float32)
+        rewards = np.empty((steps, n))
+        dones = np.empty((steps, n), dtype=bool)
+        infos: list = [None] * steps
+        reset_infos: list = []
+        for t in range(steps):
+            noise = None if eps is None else eps[t]
+            with th.no_grad():
+                a, v, lp = block_forward(policy, obs[t], "cpu", mats, noise)
+            actions[t] = a.numpy()
+            values[t] = v.flatten().numpy()
+            log_probs[t] = lp.numpy()
+            answer = self.handle("step", np.clip(actions[t], space.low, space.high))
+            if isinstance(answer, _WorkerError):
+                return answer
+            obs[t + 1], rewards[t], dones[t], infos[t], reset_infos = answer
+        return {
+            "obs": obs,
+            "actions": actions,
+            "values": values,
+            "log_probs": log_probs,
+            "rewards": rewards,
+            "dones": dones,
+            "infos": infos,
+            "reset_infos": reset_infos,
+        }
 
 
 def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0) -> None:
@@ -353,6 +410,48 @@ class BlockVecEnv(VecEnv):
         block = self.blocks[worker]
         self.reset_infos[block.start : block.stop] = reset_infos
         return obs, rews, dones, tuple(infos)
+
+    # ------------------------------------------------------------------ whole rollouts
+    def rollout(self, policy, steps: int, obs0: np.ndarray, eps, mats) -> dict[str, Any]:
+        """Every worker plays its block's next ``steps`` steps with a copy of ``policy`` (the
+        learner's, as it is now; the same numbers as the learner would compute), all workers at
+        once, from the observations ``obs0`` (one per environment), with the rollout's noise:
+        ``eps`` (``(steps, n_envs, action_dim)``) or, with gSDE, the per-environment exploration
+        matrices ``mats``. One round trip per worker and rollout. Returns the rollout's ``obs``
+        (``steps + 1`` rows), ``actions`` (unclipped), ``clipped``, ``values``, ``log_probs``,
+        ``rewards``, ``dones``, ``infos`` (``[step][env]``) and ``restarted`` (per environment:
+        its worker was lost and started again, and its block played the rollout afresh from a
+        reset; only on Ray)."""
+        import cloudpickle
+
+        if getattr(self, "_spec_of", None) is not policy:
+            spec = (type(policy), policy._get_constructor_parameters())
+            self._spec = cloudpickle.dumps(spec)
+            self._spec_key = f"{id(self)}-{id(policy)}-{len(self._spec)}"
+            self._spec_of = policy
+        state = {k: v.detach().cpu() for k, v in policy.state_dict().items()}
+        for w in range(len(self.blocks)):
+            self._send(w, "rollout", self._rollout_payload(w, state, steps, obs0, eps, mats))
+        parts = self._from_every_worker(lambda w: _worker_failed(self._recv(w)))
+        out: dict[str, Any] = {}
+        for key in ("obs", "actions", "values", "log_probs", "rewards", "dones"):
+            out[key] = np.concatenate([part[key] for part in parts], axis=1)
+        out["clipped"] = np.clip(out["actions"], self.action_space.low, self.action_space.high)
+        out["infos"] = [[info for part in parts for info in part["infos"][t]] for t in range(steps)]
+        out["restarted"] = np.concatenate(
+            [
+                np.full(len(b), part.get("restarted", False))
+                for b, part in zip(self.blocks, parts, strict=True)
+            ]
+        )
+        self.reset_infos = [info for part in parts for info in part["reset_infos"]]
+        return out
+
+    def _rollout_payload(self, w: int, state, steps: int, obs0, eps, mats) -> tuple:
+        b = self.blocks[w]
+        noise = None if eps is None else eps[:, b.start : b.stop].cpu()
+        block_mats = None if mats is None else mats[b.start : b.stop].detach().cpu()
+        return self._spec_key, self._spec, state, steps, obs0[b.start : b.stop], noise, block_mats
 
     def reset(self):
         for w, block in enumerate(self.blocks):

@@ -62,11 +62,19 @@ def _row_by_row(policy) -> None:
     policy.forward = rows
 
 
-def _collect(pipelined: bool, use_sde: bool, rollouts: int = 2):
+def _collect(
+    pipelined: bool, use_sde: bool, rollouts: int = 2, workers: bool = False, rows: bool = True
+):
+    """Buffers of ``rollouts`` rollouts; ``workers``: the workers play them (their own copy of
+    the policy, whose forward pass is not made row by row); ``rows``: the learner's policy
+    evaluates one observation at a time."""
     venv = small_vec_env()
     try:
-        model = small_pipelined_ppo(venv, use_sde=use_sde, pipeline_rollouts=pipelined)
-        _row_by_row(model._rollout_policy())
+        model = small_pipelined_ppo(
+            venv, use_sde=use_sde, pipeline_rollouts=pipelined, worker_rollouts=workers
+        )
+        if rows:
+            _row_by_row(model._rollout_policy())
         assert model.can_pipeline(venv) == pipelined
         cb = _Record()
         model._setup_learn(16 * 4 * rollouts, cb)
@@ -117,9 +125,25 @@ def test_pipelined_rollout_matches_lockstep(use_sde):
             assert np.abs(bp["actions"]).max() > 0.0
 
 
-def test_pipelined_runs_are_reproducible():
-    a, _, _ = _collect(True, False, rollouts=1)
-    b, _, _ = _collect(True, False, rollouts=1)
+@pytest.mark.parametrize("use_sde", [True, False], ids=["gsde", "gaussian"])
+def test_rollouts_played_by_the_workers_are_the_learner_s_to_the_bit(use_sde):
+    """Each worker computes its block's actions with a copy of the policy: the same numbers as
+    the learner computing them block by block, so the same buffers and episodes."""
+    learner, cb_l, m_l = _collect(True, use_sde, workers=False, rows=False)
+    workers, cb_w, m_w = _collect(True, use_sde, workers=True, rows=False)
+    assert [s[0] for s in cb_w.seen] == [s[0] for s in cb_l.seen]
+    assert m_w.num_timesteps == m_l.num_timesteps == 128
+    assert len(m_w.ep_info_buffer) == len(m_l.ep_info_buffer) > 0
+    for bl, bw in zip(learner, workers, strict=True):
+        assert bw["episode_starts"].any(), "the rollout should cross episode ends"
+        for key, a in bl.items():
+            np.testing.assert_array_equal(bw[key], a, err_msg=key)
+
+
+@pytest.mark.parametrize("workers", [False, True], ids=["learner", "workers"])
+def test_pipelined_runs_are_reproducible(workers):
+    a, _, _ = _collect(True, False, rollouts=1, workers=workers)
+    b, _, _ = _collect(True, False, rollouts=1, workers=workers)
     for key in a[0]:
         np.testing.assert_array_equal(a[0][key], b[0][key], err_msg=key)
 

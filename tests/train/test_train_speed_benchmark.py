@@ -28,6 +28,10 @@ def test_training_speed_quick_prints_json_last():
         assert r[key] > 0, key
     limit = r["cores"] * r["env_agent_steps_per_s_one_core"]
     assert r["train_vs_limit"] == pytest.approx(r["train_steps_per_s"] / limit, abs=2e-3)
+    policy_limit = r["cores"] * r["env_agent_steps_per_s_one_core_policy"]
+    assert r["train_vs_policy_limit"] == pytest.approx(
+        r["train_steps_per_s"] / policy_limit, abs=2e-3
+    )
     assert 0 < r["learner_cpu_share"] <= 1.0
     if r["workers_cpu_share"] is not None:  # Linux
         total = r["learner_cpu_share"] + r["workers_cpu_share"] + r["idle_share"]
