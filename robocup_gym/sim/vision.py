@@ -79,18 +79,19 @@ def _visible(pol: np.ndarray, half_cone: float) -> np.ndarray:
     )
 
 
-def _noisy(pol: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    # One draw for the three components: the same numbers in the same order as three
-    # ``rng.normal(0.0, sigma, n)`` calls (distances, then horizontal, then vertical angles),
-    # each ``0.0 + sigma * z`` as numpy computes them.
-    z = rng.standard_normal((3, len(pol)))
-    z *= _NOISE_SIGMA
-    z += 0.0
+def _noisy_from(pol: np.ndarray, z: np.ndarray, used: int) -> tuple[np.ndarray, int]:
+    """``pol`` with SimSpark's noise, from the standard normal numbers ``z[used:]``; returns it
+    and how many numbers are used now. Per group of n points, 3n numbers: the same numbers in
+    the same order as three ``rng.normal(0.0, sigma, n)`` calls (distances, then horizontal,
+    then vertical angles), each ``0.0 + sigma * z`` as numpy computes them."""
+    n = len(pol)
+    zz = z[used : used + 3 * n].reshape(3, n) * _NOISE_SIGMA
+    zz += 0.0
     out = pol.copy()
-    out[:, 0] += z[0] * out[:, 0] / 100.0
-    out[:, 1] += z[1]
-    out[:, 2] += z[2]
-    return out
+    out[:, 0] += zz[0] * out[:, 0] / 100.0
+    out[:, 1] += zz[1]
+    out[:, 2] += zz[2]
+    return out, used + 3 * n
 
 
 def clip_segment(a: np.ndarray, b: np.ndarray, half_cone_deg: float) -> tuple | None:
@@ -191,53 +192,63 @@ def see(
     half = float(int(config.view_cone_deg) // 2)
     noise = config.noise
     cal = calibration if noise else _ZERO3
-    objs = _OBJECTS.copy()
-    objs[-1] = ball_pos
-    # head-frame positions: landmarks and ball, each player's parts, line end points
-    rels = [to_head_frame(objs, head_pos, head_rot) + cal]
-    for _, _, parts in players:
-        rels.append(to_head_frame(parts, head_pos, head_rot) + cal)
-    n_obj = len(objs)
-    n_pts = n_obj + len(PLAYER_PARTS) * len(players)
+    n_obj = len(_OBJECTS)
+    n_parts = len(PLAYER_PARTS)
+    # every point in one array: landmarks and ball, each player's parts, line end points
+    pieces = [_OBJECTS[:-1], ball_pos.reshape(1, 3)]
+    pieces += [parts for _, _, parts in players]
     if config.lines:
-        ends = to_head_frame(_LINE_ENDS, head_pos, head_rot) + cal
-        inside, clipped = _clip_segments(ends.reshape(-1, 2, 3), half)
-        rels.append(clipped.reshape(-1, 3))
+        pieces.append(_LINE_ENDS)
+    rel = to_head_frame(np.concatenate(pieces), head_pos, head_rot)
+    rel += cal
+    n_pts = n_obj + n_parts * len(players)
+    if config.lines:
+        inside, clipped = _clip_segments(rel[n_pts:].reshape(-1, 2, 3), half)
+        rel[n_pts:] = clipped.reshape(-1, 3)
     # one polar conversion and one visibility test for everything (element-wise operations)
-    pol_all = polar(np.concatenate(rels))
+    pol_all = polar(rel)
     vis_all = _visible(pol_all, half)
 
-    pol = pol_all[:n_obj]
-    vis = vis_all[:n_obj]
+    # which players are seen (any part), and which lines (both ends inside the cone, slightly
+    # widened: clipped ends lie on its border)
+    pvis_all = vis_all[n_obj:n_pts].reshape(len(players), n_parts)
+    seen = np.flatnonzero(pvis_all.any(axis=1))
+    keep = None
+    if config.lines:
+        lvis = _visible(pol_all[n_pts:], half + 1e-6).reshape(-1, 2).all(axis=1)
+        keep = inside & lvis
+    n_lines = 0 if keep is None else int(keep.sum())
+
+    # the noise of everything seen, drawn at once in the order of one draw per group (the
+    # objects, each seen player, the lines): the same numbers as group by group
+    z = np.zeros(0)
     if noise:
-        pol = _noisy(pol, rng)
+        z = rng.standard_normal(3 * (n_obj + n_parts * len(seen) + 2 * n_lines))
     names = _OBJECT_NAMES
-    objects = {names[i]: pol[i] for i in np.flatnonzero(vis)}
+    pol = pol_all[:n_obj]
+    used = 0
+    if noise:
+        pol, used = _noisy_from(pol, z, used)
+    objects = {names[i]: pol[i] for i in np.flatnonzero(vis_all[:n_obj])}
 
     seen_players: list[SeenPlayer] = []
-    k = n_obj
-    for team, unum, _ in players:
-        ppol = pol_all[k : k + len(PLAYER_PARTS)]
-        pvis = vis_all[k : k + len(PLAYER_PARTS)]
-        k += len(PLAYER_PARTS)
-        if not pvis.any():
-            continue
+    for j in seen:
+        team, unum, _ = players[j]
+        k = n_obj + n_parts * j
+        ppol = pol_all[k : k + n_parts]
         if noise:
-            ppol = _noisy(ppol, rng)
+            ppol, used = _noisy_from(ppol, z, used)
+        pvis = pvis_all[j]
         seen_players.append(
             SeenPlayer(team, unum, {PLAYER_PARTS[i]: ppol[i] for i in np.flatnonzero(pvis)})
         )
 
     lines = np.zeros((0, 2, 3))
-    if config.lines:
-        lpol = pol_all[n_pts:].reshape(-1, 2, 3)
-        # both ends inside the cone (slightly widened: clipped ends lie on its border)
-        lvis = _visible(pol_all[n_pts:], half + 1e-6).reshape(-1, 2).all(axis=1)
-        keep = inside & lvis
-        if keep.any():
-            lines = lpol[keep]
-            if noise:
-                lines = _noisy(lines.reshape(-1, 3), rng).reshape(-1, 2, 3)
+    if n_lines:
+        lines = pol_all[n_pts:].reshape(-1, 2, 3)[keep]
+        if noise:
+            flat, used = _noisy_from(lines.reshape(-1, 3), z, used)
+            lines = flat.reshape(-1, 2, 3)
 
     vision = Vision(objects=objects, players=seen_players, lines=lines)
     if config.ground_truth:
