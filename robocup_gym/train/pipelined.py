@@ -185,68 +185,15 @@ class PipelinedPPO(PPO):
         else:
             eps = th.randn((steps, n_envs, *self.action_space.shape), device=self.device)
         callback.on_rollout_start()
-
-        obs = np.empty((steps + 1, *np.shape(self._last_obs)), dtype=self._last_obs.dtype)
-        obs[0] = self._last_obs
-        actions = np.empty((steps, n_envs, *self.action_space.shape), dtype=np.float32)
-        clipped = np.empty_like(actions)
-        values = th.empty((steps, n_envs))
-        log_probs = th.empty((steps, n_envs))
-        rewards = np.empty((steps, n_envs))
-        dones = np.empty((steps, n_envs), dtype=bool)
-        infos: list[list] = [[None] * n_envs for _ in range(steps)]
-        low, high = self.action_space.low, self.action_space.high
-
-        restarted = None
         if self.worker_rollouts:
-            # each worker plays its block's whole rollout with a copy of the policy
             mats = policy.action_dist.exploration_matrices if eps is None else None
-            got = env.rollout(policy, steps, obs[0], eps, mats)
-            obs[:] = got["obs"]
-            actions[:] = got["actions"]
-            clipped[:] = got["clipped"]
-            values[:] = th.as_tensor(got["values"])
-            log_probs[:] = th.as_tensor(got["log_probs"])
-            rewards[:] = got["rewards"]
-            dones[:] = got["dones"]
-            infos = got["infos"]
-            restarted = got["restarted"]
+            got = env.rollout(policy, steps, self._last_obs, eps, mats)
         else:
-            blocks = env.blocks
-            step_of = [0] * len(blocks)
-
-            def act(w: int) -> None:
-                t, b = step_of[w], blocks[w]
-                with th.no_grad():
-                    a, v, lp = self._block_forward(
-                        policy,
-                        obs[t, b.start : b.stop],
-                        b,
-                        None if eps is None else eps[t, b.start : b.stop],
-                    )
-                a = a.cpu().numpy()
-                actions[t, b.start : b.stop] = a
-                clipped[t, b.start : b.stop] = np.clip(a, low, high)
-                values[t, b.start : b.stop] = v.flatten()
-                log_probs[t, b.start : b.stop] = lp
-                env.step_block_async(w, clipped[t, b.start : b.stop])
-
-            for w in range(len(blocks)):
-                act(w)
-            running = list(range(len(blocks)))
-            while running:
-                for w in env.ready_blocks(running):
-                    t, b = step_of[w], blocks[w]
-                    o, r, d, info = env.step_block_wait(w)
-                    obs[t + 1, b.start : b.stop] = o
-                    rewards[t, b.start : b.stop] = r
-                    dones[t, b.start : b.stop] = d
-                    infos[t][b.start : b.stop] = info
-                    step_of[w] = t + 1
-                    if t + 1 < steps:
-                        act(w)
-                    else:
-                        running.remove(w)
+            got = self._rollout_by_learner(env, policy, steps, eps)
+        obs, actions, clipped = got["obs"], got["actions"], got["clipped"]
+        values, log_probs = th.as_tensor(got["values"]), th.as_tensor(got["log_probs"])
+        rewards, dones, infos = got["rewards"], got["dones"], got["infos"]
+        restarted = got.get("restarted")
 
         # Truncated episodes: bootstrap with the value of their last observation (SB3 #633).
         cut = [
@@ -307,6 +254,67 @@ class PipelinedPPO(PPO):
         callback.update_locals({"new_obs": obs[steps], "dones": dones[-1], "values": last_values})
         callback.on_rollout_end()
         return True
+
+    def _rollout_by_learner(self, env, policy, steps: int, eps: th.Tensor | None) -> dict:
+        """The rollout with the learner computing every step's actions: whenever a worker
+        returns a step, its block's next actions go out at once while the others still step.
+        The same arrays as :meth:`~robocup_gym.train.vecenv.BlockVecEnv.rollout`."""
+        n_envs = env.num_envs
+        obs = np.empty((steps + 1, *np.shape(self._last_obs)), dtype=self._last_obs.dtype)
+        obs[0] = self._last_obs
+        actions = np.empty((steps, n_envs, *self.action_space.shape), dtype=np.float32)
+        clipped = np.empty_like(actions)
+        values = th.empty((steps, n_envs))
+        log_probs = th.empty((steps, n_envs))
+        rewards = np.empty((steps, n_envs))
+        dones = np.empty((steps, n_envs), dtype=bool)
+        infos: list[list] = [[None] * n_envs for _ in range(steps)]
+        low, high = self.action_space.low, self.action_space.high
+        blocks = env.blocks
+        step_of = [0] * len(blocks)
+
+        def act(w: int) -> None:
+            t, b = step_of[w], blocks[w]
+            with th.no_grad():
+                a, v, lp = self._block_forward(
+                    policy,
+                    obs[t, b.start : b.stop],
+                    b,
+                    None if eps is None else eps[t, b.start : b.stop],
+                )
+            a = a.cpu().numpy()
+            actions[t, b.start : b.stop] = a
+            clipped[t, b.start : b.stop] = np.clip(a, low, high)
+            values[t, b.start : b.stop] = v.flatten()
+            log_probs[t, b.start : b.stop] = lp
+            env.step_block_async(w, clipped[t, b.start : b.stop])
+
+        for w in range(len(blocks)):
+            act(w)
+        running = list(range(len(blocks)))
+        while running:
+            for w in env.ready_blocks(running):
+                t, b = step_of[w], blocks[w]
+                o, r, d, info = env.step_block_wait(w)
+                obs[t + 1, b.start : b.stop] = o
+                rewards[t, b.start : b.stop] = r
+                dones[t, b.start : b.stop] = d
+                infos[t][b.start : b.stop] = info
+                step_of[w] = t + 1
+                if t + 1 < steps:
+                    act(w)
+                else:
+                    running.remove(w)
+        return {
+            "obs": obs,
+            "actions": actions,
+            "clipped": clipped,
+            "values": values,
+            "log_probs": log_probs,
+            "rewards": rewards,
+            "dones": dones,
+            "infos": infos,
+        }
 
     def _block_forward(self, policy, obs: np.ndarray, block: range, eps: th.Tensor | None):
         """``(actions, values, log_probs)`` of one worker's environments (``block``) under
