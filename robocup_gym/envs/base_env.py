@@ -201,7 +201,18 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         model = robot_model(config)
         self.league = config.robot != "nao"
         """Whether the robot is one of the league's (RCSSServerMJ, PD joints)."""
-        # ---- observation components (validated before a backend is started)
+        comps = self._components(model)
+        ctrl, obs_joints = self._joints(model)
+        self._attach_backend(backend, engine, comps)
+        n_act = self._build_actions(model, ctrl)
+        self._build_observations(model, comps, obs_joints, n_act)
+        self._start_state(n_act)
+
+    # ------------------------------------------------------------------ construction steps
+    def _components(self, model) -> list:
+        """The configured observation components, checked against the robot (before any
+        backend is started)."""
+        config = self.config
         unknown = [n for n in config.observations if n not in COMPONENTS]
         if unknown:
             raise EnvConfigError(
@@ -220,7 +231,11 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                     f"observation {c.name!r} needs the toes of robot type 4, "
                     f"got robot_type={config.robot_type}"
                 )
-        # ---- joints
+        return comps
+
+    def _joints(self, model) -> tuple[np.ndarray, np.ndarray]:
+        """The controlled and observed joints, and the start pose's angles and noise."""
+        config = self.config
         if config.controlled_joints is None:
             ctrl = np.array(
                 [i for i, n in enumerate(model.effector_names) if not n.startswith("he")],
@@ -245,8 +260,11 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         if (self._start_noise < 0).any() or not np.isfinite(self._start_noise).all():
             raise EnvConfigError("joint_start_noise_deg must be finite and >= 0")
         self._ranges = model.ranges_deg.astype(float)
+        return ctrl, obs_joints
 
-        # ---- backend
+    def _attach_backend(self, backend: str | Backend | None, engine: str | None, comps) -> None:
+        """The given backend (checked against the config) or a new one of the named kind."""
+        config = self.config
         needs_vision = any(c.needs_vision for c in comps)
         if isinstance(backend, Backend):
             if engine is not None and engine != backend.name:
@@ -276,7 +294,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                 f"{self.backend.name!r} backend does not provide"
             )
 
-        # ---- actions
+    def _build_actions(self, model, ctrl: np.ndarray) -> int:
+        """The action mapper and space; returns the action size."""
+        config = self.config
         spread = config.target_around_start_deg
         around = None if spread is None else self._start_angles
         if self.league:
@@ -303,8 +323,11 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         n_act = self._actions.size
         self.action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), dtype=np.float32)
         self.action_labels: list[str] = self._actions.labels()
+        return n_act
 
-        # ---- observations
+    def _build_observations(self, model, comps, obs_joints: np.ndarray, n_act: int) -> None:
+        """The observation frame's writers, slices, bounds, normalisation and space."""
+        config = self.config
         ctx = ObservationContext(model, obs_joints, n_act, int(config.max_episode_steps))
         self._obs_joints = obs_joints
         los, his, labels, sizes = [], [], [], []
@@ -348,16 +371,18 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             labels if k == 1 else [f"{lab}@t-{k - 1 - i}" for i in range(k) for lab in labels]
         )
 
-        # ---- per-episode state
+    def _start_state(self, n_act: int) -> None:
+        """What an environment holds between and within episodes, before its first reset."""
+        config = self.config
         self._obs_noise = float(config.observation_noise_std)
         self._act_noise = float(config.action_noise_std)
         self._last_action = np.zeros(n_act)
         self._acted = self._last_action.copy()
+        """The action of the command :meth:`act` made last (clipped, noise included)."""
         self.rewarded = True
+        """Compute rewards (a task run as a skill, whose reward nobody reads, turns this off)."""
         self.reward_terms: dict[str, float] = {}
         """The last step's reward by term (:meth:`_reward_terms`)."""
-        """Compute rewards (a task run as a skill, whose reward nobody reads, turns this off)."""
-        """The action of the command :meth:`act` made last (clipped, noise included)."""
         self._vision_ball = np.zeros(4)
         self._needs_heading = "ball_rel" in config.observations or "ball_vel" in config.observations
         self._heading = (1.0, 0.0)
