@@ -134,9 +134,17 @@ class RayVecEnv(BlockVecEnv):
         self._env_fns = list(env_fns)
         self._last_obs: np.ndarray | None = None
         n_envs = len(self._env_fns)
+        cpus = int(ray.cluster_resources().get("CPU", 0))
         if n_workers <= 0:
-            n_workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
+            n_workers = max(1, cpus)
         n_actors = max(1, min(n_workers, n_envs))
+        if n_actors > cpus:
+            if self._owns_ray:
+                ray.shutdown()
+            raise ValueError(
+                f"{n_actors} Ray actors need {n_actors} CPUs, one each; the Ray cluster has "
+                f"{cpus} (use fewer workers, --n-workers {max(1, cpus)}, or add nodes)"
+            )
         self._start_blocks(n_envs, n_actors)
         self._actor_of = list(range(n_actors))
         """The actor (index into :attr:`actors`) hosting each block."""

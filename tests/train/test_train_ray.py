@@ -216,3 +216,9 @@ def test_train_on_ray_from_the_command_line_and_resume_on_local_workers(tmp_path
     assert TrainConfig.load(run / "config.yaml").vec_env == "auto"
     steps = [int(r.split(",")[0]) for r in (run / "progress.csv").read_text().splitlines()[1:]]
     assert steps[-1] >= 512
+
+
+def test_more_actors_than_the_cluster_has_cpus_is_refused_at_once():
+    with pytest.raises(ValueError, match=r"64 Ray actors need 64 CPUs, one each; the Ray cluster"):
+        make_vec_env(TASK, 64, n_workers=64, kind="ray")
+    assert not ray.is_initialized()
