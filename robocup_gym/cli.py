@@ -688,6 +688,13 @@ if typer is not None:
         ] = None,
         engine: Annotated[str, typer.Option(help="ode (SimSpark's physics) or mujoco.")] = "ode",
         seed: Annotated[int, typer.Option(help="Game k is seeded with seed + k.")] = 0,
+        video: Annotated[
+            Path | None,
+            typer.Option(
+                help="Record the first game to this .mp4 (or .gif) file, from the side, "
+                "following the ball (headless: MUJOCO_GL=egl)."
+            ),
+        ] = None,
     ) -> None:
         """Play two teams against each other in-process (multi-agent soccer with skill
         actions); a table, then one JSON object from the first team's side."""
@@ -726,8 +733,9 @@ if typer is not None:
                 engine=engine,
                 seed=seed,
                 on_game=progress,
+                video=video,
             )
-        except ValueError as exc:
+        except (ValueError, RuntimeError) as exc:
             _fail(str(exc))
         summary = result.summary
         table = Table(title=f"{team_a} against {team_b}: {players} a side, {seconds:g} s a game")

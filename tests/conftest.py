@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 import threading
 
@@ -51,3 +53,21 @@ def make_server(request):
         assert server.stopped, "server thread did not stop"
     leftover = [t for t in threading.enumerate() if t.name == "robocup-gym-serve"]
     assert not leftover, f"server threads still running: {leftover}"
+
+
+@pytest.fixture(scope="session")
+def offscreen_gl() -> dict[str, str]:
+    """The environment variables under which MuJoCo renders offscreen here (``MUJOCO_GL``,
+    egl unless set); skips where no OpenGL context can be made (checked in a child process,
+    as a failing GL library can take its process down)."""
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    code = "import mujoco; r = mujoco.Renderer(mujoco.MjModel.from_xml_string('<mujoco/>'), 8, 8)"
+    try:
+        ok = (
+            subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, timeout=60)
+        ).returncode == 0
+    except subprocess.TimeoutExpired:
+        ok = False
+    if not ok:
+        pytest.skip("no OpenGL for MuJoCo's offscreen renderer here (set MUJOCO_GL=egl/osmesa)")
+    return env

@@ -49,10 +49,21 @@ class ScenePoser:
 
 class FollowCamera:
     """Renders a MuJoCo world from a camera that follows robot 0 (the environments'
-    ``render()``; needs an OpenGL context, e.g. ``MUJOCO_GL=egl`` on a headless machine)."""
+    ``render()``), or the ball with ``follow="ball"`` (a game seen from the side); needs an
+    OpenGL context, e.g. ``MUJOCO_GL=egl`` on a headless machine. ``distance`` m, ``elevation``
+    and ``azimuth`` deg."""
 
-    def __init__(self, distance: float = 1.6, elevation: float = -20.0, azimuth: float = 135.0):
+    def __init__(
+        self,
+        distance: float = 1.6,
+        elevation: float = -20.0,
+        azimuth: float = 135.0,
+        follow: str = "robot",
+    ):
+        if follow not in ("robot", "ball"):
+            raise ValueError(f"follow must be 'robot' or 'ball', got {follow!r}")
         self.view = (distance, elevation, azimuth)
+        self.follow = follow
         self._renderer: Any = None
         self._camera: Any = None
 
@@ -66,7 +77,8 @@ class FollowCamera:
             self._renderer = mujoco.Renderer(world.model, height, width)
             self._camera = mujoco.MjvCamera()
             self._camera.distance, self._camera.elevation, self._camera.azimuth = self.view
-        self._camera.lookat[:] = world.torso_position(0) * (1.0, 1.0, 0.0) + (0.0, 0.0, 0.25)
+        target = world.ball_position() if self.follow == "ball" else world.torso_position(0)
+        self._camera.lookat[:] = np.asarray(target) * (1.0, 1.0, 0.0) + (0.0, 0.0, 0.25)
         self._renderer.update_scene(world.data, self._camera)
         return self._renderer.render().copy()
 

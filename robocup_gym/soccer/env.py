@@ -141,15 +141,30 @@ class SoccerParallelEnv(ParallelEnv):
 
     metadata: ClassVar[dict] = {
         "name": "robocup_soccer_v0",
-        "render_modes": [],
+        "render_modes": ["rgb_array"],
+        "render_fps": 50,
         "is_parallelizable": True,
     }
     default_config = SoccerConfig()
 
-    def __init__(self, render_mode: str | None = None, **options: Any) -> None:
-        if render_mode is not None:
-            raise ValueError(f"render_mode {render_mode!r} is not supported (none is)")
-        self.render_mode = None
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        render_size: tuple[int, int] = (640, 360),
+        **options: Any,
+    ) -> None:
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                f"got {render_mode!r}"
+            )
+        self.render_mode = render_mode
+        self.render_size = (int(render_size[0]), int(render_size[1]))
+        self.cycle_hook: Any = None
+        """Called with the environment after every simulated cycle of a step (a step of skill
+        actions runs several), e.g. to record every cycle of a video."""
+        self._scene: Any = None
+        self._camera: Any = None
         self.config = SoccerConfig.with_options(self.default_config, options)
         c = self.config
         self.game = SoccerGame(
@@ -256,6 +271,8 @@ class SoccerParallelEnv(ParallelEnv):
             report = self.game.step(commands)
             commands = {}  # the targets stay
             self._cycles += 1
+            if self.cycle_hook is not None:
+                self.cycle_hook(self)
             if report.diverged is not None:
                 break
             if skills is not None:  # the skills (and vision) see every cycle
@@ -386,10 +403,27 @@ class SoccerParallelEnv(ParallelEnv):
         score = (g.score_left, g.score_right) if side == "left" else (g.score_right, g.score_left)
         return {"play_mode": g.play_mode, "score": score, "goal": goal, "reward_terms": terms}
 
-    def render(self) -> None:
-        return None
+    def render(self) -> np.ndarray | None:
+        """With ``render_mode="rgb_array"``: an RGB image ``(height, width, 3)`` of the game now,
+        from the side, following the ball (MuJoCo's renderer over a scene posed like the world,
+        whatever its engine; needs an OpenGL context, e.g. ``MUJOCO_GL=egl``); else ``None``."""
+        if self.render_mode is None:
+            return None
+        from robocup_gym.sim.render import FollowCamera, ScenePoser
+
+        world = self.game.world
+        if self._scene is None:
+            types = [0] * len(self.game.players)
+            for p, t in zip(self.game.players, self.game.robot_types, strict=True):
+                types[p.index] = t
+            self._scene = ScenePoser(types)
+            self._camera = FollowCamera(distance=9.0, elevation=-35.0, azimuth=90.0, follow="ball")
+        return self._camera.render(self._scene.pose(world), *self.render_size)
 
     def close(self) -> None:
+        if self._camera is not None:
+            self._camera.close()
+            self._camera = None
         self.game.close()
 
     def __enter__(self) -> SoccerParallelEnv:

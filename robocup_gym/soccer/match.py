@@ -9,6 +9,7 @@ interval of the mean goal difference per game (normal approximation, from two ga
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -56,6 +57,8 @@ class MatchResult:
     team_a: str
     team_b: str
     games: list[GameResult] = field(default_factory=list)
+    video: str | None = None
+    """The recorded first game, if one was asked for."""
 
     @property
     def summary(self) -> dict[str, Any]:
@@ -77,6 +80,7 @@ class MatchResult:
             "goal_difference_mean": round(float(diffs.mean()), 3) if n else None,
             "goal_difference_ci95": ci,
             "diverged_games": int(sum(g.diverged for g in self.games)),
+            **({"video": self.video} if self.video is not None else {}),
         }
 
 
@@ -91,6 +95,7 @@ def play_match(
     engine: str = "ode",
     seed: int = 0,
     on_game: Callable[[int, GameResult], None] | None = None,
+    video: str | os.PathLike | None = None,
 ) -> MatchResult:
     """Play ``games`` games of ``team_a`` against ``team_b``.
 
@@ -100,6 +105,8 @@ def play_match(
         robot_types: Each team's robot types (default: types 0, 1, 2, 3, 4 in turn).
         seed: Game k is seeded with ``seed + k``.
         on_game: Called after each game.
+        video: Record the first game to this file (``.mp4``, or ``.gif``) at 25 frames a second
+            of game time, from the side, following the ball (MuJoCo's renderer).
 
     Raises:
         ValueError: an unknown team or an impossible set-up.
@@ -116,12 +123,25 @@ def play_match(
         raise ValueError(f"{players} players need {players} robot types, got {types!r}")
     cycles = round(seconds / 0.02)
     result = MatchResult(team_a, team_b)
+    recorder = None
+    if video is not None:
+        from robocup_gym.train.evaluate import FrameRecorder, check_renderer, ensure_gl_backend
+
+        ensure_gl_backend()
+        check_renderer()
+        recorder = FrameRecorder(every=2)  # 25 frames a second of game time
     env = game_v0.parallel_env(
-        actions="skills", left_types=types, right_types=types, engine=engine, max_cycles=cycles
+        actions="skills",
+        left_types=types,
+        right_types=types,
+        engine=engine,
+        max_cycles=cycles,
+        render_mode=None if video is None else "rgb_array",
     )
     try:
         for k in range(games):
             a_side = "left" if k % 2 == 0 else "right"
+            env.cycle_hook = recorder if k == 0 else None
             env.reset(seed=seed + k)
             diverged = False
             while env.agents:
@@ -135,6 +155,9 @@ def play_match(
             )
             game = GameResult(a_side, int(own), int(other), seconds, diverged)
             result.games.append(game)
+            if recorder is not None and k == 0:
+                result.video = str(recorder.save(video, fps=25.0))
+                recorder.close()
             if on_game is not None:
                 on_game(k, game)
     finally:

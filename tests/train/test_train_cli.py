@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import warnings
@@ -180,25 +179,9 @@ def test_sac_train_and_export(tmp_path):
     assert last_json(result.stdout)["verification"]["max_abs_diff"] <= 1e-5
 
 
-def _gl_available() -> bool:
-    code = "import mujoco; r = mujoco.Renderer(mujoco.MjModel.from_xml_string('<mujoco/>'), 8, 8)"
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-    try:
-        return (
-            subprocess.run(
-                [sys.executable, "-c", code], env=env, capture_output=True, timeout=60
-            ).returncode
-            == 0
-        )
-    except subprocess.TimeoutExpired:
-        return False
-
-
-def test_eval_video(ppo_run, tmp_path):
-    if not _gl_available():
-        pytest.skip("no OpenGL for MuJoCo's offscreen renderer here (set MUJOCO_GL=egl/osmesa)")
+def test_eval_video(ppo_run, tmp_path, offscreen_gl):
     video = tmp_path / "kick.mp4"
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    env = offscreen_gl
     proc = subprocess.run(
         [
             sys.executable,
