@@ -417,8 +417,23 @@ class SoccerParallelEnv(ParallelEnv):
             for p, t in zip(self.game.players, self.game.robot_types, strict=True):
                 types[p.index] = t
             self._scene = ScenePoser(types)
+            self._paint_teams(self._scene.scene)
             self._camera = FollowCamera(distance=9.0, elevation=-35.0, azimuth=90.0, follow="ball")
         return self._camera.render(self._scene.pose(world), *self.render_size)
+
+    def _paint_teams(self, scene: Any) -> None:
+        """The right team's robots drawn red (the left's keep their colours)."""
+        m = scene.model
+        roots = {
+            int(m.body_rootid[scene.robots[p.index].torso_body])
+            for p in self.game.players
+            if p.side == "right"
+        }
+        for g in range(m.ngeom):
+            if int(m.body_rootid[m.geom_bodyid[g]]) in roots:
+                r, gr, b, a = (float(v) for v in m.geom_rgba[g])
+                grey = (r + gr + b) / 3.0
+                m.geom_rgba[g] = (min(1.0, 0.45 + grey), 0.6 * grey, 0.6 * grey, a)
 
     def close(self) -> None:
         if self._camera is not None:
