@@ -63,15 +63,13 @@ def import_ray():
 
 
 class _BlockActor:
-    """The body of a Ray actor: one or more :class:`EnvBlock`, by block number. Ray runs an
-    actor's calls one at a time in the order they were sent, so while the learner computes one
-    block's actions the actor already steps its next block."""
+    """The body of a Ray actor: one :class:`EnvBlock`."""
 
-    def __init__(self, blocks: dict[int, tuple[list[Callable[[], gym.Env]], int]]) -> None:
-        self.blocks = {b: EnvBlock(fns, first) for b, (fns, first) in blocks.items()}
+    def __init__(self, env_fns: list[Callable[[], gym.Env]], first_index: int) -> None:
+        self.block = EnvBlock(env_fns, first_index)
 
-    def handle(self, block: int, cmd: str, data: Any) -> Any:
-        return self.blocks[block].handle(cmd, data)
+    def handle(self, cmd: str, data: Any) -> Any:
+        return self.block.handle(cmd, data)
 
     def node(self) -> str:
         import ray
@@ -79,8 +77,7 @@ class _BlockActor:
         return ray.get_runtime_context().get_node_id()
 
     def close(self) -> None:
-        for block in self.blocks.values():
-            block.close()
+        self.block.close()
 
 
 class RayVecEnv(BlockVecEnv):
@@ -146,17 +143,12 @@ class RayVecEnv(BlockVecEnv):
                 f"{cpus} (use fewer workers, --n-workers {max(1, cpus)}, or add nodes)"
             )
         self._start_blocks(n_envs, n_actors)
-        self._actor_of = list(range(n_actors))
-        """The actor (index into :attr:`actors`) hosting each block."""
-        self._generation = [0] * n_actors
-        """How many times each actor was started again (a lost call of an older one needs no
-        new actor)."""
         self._actor_class = ray.remote(num_cpus=1, max_restarts=0)(_BlockActor)
-        self._pending: list[tuple[str, Any, Any, int] | None] = [None] * len(self.blocks)
+        self._pending: list[tuple[str, Any, Any] | None] = [None] * len(self.blocks)
         self._ref_block: dict[Any, int] = {}
         self.actors: list[Any] = []
         try:
-            self.actors = [self._new_actor(a) for a in range(n_actors)]
+            self.actors = [self._new_actor(w) for w in range(n_actors)]
             for w in range(len(self.blocks)):
                 self._send(w, "get_spaces", None)
             spaces = self._from_every_worker(lambda w: _worker_failed(self._recv(w)))
@@ -167,54 +159,42 @@ class RayVecEnv(BlockVecEnv):
         super().__init__(n_envs, observation_space, action_space)
 
     # ------------------------------------------------------------------ actors
-    def _hosted(self, actor: int) -> list[int]:
-        return [b for b, a in enumerate(self._actor_of) if a == actor]
-
-    def _new_actor(self, actor: int):
-        hosted = self._hosted(actor)
-        blocks = {
-            b: ([self._env_fns[i] for i in self.blocks[b]], self.blocks[b].start) for b in hosted
-        }
-        handle = self._actor_class.remote(blocks)
+    def _new_actor(self, worker: int):
+        """A new actor hosting block ``worker`` (``blocks[worker]``), once it has started."""
+        block = self.blocks[worker]
+        handle = self._actor_class.remote([self._env_fns[i] for i in block], block.start)
         try:
             self._ray.get(handle.node.remote(), timeout=self.start_timeout_s)
         except self._ray.exceptions.GetTimeoutError:
             self._ray.kill(handle)
-            first, last = self.blocks[hosted[0]].start, self.blocks[hosted[-1]].stop - 1
             raise WorkersLostError(
-                f"no Ray worker for environments {first}–{last} could start within "
-                f"{self.start_timeout_s:g} s: the cluster has no free CPU left "
+                f"no Ray worker for environments {block.start}–{block.stop - 1} could start "
+                f"within {self.start_timeout_s:g} s: the cluster has no free CPU left "
                 f"({self._ray.available_resources().get('CPU', 0):g} available)"
             ) from None
         return handle
 
     def actor_nodes(self) -> list[str]:
-        """The Ray node id of each actor (``actors[a]`` hosts the blocks ``b`` with
-        ``actor_of(b) == a``)."""
+        """The Ray node id of each actor (``actors[w]`` hosts block ``blocks[w]``)."""
         return self._ray.get([a.node.remote() for a in self.actors])
-
-    def actor_of(self, block: int) -> int:
-        """The actor hosting block ``block``."""
-        return self._actor_of[block]
 
     # ------------------------------------------------------------------ BlockVecEnv
     def _send(self, worker: int, cmd: str, data: Any) -> None:
-        actor = self._actor_of[worker]
-        ref = self.actors[actor].handle.remote(worker, cmd, data)
-        self._pending[worker] = (cmd, data, ref, self._generation[actor])
+        ref = self.actors[worker].handle.remote(cmd, data)
+        self._pending[worker] = (cmd, data, ref)
         self._ref_block[ref] = worker
 
     def _recv(self, worker: int) -> Any:
         pending = self._pending[worker]
         if pending is None:
             return _WorkerError(f"worker {worker} was asked nothing")
-        cmd, data, ref, generation = pending
+        cmd, data, ref = pending
         self._pending[worker] = None
         self._ref_block.pop(ref, None)
         try:
             answer = self._ray.get(ref)
         except (self._ray.exceptions.RayActorError, self._ray.exceptions.ObjectLostError):
-            return self._replace(worker, cmd, data, generation)
+            return self._replace(worker, cmd, data)
         if cmd == "step" and not isinstance(answer, _WorkerError):
             self._remember(worker, answer[0])
         elif cmd == "reset" and not isinstance(answer, _WorkerError):
@@ -235,15 +215,11 @@ class RayVecEnv(BlockVecEnv):
             self._last_obs = np.zeros((self.num_envs, *obs.shape[1:]), dtype=obs.dtype)
         self._last_obs[block.start : block.stop] = obs
 
-    def _replace(self, worker: int, cmd: str, data: Any, generation: int) -> Any:
-        """Block ``worker``'s actor is gone: start its blocks again in a new actor (unless that
-        was done since the lost call was sent) and answer ``cmd`` as well as can be (a lost
-        step ends every episode of the block)."""
-        actor = self._actor_of[worker]
-        if generation == self._generation[actor]:
-            self.restarts += 1
-            self._generation[actor] += 1
-            self.actors[actor] = self._new_actor(actor)
+    def _replace(self, worker: int, cmd: str, data: Any) -> Any:
+        """Block ``worker``'s actor is gone: start the block again in a new actor and answer
+        ``cmd`` as well as can be (a lost step ends every episode of the block)."""
+        self.restarts += 1
+        self.actors[worker] = self._new_actor(worker)
         block = self.blocks[worker]
         if cmd == "rollout":  # played again from a reset
             self._send(worker, "reset", [(None, None)] * len(block))

@@ -48,6 +48,22 @@ def cluster():
         c.shutdown()
 
 
+def _small_run(timesteps: int, **fields) -> TrainConfig:
+    """VelocityKick in 4 environments on 2 workers with :data:`SMALL_PPO`, no evaluations or
+    checkpoints; ``fields`` over that."""
+    return TrainConfig(
+        task="velocity-kick",
+        timesteps=timesteps,
+        n_envs=4,
+        n_workers=2,
+        eval_freq=0,
+        checkpoint_freq=0,
+        checkpoint_every_s=0,
+        algo_kwargs=SMALL_PPO,
+        **fields,
+    )
+
+
 def _rollout(venv, steps: int, seed: int = 3):
     rng = np.random.default_rng(seed)
     venv.seed(11)
@@ -86,18 +102,7 @@ def test_a_run_on_ray_learns_the_same_policy_as_on_local_workers(tmp_path):
 
     params = {}
     for vec in ("subproc", "ray"):
-        cfg = TrainConfig(
-            task="velocity-kick",
-            timesteps=512,
-            n_envs=4,
-            n_workers=2,
-            eval_freq=0,
-            checkpoint_freq=0,
-            checkpoint_every_s=0,
-            vec_env=vec,
-            algo_kwargs=SMALL_PPO,
-        )
-        result = train(cfg, out=tmp_path / vec, progress=False)
+        result = train(_small_run(512, vec_env=vec), out=tmp_path / vec, progress=False)
         assert result.timesteps == 512
         params[vec] = PPO.load(result.run_dir / "model.zip").policy.state_dict()
     for name, value in params["subproc"].items():
@@ -162,18 +167,7 @@ def test_with_no_resources_left_the_run_saves_and_stops(cluster, tmp_path):
     c, nodes = cluster
     c.remove_node(nodes[2])  # two one-CPU nodes left, two actors: no spare
     c.remove_node(nodes[3])
-    cfg = TrainConfig(
-        task="velocity-kick",
-        timesteps=10_000_000,
-        n_envs=4,
-        n_workers=2,
-        eval_freq=0,
-        checkpoint_freq=0,
-        checkpoint_every_s=0,
-        vec_env="ray",
-        ray_start_timeout_s=5,
-        algo_kwargs=SMALL_PPO,
-    )
+    cfg = _small_run(10_000_000, vec_env="ray", ray_start_timeout_s=5)
     run_dir = tmp_path / "run"
 
     def remove_when_training() -> None:
