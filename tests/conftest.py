@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
 import tempfile
 import threading
+from pathlib import Path
 
 import pytest
 
@@ -71,3 +73,28 @@ def offscreen_gl() -> dict[str, str]:
     if not ok:
         pytest.skip("no OpenGL for MuJoCo's offscreen renderer here (set MUJOCO_GL=egl/osmesa)")
     return env
+
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+@pytest.fixture(scope="session")
+def run_benchmark():
+    """``run_benchmark("soccer.py", "--quick", timeout=300)`` runs ``benchmarks/<script>`` with
+    these arguments from the repository's root and returns ``(the JSON object of its last line,
+    the lines before it)``; a non-zero exit fails the test with the end of its stderr."""
+
+    def run(script: str, *args: object, timeout: float = 300, env: dict | None = None):
+        proc = subprocess.run(
+            [sys.executable, str(BENCHMARKS / script), *map(str, args)],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            cwd=BENCHMARKS.parent,
+            env=env,
+        )
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        lines = proc.stdout.strip().splitlines()
+        return json.loads(lines[-1]), lines[:-1]
+
+    return run

@@ -2,13 +2,7 @@
 
 from __future__ import annotations
 
-import json
 import math
-import subprocess
-import sys
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parents[2]
 
 KEYS = (
     "world_cycles_per_s",
@@ -33,17 +27,8 @@ ODE_KEYS = (
 )
 
 
-def test_throughput_quick_prints_json_last():
-    proc = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "throughput.py"), "--quick"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=ROOT,
-    )
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    last = proc.stdout.strip().splitlines()[-1]
-    result = json.loads(last)
+def test_throughput_quick_prints_json_last(run_benchmark):
+    result, _ = run_benchmark("throughput.py", "--quick", timeout=120)
     assert result["quick"] is True
     for key in KEYS:
         assert isinstance(result[key], float) and math.isfinite(result[key]) and result[key] > 0

@@ -554,26 +554,12 @@ def test_zero_actions_get_up_on_the_scripted_reference(robot_type, side):
 
 
 @pytest.mark.parametrize("script", ["walk.py", "getup.py"])
-def test_the_locomotion_benchmarks_print_json_last(script):
+def test_the_locomotion_benchmarks_print_json_last(script, run_benchmark):
     """``benchmarks/walk.py`` and ``benchmarks/getup.py`` with the zero-action baseline: the
     JSON is there; zero actions walk and get up as the reference gait and the scripted get-up
     do (from the front, on poses 20 and 21 of ``--pose-from``)."""
-    import json
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[2]
     extra = ["--pose-from", "20", "--robot-type", "0"] if script == "getup.py" else []
-    out = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / script), "zero", "--episodes", "2", *extra],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=root,
-        check=True,
-    ).stdout
-    res = json.loads(out.strip().splitlines()[-1])
+    res, _ = run_benchmark(script, "zero", "--episodes", 2, *extra, timeout=300)
     if script == "walk.py":
         # zero actions follow the reference gait: it walks forward, sideways and turns
         assert 0.4 < res["forward_speed_mps"] < 0.7

@@ -2,24 +2,9 @@
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-from pathlib import Path
 
-SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "protocol_parse.py"
-
-
-def test_benchmark_quick_prints_json_last() -> None:
-    proc = subprocess.run(
-        [sys.executable, str(SCRIPT), "--quick"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=True,
-    )
-    last = proc.stdout.strip().splitlines()[-1]
-    result = json.loads(last)
+def test_benchmark_quick_prints_json_last(run_benchmark) -> None:
+    result, _ = run_benchmark("protocol_parse.py", "--quick", timeout=120)
     for key in ("perception_msgs_per_s", "sexpr_msgs_per_s", "format_msgs_per_s"):
         assert isinstance(result[key], float) and result[key] > 0, key
     assert result["fixture_messages"] == 20

@@ -1,31 +1,12 @@
 """The sim benchmarks run in quick mode and print a JSON summary (no timing assertions)."""
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
 from robocup_gym.sim.engines.ode import available
 
-ROOT = Path(__file__).resolve().parents[2]
 
-
-def run_quick(script: str) -> dict:
-    """Run ``benchmarks/<script> --quick`` and return the JSON object of its last line."""
-    out = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / script), "--quick"],
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=300,
-    ).stdout
-    return json.loads(out.strip().splitlines()[-1])
-
-
-def test_fidelity_quick_reports_targets():
-    res = run_quick("fidelity.py")
+def test_fidelity_quick_reports_targets(run_benchmark):
+    res, _ = run_benchmark("fidelity.py", "--quick")
     assert res["total_mass_kg"] == 4.6071
     assert res["stand_fell"] is False
     assert abs(res["stand_torso_z_m"] - 0.384) < 0.005
@@ -40,12 +21,12 @@ def test_fidelity_quick_reports_targets():
         assert ode["stand_z_within_2mm"] and ode["stand_no_fall"], res["ode_stand_torso_z_m"]
 
 
-def test_ode_compare_quick_reports_the_motions():
+def test_ode_compare_quick_reports_the_motions(run_benchmark):
     """``benchmarks/ode_compare.py --quick`` (needs libode): the JSON names each motion with its
     distances, and the reference's own kick is the real server's."""
     if not available():
         pytest.skip("no double-precision libode here (apt-get install libode8)")
-    res = run_quick("ode_compare.py")
+    res, _ = run_benchmark("ode_compare.py", "--quick")
     assert abs(res["ode_kick_D_ball_m"] - 2.307) < 0.05
     rows = {r["motion"]: r for r in res["motions"]}
     assert set(rows) == {"stand", "kick_D", "ball_roll"}
@@ -53,19 +34,12 @@ def test_ode_compare_quick_reports_the_motions():
     assert rows["kick_D"]["ball_travel_m"][1] == pytest.approx(res["ode_kick_D_ball_m"], abs=1e-3)
 
 
-def test_ode_threads_reports_speed_and_exactness():
+def test_ode_threads_reports_speed_and_exactness(run_benchmark):
     """``benchmarks/ode_threads.py``: ODE's island threading set up, run and torn down cleanly
     (a short run: the speed-up and the bit-equality verdict are what it reports)."""
     if not available():
         pytest.skip("no double-precision libode here (apt-get install libode8)")
-    out = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "ode_threads.py"), "--cycles", "5"],
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=300,
-    ).stdout
-    res = json.loads(out.strip().splitlines()[-1])
+    res, _ = run_benchmark("ode_threads.py", "--cycles", 5)
     assert res["ode_22_robots_1_thread_cycles_per_s"] > 0
     assert res["ode_22_robots_2_threads_cycles_per_s"] > 0
     assert isinstance(res["bit_equal"], bool) and res["largest_state_difference"] >= 0.0

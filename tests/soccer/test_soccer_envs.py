@@ -233,21 +233,8 @@ def test_a_one_minute_eleven_against_eleven_game_runs_to_its_end(make):
     assert 0 < len(off) < 22
 
 
-def test_the_soccer_benchmark_reports_every_measure():
-    import json
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    script = Path(__file__).resolve().parents[2] / "benchmarks" / "soccer.py"
-    out = subprocess.run(
-        [sys.executable, str(script), "--quick"],
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=300,
-    ).stdout
-    res = json.loads(out.strip().splitlines()[-1])
+def test_the_soccer_benchmark_reports_every_measure(run_benchmark):
+    res, _ = run_benchmark("soccer.py", "--quick", timeout=300)
     for key in (
         "penalty_env_steps_per_s",
         "game_2v2_steps_per_s",

@@ -3,31 +3,16 @@ assertions)."""
 
 from __future__ import annotations
 
-import json
 import math
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
 
-
-def test_rollouts_quick_prints_json_last():
+def test_rollouts_quick_prints_json_last(run_benchmark):
     pytest.importorskip("stable_baselines3")
-    proc = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "rollouts.py"), "--quick", "--n-envs", "4"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=ROOT,
-    )
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    lines = proc.stdout.strip().splitlines()
-    result = json.loads(lines[-1])
+    result, lines = run_benchmark("rollouts.py", "--quick", "--n-envs", 4, timeout=300)
     names = ["lockstep", "pipelined", "overlapped", "workers"]
-    assert [line.split()[0] for line in lines[:-1]] == names
+    assert [line.split()[0] for line in lines] == names
     for name in names:
         for key in ("rollout_s", "update_s", "steps_per_s"):
             v = result[f"{name}_{key}"]

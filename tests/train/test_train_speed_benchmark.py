@@ -3,27 +3,12 @@ reports them against each other (no timing assertions)."""
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
 
-
-def test_training_speed_quick_prints_json_last():
+def test_training_speed_quick_prints_json_last(run_benchmark):
     pytest.importorskip("stable_baselines3")
-    proc = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "training_speed.py"), "--quick"],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        cwd=ROOT,
-    )
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    r = json.loads(proc.stdout.strip().splitlines()[-1])
+    r, _ = run_benchmark("training_speed.py", "--quick", timeout=600)
     for key in ("env_agent_steps_per_s_one_core", "vec_steps_per_s", "train_steps_per_s"):
         assert r[key] > 0, key
     limit = r["cores"] * r["env_agent_steps_per_s_one_core"]
