@@ -142,7 +142,8 @@ if typer is not None:
         task: Annotated[
             str | None,
             typer.Argument(
-                help="Task: velocity-kick, simple-kick, walk, getup (see `robocup-gym tasks`)."
+                help="Task: velocity-kick, simple-kick, walk, getup (see `robocup-gym tasks`), "
+                "or a team scenario: penalty, keepaway, game-2v2, game-3v3, …"
             ),
         ] = None,
         algo: Annotated[str | None, typer.Option(help="ppo or sac.")] = None,
@@ -272,12 +273,23 @@ if typer is not None:
                 "always; 60: the robot sits up by itself first).",
             ),
         ] = None,
+        selfplay: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--selfplay",
+                help="Team scenarios: opponent setting KEY=VALUE (repeatable): snapshot_every, "
+                "pool_size, scripted_share.",
+            ),
+        ] = None,
         progress: Annotated[bool, typer.Option(help="Show the progress bar.")] = True,
     ) -> None:
-        """Train a policy with Stable-Baselines3 (defaults: the paper's PPO setup).
+        """Train a policy with Stable-Baselines3 (defaults: the paper's PPO setup), or a team
+        on a team scenario (penalty, keepaway, game-2v2, …: one policy shared by the team's
+        players, against the scripted team and the policy's earlier versions).
 
         Writes runs/<task>-<algo>-<time>/ with config.yaml, model.zip, checkpoints/, tb/
-        (TensorBoard), progress.csv (learning curve) and evaluations.jsonl.
+        (TensorBoard), progress.csv (learning curve) and evaluations.jsonl; a team run also
+        opponents/ (the snapshot pool and the ratings).
         """
         from robocup_gym.train.config import TrainConfig
         from robocup_gym.train.trainer import train as run_training
@@ -293,10 +305,11 @@ if typer is not None:
                     or assist_steps is not None
                     or assist_max_tilt is not None
                     or assist_schedule is not None
+                    or selfplay
                 ):
                     _fail(
                         "--resume continues a run with its own config; "
-                        "give no TASK/--config/--init-from/--assist-*"
+                        "give no TASK/--config/--init-from/--assist-*/--selfplay"
                     )
                 result = run_training(
                     resume=resume,
@@ -312,6 +325,7 @@ if typer is not None:
                 if algo is not None and algo.lower() != cfg.algo:
                     algo_kw = {}  # hyperparameters of another algorithm do not carry over
                 algo_kw.update(_parse_assignments(hp, "--hp"))
+                selfplay_kw = {**cfg.selfplay, **_parse_assignments(selfplay, "--selfplay")}
                 cfg = cfg.merged(
                     task=task,
                     algo=algo,
@@ -324,6 +338,7 @@ if typer is not None:
                     eval_freq=eval_freq,
                     env_kwargs=env_kw,
                     algo_kwargs=algo_kw,
+                    selfplay=selfplay_kw,
                     init_from=None if init_from is None else str(init_from),
                     assist_force=assist_force,
                     assist_steps=assist_steps,
@@ -522,7 +537,10 @@ if typer is not None:
             f"obs {meta['input']['shape'][1]} → action {meta['output']['shape'][1]}; matches the "
             f"SB3 policy to {v['max_abs_diff']:.2e} on {v['samples']} observations"
         )
-        console.print(f"run it on a server: robocup-gym agent {onnx} --port 3100")
+        if str(meta.get("env_id", "")).startswith("soccer/"):
+            console.print(f"play it: robocup-gym match {onnx} scripted")
+        else:
+            console.print(f"run it on a server: robocup-gym agent {onnx} --port 3100")
         print(
             json.dumps(
                 {
@@ -677,11 +695,29 @@ if typer is not None:
     # ------------------------------------------------------------------------------ match
     @app.command()
     def match(
-        team_a: Annotated[str, typer.Argument(help="A team: scripted or standing.")],
+        team_a: Annotated[
+            str,
+            typer.Argument(
+                help="A team: scripted, standing, a team run's folder, an exported team policy "
+                "(.onnx) or pretrained:NAME."
+            ),
+        ],
         team_b: Annotated[str, typer.Argument(help="The other team.")],
         games: Annotated[int, typer.Option(help="Games to play (sides change every game).")] = 20,
-        players: Annotated[int, typer.Option(help="Players a side (1-11).")] = 2,
-        seconds: Annotated[float, typer.Option(help="Game time of each game, s.")] = 120.0,
+        players: Annotated[
+            int | None, typer.Option(help="Players a side (1-11; default 2, a penalty 1).")
+        ] = None,
+        seconds: Annotated[
+            float | None,
+            typer.Option(help="Game time of each game, s (default 120; a penalty's 10)."),
+        ] = None,
+        scenario: Annotated[
+            str,
+            typer.Option(
+                help="game, or penalty: the first team's striker against the second's "
+                "goalkeeper in every game."
+            ),
+        ] = "game",
         types: Annotated[
             str | None,
             typer.Option(help="Each team's robot types, e.g. 0,1 (default 0,1,2,3,4 in turn)."),
@@ -734,11 +770,18 @@ if typer is not None:
                 seed=seed,
                 on_game=progress,
                 video=video,
+                scenario=scenario,
             )
         except (ValueError, RuntimeError) as exc:
             _fail(str(exc))
         summary = result.summary
-        table = Table(title=f"{team_a} against {team_b}: {players} a side, {seconds:g} s a game")
+        first = result.games[0]
+        if scenario == "penalty":
+            title = f"{team_a}'s striker against {team_b}'s goalkeeper: {first.seconds:g} s each"
+        else:
+            per_side = players if players is not None else 2
+            title = f"{team_a} against {team_b}: {per_side} a side, {first.seconds:g} s a game"
+        table = Table(title=title)
         for col in ("games", "wins", "draws", "losses", "goals for", "goals against", "ci95"):
             table.add_column(col, justify="right")
         table.add_row(
@@ -855,6 +898,21 @@ if typer is not None:
                 engine=engine,
                 console=_console(),
             )
+        except (ValueError, FileNotFoundError) as exc:
+            _fail(str(exc))
+        print(json.dumps(summary), flush=True)
+
+    @experiments_app.command("team")
+    def experiments_team(
+        runs: Annotated[list[Path], typer.Argument(help="Team run folders (train game-2v2 …).")],
+        out: Annotated[Path, typer.Option(help="Output folder.")] = Path("runs/team"),
+    ) -> None:
+        """Learning curves of team runs as CSV + PNG: the goal difference and win rate against
+        the scripted team and the TrueSkill rating against steps."""
+        from robocup_gym.train.experiments import team_curves
+
+        try:
+            summary = team_curves(list(runs), out)
         except (ValueError, FileNotFoundError) as exc:
             _fail(str(exc))
         print(json.dumps(summary), flush=True)

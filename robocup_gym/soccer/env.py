@@ -380,6 +380,12 @@ class SoccerParallelEnv(ParallelEnv):
                 commands[self.game.index(name)] = self._mappers[name].command(a, self._angles[name])
         return commands
 
+    def goalkeepers(self) -> set[str]:
+        """The agents that play goalkeeper (for scripted teams): uniform number 1 of a team of
+        several players; a scenario may say otherwise."""
+        teams = teams_of(self.config)
+        return {names[0] for names in teams.values() if len(names) > 1}
+
     def side_of(self, agent: str) -> str:
         """``"left"`` or ``"right"``."""
         self._observer(agent)

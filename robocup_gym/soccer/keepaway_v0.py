@@ -45,6 +45,9 @@ class KeepawayEnv(SoccerParallelEnv):
         if not self.config.left_types or not self.config.right_types:
             raise ValueError("keepaway needs attackers (left_types) and defenders (right_types)")
 
+    def goalkeepers(self) -> set[str]:
+        return set()  # nobody guards a goal
+
     def _start(self, rng: np.random.Generator) -> Start:
         h = self.area / 2
         c = self.config

@@ -2,6 +2,8 @@
 
 Each game is :mod:`robocup_gym.soccer.game_v0` with skill actions, ``players`` a side, for
 ``seconds`` of game time; the teams change sides every game (team A plays left in the first).
+With ``scenario="penalty"`` each game is a penalty (:mod:`robocup_gym.soccer.penalty_v0`):
+team A's striker against team B's goalkeeper.
 The result is counted from team A's side: wins, draws, losses, goals for and against, and a 95 %
 interval of the mean goal difference per game (normal approximation, from two games on).
 """
@@ -12,31 +14,49 @@ import math
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from robocup_gym.soccer import game_v0
+from robocup_gym.soccer import game_v0, penalty_v0
 from robocup_gym.soccer.scripted import TEAMS
 
 __all__ = ["GameResult", "MatchResult", "make_team", "play_match"]
 
-Team = Callable[[Any, list[str]], dict[str, np.ndarray]]
+PENALTY_START_NOISE_M = 0.3
+"""A match's penalties start with the ball up to this far sideways of its spot (and the players
+with it), m."""
+
+Team = Callable[[Any, list[str], dict[str, np.ndarray]], dict[str, np.ndarray]]
+"""A team: ``team(env, agents, obs) → {agent: skill action}``."""
 
 
 def make_team(spec: str) -> Team:
-    """A team by name (``scripted``, ``standing``).
+    """A team by name: ``scripted``, ``standing``, a team run's folder, an exported team policy
+    (``.onnx``) or a shipped one (``pretrained:NAME``).
 
     Raises:
-        ValueError: an unknown team (naming the known ones).
+        ValueError: an unknown team (naming the known ones), or a policy that is not a team's.
     """
     cls = TEAMS.get(spec)
-    if cls is None:
-        raise ValueError(
-            f"unknown team {spec!r}; teams: {', '.join(sorted(TEAMS))} "
-            "(learnt teams come with self-play training)"
-        )
-    return cls()
+    if cls is not None:
+        return cls()
+    from robocup_gym.soccer.learnt import PolicyTeam
+
+    if spec.startswith("pretrained:"):
+        from robocup_gym.train.pretrained import pretrained_path
+
+        return PolicyTeam.from_onnx(pretrained_path(spec.split(":", 1)[1]), name=spec)
+    path = Path(spec)
+    if path.suffix == ".onnx" and path.is_file():
+        return PolicyTeam.from_onnx(path)
+    if path.is_dir():
+        return PolicyTeam.from_run(path)
+    raise ValueError(
+        f"unknown team {spec!r}; teams: {', '.join(sorted(TEAMS))}, a team run's folder, an "
+        "exported team policy (.onnx) or pretrained:NAME"
+    )
 
 
 @dataclass
@@ -89,19 +109,24 @@ def play_match(
     team_b: str,
     *,
     games: int = 20,
-    players: int = 2,
-    seconds: float = 120.0,
+    players: int | None = None,
+    seconds: float | None = None,
     robot_types: Sequence[int] | None = None,
     engine: str = "ode",
     seed: int = 0,
     on_game: Callable[[int, GameResult], None] | None = None,
     video: str | os.PathLike | None = None,
+    scenario: str = "game",
 ) -> MatchResult:
     """Play ``games`` games of ``team_a`` against ``team_b``.
 
     Args:
-        players: Players a side (1–11).
-        seconds: Game time of each game, s.
+        players: Players a side (1–11; default 2; a penalty has 1).
+        seconds: Game time of each game, s (default 120; a penalty's: 10).
+        scenario: ``"game"`` (:mod:`.game_v0`; the teams change sides every game) or
+            ``"penalty"`` (:mod:`.penalty_v0`: team A's striker against team B's goalkeeper
+            in every game, which ends at a goal, when the ball leaves the field or after
+            ``seconds``; the ball's spot varies by up to 0.3 m sideways).
         robot_types: Each team's robot types (default: types 0, 1, 2, 3, 4 in turn).
         seed: Game k is seeded with ``seed + k``.
         on_game: Called after each game.
@@ -113,6 +138,13 @@ def play_match(
     """
     if isinstance(games, bool) or not isinstance(games, int) or games < 1:
         raise ValueError(f"games must be a positive integer, got {games!r}")
+    if scenario not in ("game", "penalty"):
+        raise ValueError(f"scenario must be 'game' or 'penalty', got {scenario!r}")
+    penalty = scenario == "penalty"
+    players = (1 if penalty else 2) if players is None else players
+    seconds = (10.0 if penalty else 120.0) if seconds is None else float(seconds)
+    if penalty and players != 1:
+        raise ValueError(f"a penalty has 1 player a side, got {players!r}")
     if not 1 <= int(players) <= 11:
         raise ValueError(f"players must be 1-11 a side, got {players!r}")
     if not (math.isfinite(seconds) and seconds > 0):
@@ -130,24 +162,30 @@ def play_match(
         ensure_gl_backend()
         check_renderer()
         recorder = FrameRecorder(every=2)  # 25 frames a second of game time
-    env = game_v0.parallel_env(
-        actions="skills",
-        left_types=types,
-        right_types=types,
-        engine=engine,
-        max_cycles=cycles,
-        render_mode=None if video is None else "rgb_array",
-    )
+    privileged = any(getattr(t, "privileged", False) for t in (a, b))
+    options: dict[str, Any] = {
+        "actions": "skills",
+        "privileged": privileged,
+        "left_types": types,
+        "right_types": types,
+        "engine": engine,
+        "max_cycles": cycles,
+        "render_mode": None if video is None else "rgb_array",
+    }
+    if penalty:
+        env = penalty_v0.parallel_env(start_noise=PENALTY_START_NOISE_M, **options)
+    else:
+        env = game_v0.parallel_env(**options)
     try:
         for k in range(games):
-            a_side = "left" if k % 2 == 0 else "right"
+            a_side = "left" if k % 2 == 0 or penalty else "right"
             env.cycle_hook = recorder if k == 0 else None
-            env.reset(seed=seed + k)
+            obs, _ = env.reset(seed=seed + k)
             diverged = False
             while env.agents:
                 mine = [n for n in env.agents if n.startswith(a_side)]
                 theirs = [n for n in env.agents if not n.startswith(a_side)]
-                _, _, _, _, infos = env.step({**a(env, mine), **b(env, theirs)})
+                obs, _, _, _, infos = env.step({**a(env, mine, obs), **b(env, theirs, obs)})
                 diverged = diverged or any("diverged" in i for i in infos.values())
             g = env.game.world.game
             own, other = (

@@ -47,6 +47,9 @@ class PenaltyEnv(SoccerParallelEnv):
             ball=(bx, by),
         )
 
+    def goalkeepers(self) -> set[str]:
+        return {"right_1"}
+
     def _ended(self, report: CycleReport) -> str | None:
         if report.goal is not None:
             return f"goal for the {report.goal} team"

@@ -3,13 +3,14 @@ game.
 
 :class:`ScriptedTeam` plays the obvious football: the player nearest the ball walks to the spot
 from which the scripted kick sends the ball toward the opponent goal, turns, and kicks; the
-goalkeeper (uniform number 1) stays between the ball and the middle of its goal; the others
+goalkeeper (the scenario's: uniform number 1 of a team of several; the penalty's keeper) stays
+between the ball and the middle of its goal; the others
 follow the play 3 m behind the ball. It reads the positions of the ball and its own players
 from ground truth (a team on a real server would localise from vision). :class:`StandingTeam`
 stands still.
 
-A team is called with the environment and the names of its agents and returns their skill
-actions (``robocup_gym.soccer.skills.SKILL_ACTION_LABELS``).
+A team is called with the environment, the names of its agents and (optionally) their
+observations, and returns their skill actions (``robocup_gym.soccer.skills.SKILL_ACTION_LABELS``).
 """
 
 from __future__ import annotations
@@ -82,7 +83,9 @@ class StandingTeam:
 
     name = "standing"
 
-    def __call__(self, env: Any, agents: list[str]) -> dict[str, np.ndarray]:
+    def __call__(
+        self, env: Any, agents: list[str], obs: dict[str, np.ndarray] | None = None
+    ) -> dict[str, np.ndarray]:
         return {a: np.zeros(4) for a in agents}
 
 
@@ -91,7 +94,9 @@ class ScriptedTeam:
 
     name = "scripted"
 
-    def __call__(self, env: Any, agents: list[str]) -> dict[str, np.ndarray]:
+    def __call__(
+        self, env: Any, agents: list[str], obs: dict[str, np.ndarray] | None = None
+    ) -> dict[str, np.ndarray]:
         game = env.game
         world = game.world
         ball = world.ball_position()[:2]
@@ -103,8 +108,11 @@ class ScriptedTeam:
         own_goal = -goal
         positions = {a: world.torso_position(game.index(a))[:2] for a in agents}
         headings = {a: heading_frame(world.torso_quat(game.index(a))) for a in agents}
-        field_players = [a for a in agents if not a.endswith("_1") or len(agents) == 1]
-        chaser = min(field_players, key=lambda a: float(np.hypot(*(positions[a] - ball))))
+        keepers = env.goalkeepers()
+        field_players = [a for a in agents if a not in keepers]
+        chaser = min(
+            field_players, key=lambda a: float(np.hypot(*(positions[a] - ball))), default=None
+        )
         out = {}
         to_goal = (goal - ball) / max(float(np.hypot(*(goal - ball))), 1e-6)
         right = np.array([to_goal[1], -to_goal[0]])  # the kicker's right, facing the goal
@@ -124,7 +132,7 @@ class ScriptedTeam:
                     act = _walk_to(pos, heading, spot, goal, top=_CREEP)
                     if _in_kick_reach(pos, heading, ball, to_goal):
                         act[3] = 1.0
-            elif a.endswith("_1"):  # the goalkeeper
+            elif a in keepers:
                 d = ball - own_goal
                 guard = own_goal + _GOALIE_DISTANCE_M * d / max(float(np.hypot(*d)), 1e-6)
                 act = _walk_to(pos, heading, guard, ball)

@@ -17,8 +17,14 @@ from robocup_gym.train.metrics import episode_record, summarize
 
 
 def task_measure(summary: dict[str, Any]) -> str:
-    """The task's own measure in a summary, for the training display: GetUp's success rate,
-    Walk's forward speed and tracking error, else (the kicks) the ball's x-displacement."""
+    """The task's own measure in a summary, for the training display: a team's goal difference
+    against the scripted team and its rating, GetUp's success rate, Walk's forward speed and
+    tracking error, else (the kicks) the ball's x-displacement."""
+    if "rating_mu" in summary:  # a team: its recent games
+        return (
+            f"vs scripted {_fmt(summary.get('goal_difference_vs_scripted'), '+.2f')} goals/game"
+            f" · rating {_fmt(summary.get('rating_mu'), '.1f')}"
+        )
     if summary.get("success_rate") is not None:
         return f"success {_fmt(summary['success_rate'])}"
     if summary.get("forward_speed_mps_mean") is not None:
@@ -62,8 +68,15 @@ class EpisodeStatsCallback(BaseCallback):
         window: int = 100,
         wall_offset_s: float = 0.0,
         episodes_offset: int = 0,
+        extra_fields: tuple[str, ...] = (),
+        extra: Any = None,
     ) -> None:
         super().__init__()
+        self.extra_fields = tuple(extra_fields)
+        """More columns of ``curve_path``, after :data:`CURVE_FIELDS`, …"""
+        self.extra = extra
+        """… and what gives their values: ``extra() → {field: value}`` (a self-play run's
+        games)."""
         self.curve_path = curve_path
         self.curve_every = max(1, int(curve_every))
         self.recent: deque[dict[str, float]] = deque(maxlen=window)
@@ -90,7 +103,7 @@ class EpisodeStatsCallback(BaseCallback):
         self._ep_lengths = np.zeros(n, dtype=int)
         if self.curve_path is not None and not self.curve_path.exists():
             with self.curve_path.open("w", newline="") as f:
-                csv.writer(f).writerow(CURVE_FIELDS)
+                csv.writer(f).writerow(CURVE_FIELDS + self.extra_fields)
 
     def _on_step(self) -> bool:
         rewards = self.locals.get("rewards")
@@ -153,7 +166,10 @@ class EpisodeStatsCallback(BaseCallback):
         return self.wall_offset_s + time.perf_counter() - self._t0
 
     def summary(self) -> dict[str, Any]:
-        return summarize(self.recent)
+        out = summarize(self.recent)
+        if self.extra is not None:
+            out.update(self.extra())
+        return out
 
     def overall_steps_per_s(self) -> float:
         """Steps per second since this start (a resumed run's earlier steps not counted)."""
@@ -176,6 +192,9 @@ class EpisodeStatsCallback(BaseCallback):
             s["fall_rate"],
             round(self.overall_steps_per_s(), 1),
         ]
+        if self.extra_fields:
+            values = self.extra() if self.extra is not None else {}
+            row += [values.get(k) for k in self.extra_fields]
         with self.curve_path.open("a", newline="") as f:
             csv.writer(f).writerow(["" if v is None else v for v in row])
 

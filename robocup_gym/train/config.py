@@ -36,7 +36,7 @@ from robocup_gym.backends import (
     resolve_backend,
 )
 from robocup_gym.train.algos import ALGOS
-from robocup_gym.train.tasks import resolve_task
+from robocup_gym.train.tasks import is_team_task, resolve_task
 
 PPO_PAPER_DEFAULTS: dict[str, Any] = {
     "learning_rate": 1e-4,
@@ -86,6 +86,18 @@ TASK_ALGO_DEFAULTS: dict[tuple[str, str], dict[str, Any]] = {
 """Hyperparameters a task's reference policy was trained with where they differ from the
 paper's, by (Gymnasium id, algorithm): :meth:`TrainConfig.resolved_algo_kwargs` puts them
 between the paper's defaults and the run's own ``algo_kwargs``."""
+
+TEAM_PPO_DEFAULTS: dict[str, Any] = {
+    # a decision every 10 cycles (0.2 s): rollouts of 25.6 s of play per player, plain
+    # Gaussian exploration over the skill actions (walk velocity, kick)
+    "learning_rate": 3e-4,
+    "n_steps": 128,
+    "batch_size": 512,
+    "use_sde": False,
+    "policy_kwargs": {"log_std_init": -0.5},
+}
+"""PPO's hyperparameters for the team scenarios (``penalty``, ``keepaway``, ``game-NvN``),
+where they differ from the paper's."""
 
 DEFAULT_N_ENVS = 16
 """The paper's number of worker environments."""
@@ -221,6 +233,10 @@ class TrainConfig:
     environments."""
     start_method: str = ""
     """multiprocessing start method for subprocess envs ('' = forkserver where available)."""
+    selfplay: dict[str, Any] = field(default_factory=dict)
+    """Team scenarios: how opponents are drawn (``snapshot_every``, ``pool_size``,
+    ``scripted_share``; :class:`robocup_gym.train.selfplay.SelfPlaySettings`), over the
+    defaults."""
 
     def __post_init__(self) -> None:
         self.algo = self.algo.lower()
@@ -275,6 +291,9 @@ class TrainConfig:
             raise ValueError(f"assist_steps must be >= 0, got {self.assist_steps}")
         if self.vec_env not in VEC_ENVS:
             raise ValueError(f"vec_env must be one of {', '.join(VEC_ENVS)}, got {self.vec_env!r}")
+        from robocup_gym.train.selfplay import SelfPlaySettings
+
+        SelfPlaySettings.of(self.selfplay)  # an unknown setting or a bad value: named here
         if self.ray_address and self.vec_env != "ray":
             raise ValueError(f"ray_address {self.ray_address!r} needs vec_env='ray'")
 
@@ -283,7 +302,10 @@ class TrainConfig:
         """The paper's defaults for :attr:`algo`, the task's own (:data:`TASK_ALGO_DEFAULTS`)
         over them, and :attr:`algo_kwargs` over those (``policy_kwargs`` merged key by key)."""
         merged = algo_defaults(self.algo)
-        task = TASK_ALGO_DEFAULTS.get((self._task_id(), self.algo.lower()), {})
+        task_id = self._task_id()
+        task = TASK_ALGO_DEFAULTS.get((task_id, self.algo.lower()), {})
+        if is_team_task(task_id) and self.algo == "ppo":
+            task = TEAM_PPO_DEFAULTS
         for layer in (task, self.algo_kwargs):
             for key, value in copy.deepcopy(layer).items():
                 if key == "policy_kwargs" and isinstance(value, dict):

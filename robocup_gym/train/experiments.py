@@ -557,3 +557,84 @@ def run_locomotion(
     summary["wall_s"] = round(time.perf_counter() - t0, 1)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
+
+
+TEAM_COLUMNS = (
+    "run",
+    "seed",
+    "steps",
+    "wall_s",
+    "games",
+    "goal_difference_vs_scripted",
+    "win_rate_vs_scripted",
+    "goals_for_mean",
+    "goals_against_mean",
+    "rating_mu",
+    "rating_sigma",
+)
+"""Columns of a team learning curve (:func:`team_curves`)."""
+
+
+def team_curves(runs: list[str | Path], out: str | Path) -> dict[str, Any]:
+    """The learning curves of team runs (``robocup-gym train game-2v2 …``) from their
+    ``progress.csv``: the goal difference and win rate against the scripted team and the
+    TrueSkill rating against steps, as ``fig_team.csv`` and ``fig_team.png`` in ``out``.
+    Returns where they went and each run's last row.
+
+    Raises:
+        ValueError: a folder that is not a team run.
+    """
+    from robocup_gym.train.tasks import is_team_task
+
+    rows: list[dict[str, Any]] = []
+    for run in runs:
+        info = load_run(run)
+        if not is_team_task(info.config.env_id):
+            raise ValueError(f"{info.path} is a run of {info.config.task}, not of a team scenario")
+        for r in _read_curve(info.path):
+            row = {k: r.get(k) for k in TEAM_COLUMNS if k not in ("run", "seed")}
+            rows.append({"run": info.path.name, "seed": info.config.seed, **row})
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path, png_path = out / "fig_team.csv", out / "fig_team.png"
+    with csv_path.open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=TEAM_COLUMNS)
+        w.writeheader()
+        w.writerows(rows)
+    _plot_team(rows, png_path)
+    last = {}
+    for row in rows:
+        if row["run"] not in last or row["steps"] >= last[row["run"]]["steps"]:
+            last[row["run"]] = row
+    return {"csv": str(csv_path), "png": str(png_path), "last": list(last.values())}
+
+
+def _plot_team(rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    for run in sorted({r["run"] for r in rows}):
+        mine = sorted((r for r in rows if r["run"] == run), key=lambda r: r["steps"])
+        steps = np.array([r["steps"] for r in mine], float)
+
+        def col(key: str, rows_: list[dict[str, Any]] = mine) -> np.ndarray:
+            return np.array([np.nan if r[key] is None else r[key] for r in rows_], float)
+
+        axes[0].plot(steps, col("goal_difference_vs_scripted"), "o-", ms=3, label=run)
+        mu, sigma = col("rating_mu"), col("rating_sigma")
+        axes[1].plot(steps, mu, "-", label=run)
+        axes[1].fill_between(steps, mu - sigma, mu + sigma, alpha=0.2)
+    axes[0].axhline(0.0, color="grey", lw=0.8)
+    axes[0].set_ylabel("goal difference per game against the scripted team")
+    axes[1].set_ylabel("TrueSkill rating (μ ± σ)")
+    for ax in axes:
+        ax.set_xlabel("environment steps (player decisions)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("Team self-play: recent training games")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -29,6 +29,7 @@ from robocup_gym.train.onnx_policy import (  # noqa: F401 (import path kept)
     METADATA_KEY,
     OUTPUT_NAME,
     OnnxPolicy,
+    one_thread_options,
     read_metadata,
 )
 from robocup_gym.train.run import (
@@ -38,7 +39,7 @@ from robocup_gym.train.run import (
     load_run,
     space_mismatch,
 )
-from robocup_gym.train.tasks import make_env
+from robocup_gym.train.tasks import is_team_task, make_env, task_name
 
 FORMAT = "robocup-gym-policy/1"
 
@@ -101,8 +102,13 @@ def _sample_observations(info: RunInfo, model, obs_space, n_random: int, seed: i
     u = rng.uniform(0.0, 1.0, samples.shape)
     samples = np.where(finite, low + u * (high - low), samples)
     rows = [samples.astype(np.float32)]
+    cfg = info.config
+    if is_team_task(cfg.env_id):
+        from robocup_gym.train.selfplay import team_observations
+
+        rows.append(team_observations(task_name(cfg.env_id), cfg.env_options(), seed=seed))
+        return np.concatenate(rows, axis=0)
     try:
-        cfg = info.config
         env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options())
         seen: list[np.ndarray] = []
         orig_step = env.step
@@ -138,6 +144,10 @@ def _env_description(info: RunInfo, env_kwargs: dict[str, Any], model=None) -> d
     """
 
     cfg = info.config
+    if is_team_task(cfg.env_id):
+        from robocup_gym.train.selfplay import team_description
+
+        return team_description(cfg.env_options(**env_kwargs))
     out: dict[str, Any] = {}
     try:
         env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options(**env_kwargs))
@@ -239,7 +249,9 @@ def export_onnx(
     expected, _ = model.predict(
         normalizer(obs) if normalizer is not None else obs, deterministic=True
     )
-    session = ort.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
+    session = ort.InferenceSession(  # as OnnxPolicy runs it
+        str(onnx_path), sess_options=one_thread_options(ort), providers=["CPUExecutionProvider"]
+    )
     got = session.run([OUTPUT_NAME], {INPUT_NAME: obs.astype(np.float32)})[0]
     max_diff = float(np.max(np.abs(got - expected)))
     if not max_diff <= atol:

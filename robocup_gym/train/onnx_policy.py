@@ -10,7 +10,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["INPUT_NAME", "METADATA_KEY", "OUTPUT_NAME", "OnnxPolicy", "read_metadata"]
+__all__ = [
+    "INPUT_NAME",
+    "METADATA_KEY",
+    "OUTPUT_NAME",
+    "OnnxPolicy",
+    "one_thread_options",
+    "read_metadata",
+]
 
 METADATA_KEY = "robocup_gym"
 """Key of the description in the ONNX file's metadata."""
@@ -32,6 +39,18 @@ def read_metadata(onnx_path: str | os.PathLike) -> dict[str, Any]:
     raise ValueError(f"{onnx_path} carries no robocup_gym metadata (not exported by robocup-gym?)")
 
 
+def one_thread_options(ort):
+    """Session options for a small policy network: one thread, which does not spin while it
+    waits. ONNX Runtime's default (a thread per core, spinning between calls) takes a core from
+    every other process of a machine whose cores are all busy with simulation (the training
+    workers), for no gain on matrices this small."""
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    options.inter_op_num_threads = 1
+    options.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    return options
+
+
 class OnnxPolicy:
     """An exported policy: ``policy(obs) → action`` with ONNX Runtime (no torch needed)."""
 
@@ -40,7 +59,11 @@ class OnnxPolicy:
 
         self.path = Path(onnx_path)
         try:
-            self.session = ort.InferenceSession(str(self.path), providers=["CPUExecutionProvider"])
+            self.session = ort.InferenceSession(
+                str(self.path),
+                sess_options=one_thread_options(ort),
+                providers=["CPUExecutionProvider"],
+            )
             self.metadata = read_metadata(self.path)
         except ValueError:
             raise

@@ -69,10 +69,33 @@ def resolve_task(task: str) -> str:
     loose = {name.replace("-", ""): env_id for name, env_id in tasks.items()}
     if key.replace("-", "") in loose:  # getup, velocitykick
         return loose[key.replace("-", "")]
+    team = _team_task_id(key)
+    if team is not None:
+        return team
     known = ", ".join(tasks) or "(none registered: robocup_gym.envs did not register any task)"
     raise ValueError(
-        f"unknown task {task!r}; known tasks: {known} (or any registered Gymnasium id)"
+        f"unknown task {task!r}; known tasks: {known}; team scenarios: penalty, keepaway, "
+        "game-NvN (or any registered Gymnasium id)"
     )
+
+
+TEAM_TASK_PREFIX = "soccer/"
+"""Ids of the team scenarios (``soccer/game-2v2``): :mod:`robocup_gym.train.selfplay`."""
+
+
+def _team_task_id(key: str) -> str | None:
+    """``soccer/<name>`` for a team scenario's name (``penalty``, ``game-2v2``), else ``None``."""
+    if not (key in ("penalty", "keepaway") or key.startswith("game-")):
+        return None
+    from robocup_gym.soccer.team_view import team_scenario  # needs the soccer extra
+
+    team_scenario(key)  # an impossible game (game-2v3, game-12v12): its own error
+    return TEAM_TASK_PREFIX + key
+
+
+def is_team_task(env_id: str) -> bool:
+    """Whether ``env_id`` is a team scenario (one policy for a team's players)."""
+    return env_id.startswith(TEAM_TASK_PREFIX)
 
 
 def is_robocup_task(env_id: str) -> bool:
@@ -80,7 +103,8 @@ def is_robocup_task(env_id: str) -> bool:
 
 
 def task_name(env_id: str) -> str:
-    """Short name of an id for folder names (``RobocupGym/VelocityKick-v0`` → ``velocity-kick``)."""
+    """Short name of an id for folder names (``RobocupGym/VelocityKick-v0`` → ``velocity-kick``,
+    ``soccer/game-2v2`` → ``game-2v2``)."""
     base = env_id.split("/", 1)[-1]
     return kebab(_VERSION.sub("", base)) if is_robocup_task(env_id) else base.lower()
 
@@ -98,6 +122,11 @@ def make_env(
     own ``TimeLimit`` and leave the task's episode length, after which it computes its final
     reward, as it was); the ``TimeLimit`` gets the same number."""
     kwargs = dict(env_kwargs or {})
+    if is_team_task(env_id):
+        raise ValueError(
+            f"{task_name(env_id)} is a team scenario, not a single-agent environment: its "
+            "players train together (robocup-gym train), and teams play with robocup-gym match"
+        )
     if is_robocup_task(env_id):
         _register_tasks()  # subprocess workers start with an empty registry
         kwargs.setdefault("backend", backend)
@@ -152,6 +181,10 @@ def resolved_env_config(env_id: str, env_kwargs: dict[str, Any] | None) -> dict[
         ValueError: (:class:`~robocup_gym.envs.config.EnvConfigError`) naming the option and the
             valid ones, or the value and what it must be.
     """
+    if is_team_task(env_id):
+        from robocup_gym.soccer.team_view import scenario_options
+
+        return scenario_options(task_name(env_id), env_kwargs)
     config = _config_of(env_id, env_kwargs)
     if config is None:
         return {}

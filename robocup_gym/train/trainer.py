@@ -16,7 +16,13 @@ from robocup_gym.train.algos import algo_class, validate_algo_kwargs
 from robocup_gym.train.config import TrainConfig
 from robocup_gym.train.ray_vecenv import WorkersLostError
 from robocup_gym.train.run import checkpoints, curve_so_far, load_run, new_run_dir
-from robocup_gym.train.tasks import make_env, resolve_task, resolved_env_config, task_name
+from robocup_gym.train.tasks import (
+    is_team_task,
+    make_env,
+    resolve_task,
+    resolved_env_config,
+    task_name,
+)
 
 
 @dataclass
@@ -78,7 +84,16 @@ def prepare_run(
     config = config.merged(env_id=env_id)
     # check the options (before any folder or worker exists) and freeze every option of the
     # environment, so that the run keeps it if a default changes
-    config = config.merged(env_config=resolved_env_config(env_id, config.env_options()))
+    options = config.env_options()
+    if is_team_task(env_id):
+        if config.backend not in ("ode", "mujoco"):
+            raise ValueError(
+                f"team scenarios run in-process on the ode or mujoco engine, not {config.backend!r}"
+            )
+        if config.assist_force > 0.0:
+            raise ValueError("assist_force pushes one robot; team scenarios have none")
+        options.setdefault("engine", config.backend)
+    config = config.merged(env_config=resolved_env_config(env_id, options))
     validate_algo_kwargs(config.algo, config.algo_kwargs)
     if run_dir is None:
         path = new_run_dir(out, task_name(env_id), config.algo)
@@ -193,14 +208,21 @@ def train(
         TorchThreadsCallback,
     )
 
+    team = None
+    if is_team_task(cfg.env_id):
+        from robocup_gym.train.selfplay import SELFPLAY_FIELDS, SelfPlayCallback, SelfPlaySettings
+
+        team = SelfPlayCallback(path / "opponents", SelfPlaySettings.of(cfg.selfplay))
     stats = EpisodeStatsCallback(
         curve_path=curve,
         curve_every=curve_every or max(1000, cfg.timesteps // 200),
         wall_offset_s=wall0,
         episodes_offset=episodes0,
+        extra_fields=SELFPLAY_FIELDS if team is not None else (),
+        extra=team.figures if team is not None else None,
     )
     stopper = StopOnSignal()
-    callbacks: list = [stopper, stats]
+    callbacks: list = [stopper, stats] + ([team] if team is not None else [])
     if cfg.torch_threads != 1 and cfg.n_envs > 1 and cfg.vec_env != "dummy":
         # several threads for the gradient steps only, one while the environments run
         callbacks.append(TorchThreadsCallback(rollout_threads=1, train_threads=cfg.torch_threads))
@@ -236,7 +258,7 @@ def train(
             )
         )
     evaluator = None
-    if cfg.eval_freq > 0 and cfg.eval_episodes > 0:
+    if cfg.eval_freq > 0 and cfg.eval_episodes > 0 and team is None:
         evaluator = PeriodicEvalCallback(
             lambda: make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options()),
             cfg.eval_freq,
@@ -302,7 +324,10 @@ def train(
     say(f"model: [cyan]{path / 'model.zip'}[/cyan]")
     if interrupted and steps_done < cfg.timesteps:
         say(f"continue: robocup-gym train --resume {path}")
-    say(f"next: robocup-gym eval {path}")
+    if team is not None:
+        say(f"next: robocup-gym match {path} scripted")
+    else:
+        say(f"next: robocup-gym eval {path}")
     return result
 
 
@@ -326,27 +351,46 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
         if cfg.torch_threads > 0:
             torch.set_num_threads(cfg.torch_threads)
         set_random_seed(cfg.seed)
-        venv = make_vec_env(
-            cfg.env_id,
-            cfg.n_envs,
-            backend=cfg.backend,
-            env_kwargs=cfg.env_options(),
-            seed=cfg.seed if start_from is None else cfg.seed + 7919 * (1 + _n_ckpt(path)),
-            kind=cfg.vec_env,
-            start_method=cfg.start_method,
-            n_workers=cfg.n_workers,
-            ray_address=cfg.ray_address,
-            ray_start_timeout_s=cfg.ray_start_timeout_s,
-            assist={
-                "share": cfg.assist_force,
-                "decay_steps": cfg.assist_steps,
-                "start_step": _steps_done(start_from),
-                "max_tilt_deg": cfg.assist_max_tilt_deg,
-                "schedule": cfg.assist_schedule,
-            }
-            if cfg.assist_force > 0.0
-            else None,
-        )
+        seed = cfg.seed if start_from is None else cfg.seed + 7919 * (1 + _n_ckpt(path))
+        if is_team_task(cfg.env_id):
+            from robocup_gym.train.selfplay import (
+                OpponentPool,
+                SelfPlaySettings,
+                make_team_vec_env,
+            )
+
+            venv = make_team_vec_env(
+                task_name(cfg.env_id),
+                cfg.n_envs,
+                options=cfg.env_options(),
+                pool=OpponentPool(path / "opponents", SelfPlaySettings.of(cfg.selfplay)),
+                seed=seed,
+                kind=cfg.vec_env,
+                n_workers=cfg.n_workers,
+                start_method=cfg.start_method,
+            )
+        else:
+            venv = make_vec_env(
+                cfg.env_id,
+                cfg.n_envs,
+                backend=cfg.backend,
+                env_kwargs=cfg.env_options(),
+                seed=seed,
+                kind=cfg.vec_env,
+                start_method=cfg.start_method,
+                n_workers=cfg.n_workers,
+                ray_address=cfg.ray_address,
+                ray_start_timeout_s=cfg.ray_start_timeout_s,
+                assist={
+                    "share": cfg.assist_force,
+                    "decay_steps": cfg.assist_steps,
+                    "start_step": _steps_done(start_from),
+                    "max_tilt_deg": cfg.assist_max_tilt_deg,
+                    "schedule": cfg.assist_schedule,
+                }
+                if cfg.assist_force > 0.0
+                else None,
+            )
         try:
             if cfg.normalize_obs:
                 vn_path = path / "checkpoints" / "vecnormalize.pkl"

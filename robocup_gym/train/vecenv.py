@@ -178,6 +178,11 @@ class EnvBlock:
                 )
                 break
 
+    @staticmethod
+    def seats_of(env_fns: Sequence[Callable[[], Any]]) -> int:
+        """Environments of the vector environment per constructor (1: each is one)."""
+        return 1
+
     def close(self) -> None:
         for env in self.envs:  # those created before a failure, too
             env.close()
@@ -305,9 +310,11 @@ class EnvBlock:
         }
 
 
-def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0) -> None:
-    """A worker process: hosts an :class:`EnvBlock` and answers the parent's commands over its
-    pipe until ``close`` (or the pipe's end)."""
+def _batched_worker(
+    remote, parent_remote, env_fns_wrapper, first_index: int = 0, block_class: type = EnvBlock
+) -> None:
+    """A worker process: hosts an :class:`EnvBlock` (or ``block_class``) and answers the
+    parent's commands over its pipe until ``close`` (or the pipe's end)."""
     parent_remote.close()
     # SIGTERM/SIGHUP sent to the whole process group (a job scheduler, a closed terminal) are
     # the parent's to handle: it saves the run and then closes the workers. A worker whose
@@ -315,7 +322,7 @@ def _batched_worker(remote, parent_remote, env_fns_wrapper, first_index: int = 0
     for name in ("SIGTERM", "SIGHUP"):
         if hasattr(signal, name):
             signal.signal(getattr(signal, name), signal.SIG_IGN)
-    block = EnvBlock(env_fns_wrapper.var, first_index)
+    block = block_class(env_fns_wrapper.var, first_index)
     try:
         while True:
             try:
@@ -357,8 +364,14 @@ class BlockVecEnv(VecEnv):
 
     blocks: list[range]
 
-    def _start_blocks(self, n_envs: int, n_workers: int) -> None:
-        self.blocks = _split(n_envs, max(1, min(n_workers, n_envs)))
+    def _start_blocks(self, n_envs: int, n_workers: int, group: int = 1) -> None:
+        """``n_envs`` environments in contiguous blocks, one per worker, each block made of
+        whole groups of ``group`` (the seats of one game: :class:`SeatBlock`)."""
+        games = n_envs // group
+        self.blocks = [
+            range(r.start * group, r.stop * group)
+            for r in _split(games, max(1, min(n_workers, games)))
+        ]
         self._where = [(w, k) for w, block in enumerate(self.blocks) for k in range(len(block))]
         self._block_pending = [False] * len(self.blocks)
 
@@ -517,23 +530,26 @@ class BatchedSubprocVecEnv(BlockVecEnv):
 
     def __init__(
         self,
-        env_fns: list[Callable[[], gym.Env]],
+        env_fns: list[Callable[[], Any]],
         n_workers: int,
         start_method: str | None = None,
+        block_class: type[EnvBlock] | None = None,
     ) -> None:
         from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper
 
         self.closed = False
-        n_envs = len(env_fns)
-        self._start_blocks(n_envs, n_workers)
+        block_class = block_class or EnvBlock
+        seats = block_class.seats_of(env_fns)
+        n_envs = len(env_fns) * seats
+        self._start_blocks(n_envs, n_workers, seats)
         ctx = mp.get_context(start_method or default_start_method())
         self.remotes, work_remotes = zip(*[ctx.Pipe() for _ in self.blocks], strict=True)
         self.processes = []
         for work_remote, remote, block in zip(work_remotes, self.remotes, self.blocks, strict=True):
-            fns = CloudpickleWrapper([env_fns[i] for i in block])
+            fns = CloudpickleWrapper(env_fns[block.start // seats : block.stop // seats])
             process = ctx.Process(
                 target=_batched_worker,
-                args=(work_remote, remote, fns, block.start),
+                args=(work_remote, remote, fns, block.start, block_class),
                 daemon=True,
             )
             process.start()
@@ -600,6 +616,43 @@ class BatchedSubprocVecEnv(BlockVecEnv):
         for remote in self.remotes:
             remote.close()
         self.closed = True
+
+
+class InProcessBlockVecEnv(BlockVecEnv):
+    """A :class:`BlockVecEnv` whose one block (an :class:`EnvBlock`, or ``block_class``) lives
+    in this process: no worker, the same numbers."""
+
+    def __init__(
+        self, env_fns: list[Callable[[], Any]], block_class: type[EnvBlock] | None = None
+    ) -> None:
+        block_class = block_class or EnvBlock
+        seats = block_class.seats_of(env_fns)
+        n_envs = len(env_fns) * seats
+        self._start_blocks(n_envs, 1, seats)
+        self.block = block_class(env_fns, 0)
+        self._answer: Any = None
+        self.closed = False
+        try:
+            spaces = _worker_failed(self.block.handle("get_spaces", None))
+        except BaseException:
+            self.close()
+            raise
+        super().__init__(n_envs, *spaces)
+
+    def _send(self, worker: int, cmd: str, data: Any) -> None:
+        self._answer = self.block.handle(cmd, data)
+
+    def _recv(self, worker: int) -> Any:
+        answer, self._answer = self._answer, None
+        return answer
+
+    def ready_blocks(self, workers: Sequence[int]) -> list[int]:
+        return sorted(workers)
+
+    def close(self) -> None:
+        if not self.closed:
+            self.block.close()
+            self.closed = True
 
 
 class _Monitored:
