@@ -180,9 +180,17 @@ class SoccerParallelEnv(ParallelEnv):
         world = self.game.world
         self._observers: dict[str, PlayerObserver] = {}
         self._mappers: dict[str, ActionMapper] = {}
+        teams = teams_of(c)
+        self._others: dict[str, list[str]] = {}
+        """Per agent, the other players its privileged observation places, in order."""
         for name, p in zip(self.game.names, self.game.players, strict=True):
             model = world.robots[p.index].model
-            self._observers[name] = PlayerObserver(model, p.side, c.privileged)
+            mates = [a for a in teams[p.side] if a != name]
+            opponents = teams["right" if p.side == "left" else "left"]
+            self._others[name] = mates + opponents if c.privileged else []
+            self._observers[name] = PlayerObserver(
+                model, p.side, c.privileged, len(mates), len(opponents)
+            )
             self._mappers[name] = ActionMapper(
                 model,
                 np.arange(len(model.joints)),
@@ -244,11 +252,12 @@ class SoccerParallelEnv(ParallelEnv):
         self.agents = list(self.possible_agents)
         self._cycles = 0
         self._ball_x = float(self.game.ball_position()[0])
-        obs, infos = {}, {}
+        infos = {}
         seen = self._perceive_all()
         for name in self.agents:
             self._observers[name].reset()
-            obs[name] = self._observers[name](seen[self.game.index(name)])
+        obs = self._observe(self.agents, seen)
+        for name in self.agents:
             infos[name] = self._info(name, None, {})
         if self.skills is not None:
             self.skills.reset(seen, None if seed is None else int(seed))
@@ -278,8 +287,7 @@ class SoccerParallelEnv(ParallelEnv):
             if skills is not None:  # the skills (and vision) see every cycle
                 perceptions = self._perceive_all()
                 skills.observe(perceptions)
-                for n in self.agents:
-                    seen[n] = self._observers[n](perceptions[self.game.index(n)])
+                seen = self._observe(self.agents, perceptions)
             goal = goal or report.goal
             for k, v in self._cycle_terms(report).items():
                 terms[k] = terms.get(k, 0.0) + v
@@ -293,13 +301,13 @@ class SoccerParallelEnv(ParallelEnv):
         rewards, obs, infos = {}, {}, {}
         left_reward = sum(terms.values())
         last = self._perceive_all() if report.diverged is None and not seen else {}
+        if last:
+            seen = self._observe(self.agents, last)
         for name in self.agents:
             sign = 1.0 if self._side[name] == "left" else -1.0
             rewards[name] = float(sign * left_reward)
             if name in seen:
                 obs[name] = seen[name]
-            elif report.diverged is None:
-                obs[name] = self._observers[name](last[self.game.index(name)])
             else:
                 obs[name] = np.zeros(self._observers[name].size, np.float32)
             info = self._info(name, goal, {k: sign * v for k, v in terms.items()})
@@ -393,6 +401,20 @@ class SoccerParallelEnv(ParallelEnv):
 
     def _type(self, name: str) -> int:
         return self.game.robot_types[self.game.index(name)]
+
+    def _observe(self, agents: list[str], perceptions: Mapping[int, Any]) -> dict[str, np.ndarray]:
+        """The observations of ``agents`` from their perceptions (by world index)."""
+        xy: dict[str, np.ndarray] = {}
+        if self.config.privileged:
+            w = self.game.world
+            xy = {a: w.torso_position(self.game.index(a))[:2] for a in self.possible_agents}
+        return {
+            a: self._observers[a](
+                perceptions[self.game.index(a)],
+                np.array([xy[o] for o in self._others[a]]) if self._others[a] else None,
+            )
+            for a in agents
+        }
 
     def _perceive_all(self) -> dict[int, Any]:
         """Every playing agent's perception, by world index (vision's shared work done once)."""

@@ -15,10 +15,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["PRIVILEGED_SIZE", "PolicyTeam", "team_task_error"]
-
-PRIVILEGED_SIZE = 10
-"""Values the ``privileged`` option appends to a player's observation (its last ones)."""
+__all__ = ["PolicyTeam", "team_task_error"]
 
 
 def team_task_error(what: str, task: str, options: Mapping[str, Any]) -> str | None:
@@ -119,8 +116,8 @@ class PolicyTeam:
         if obs is None:
             raise ValueError(f"team {self.name} acts on its players' observations; none given")
         x = np.stack([np.asarray(obs[a], dtype=np.float32) for a in agents])
-        if x.shape[1] == self.obs_size + PRIVILEGED_SIZE and not self.privileged:
-            x = x[:, : self.obs_size]  # a game with the privileged part, which it does not use
+        if x.shape[1] > self.obs_size and not self.privileged:
+            x = x[:, : self.obs_size]  # a game with the privileged part (last), which it lacks
         if x.shape[1] != self.obs_size:
             raise ValueError(
                 f"team {self.name} observes {self.obs_size} values a player, the game gives "

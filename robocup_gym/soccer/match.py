@@ -24,10 +24,6 @@ from robocup_gym.soccer.scripted import TEAMS
 
 __all__ = ["GameResult", "MatchResult", "make_team", "play_match"]
 
-PENALTY_START_NOISE_M = 0.3
-"""A match's penalties start with the ball up to this far sideways of its spot (and the players
-with it), m."""
-
 Team = Callable[[Any, list[str], dict[str, np.ndarray]], dict[str, np.ndarray]]
 """A team: ``team(env, agents, obs) → {agent: skill action}``."""
 
@@ -173,7 +169,7 @@ def play_match(
         "render_mode": None if video is None else "rgb_array",
     }
     if penalty:
-        env = penalty_v0.parallel_env(start_noise=PENALTY_START_NOISE_M, **options)
+        env = penalty_v0.parallel_env(start_noise=penalty_v0.SPREAD_M, **options)
     else:
         env = game_v0.parallel_env(**options)
     try:

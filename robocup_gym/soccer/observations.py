@@ -21,9 +21,10 @@ component                 size    values (raw → scaled to [-1, 1] by the range
                                   angle, seen (1/0)
 ``game``                  6       PlayOn, own set piece / kick-off, opponent's, other mode
                                   (one-hot); game time (0–600 s); score difference (±5)
-``privileged`` (option)   10      own (x, y) (±15, ±10 m), heading (cos, sin), ball (x, y),
+``privileged`` (option)   10 + 2k own (x, y) (±15, ±10 m), heading (cos, sin), ball (x, y),
                                   ball velocity (x, y) (±10 m/s), own up axis z, own height
-                                  (0–0.6 m)
+                                  (0–0.6 m); then (x, y) of every other player: teammates,
+                                  then opponents, by uniform number (k of them)
 ========================  ======  =========================================================
 
 ``n`` is the robot's joint count (22, or 24 for type 4).
@@ -56,8 +57,11 @@ def _set_piece_owner(play_mode: str) -> str | None:
     return None
 
 
-def observation_labels(model: NaoModel, privileged: bool) -> list[str]:
-    """One label per observation value, in order."""
+def observation_labels(
+    model: NaoModel, privileged: bool, mates: int = 0, opponents: int = 0
+) -> list[str]:
+    """One label per observation value, in order (``mates``, ``opponents``: the other players
+    whose positions the privileged part has)."""
     labels = [f"joint_pos/{n}" for n in model.perceptor_names]
     labels += [f"joint_vel/{n}" for n in model.perceptor_names]
     labels += [f"gyro/{a}" for a in "xyz"] + [f"accel/{a}" for a in "xyz"]
@@ -84,6 +88,9 @@ def observation_labels(model: NaoModel, privileged: bool) -> list[str]:
                 "height",
             )
         ]
+        for who, n in (("mate", mates), ("opponent", opponents)):
+            for k in range(n):
+                labels += [f"privileged/{who}{k + 1}_x", f"privileged/{who}{k + 1}_y"]
     return labels
 
 
@@ -94,14 +101,24 @@ class PlayerObserver:
         model: The player's robot.
         side: ``"left"`` or ``"right"``.
         privileged: Add the ground-truth part (training only).
+        mates, opponents: How many other players the privileged part places (their
+            positions come with each call).
     """
 
-    def __init__(self, model: NaoModel, side: str, privileged: bool = False) -> None:
+    def __init__(
+        self,
+        model: NaoModel,
+        side: str,
+        privileged: bool = False,
+        mates: int = 0,
+        opponents: int = 0,
+    ) -> None:
         self.model = model
         self.side = side
         self.opponent = "right" if side == "left" else "left"
         self.privileged = bool(privileged)
-        self.labels = observation_labels(model, privileged)
+        self.others = (int(mates) + int(opponents)) if privileged else 0
+        self.labels = observation_labels(model, privileged, mates, opponents)
         self.size = len(self.labels)
         lo = np.array([j.min_deg for j in model.joints], float)
         hi = np.array([j.max_deg for j in model.joints], float)
@@ -117,7 +134,9 @@ class PlayerObserver:
         self._posts = {name: np.zeros(3) for names in _POSTS.values() for name in names}
         self._post_seen = {name: False for name in self._posts}
 
-    def __call__(self, p: Perception) -> np.ndarray:
+    def __call__(self, p: Perception, others: np.ndarray | None = None) -> np.ndarray:
+        """The observation of perception ``p``; ``others``: the world (x, y) of the other
+        players (teammates, then opponents, by uniform number), for the privileged part."""
         out = np.empty(self.size, dtype=np.float32)
         n = len(self.model.joints)
         angles = np.asarray(p.joint_angles_deg, float)
@@ -144,6 +163,11 @@ class PlayerObserver:
         k = self._game(p, out, k)
         if self.privileged:
             k = self._ground_truth(p, out, k)
+            if self.others:
+                xy = np.asarray(others, float).reshape(self.others, 2)
+                s = 1.0 if self.side == "left" else -1.0
+                out[k : k + 2 * self.others] = (s * xy / (15.0, 10.0)).ravel()
+                k += 2 * self.others
         assert k == self.size
         np.clip(out, -1.0, 1.0, out=out)
         return out

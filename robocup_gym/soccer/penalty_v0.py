@@ -20,10 +20,12 @@ import numpy as np
 from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel
 from robocup_gym.soccer.game import CycleReport, Start
 
-__all__ = ["BALL_SPOT", "PenaltyEnv", "env", "parallel_env", "raw_env"]
+__all__ = ["BALL_SPOT", "SPREAD_M", "PenaltyEnv", "env", "parallel_env", "raw_env"]
 
 BALL_SPOT = (11.0, 0.0)
 """Where the ball lies, m (4 m in front of the right goal)."""
+SPREAD_M = 0.3
+"""The ``start_noise`` of penalties in matches and in team training, m."""
 
 
 class PenaltyEnv(SoccerParallelEnv):

@@ -65,7 +65,7 @@ def team_scenario(name: str) -> tuple[type, str, dict[str, Any]]:
 
     key = str(name).strip().lower().replace("_", "-")
     if key == "penalty":
-        return penalty_v0.PenaltyEnv, "left", {}
+        return penalty_v0.PenaltyEnv, "left", {"start_noise": penalty_v0.SPREAD_M}
     if key == "keepaway":
         return keepaway_v0.KeepawayEnv, "left", {}
     m = _GAME.match(key)

@@ -19,7 +19,9 @@ setting                default   meaning
 =====================  ========  ==========================================================
 
 A game against the pool draws one of the newest ``pool_size`` snapshots uniformly; it plays
-deterministically. Snapshots are files in the run folder (``opponents/policy-<steps>.pt``,
+deterministically. In ``penalty`` and ``keepaway`` the learning team has one role (the striker,
+the attackers) that its snapshots cannot swap, so the opponent there is always the scripted
+team. Snapshots are files in the run folder (``opponents/policy-<steps>.pt``,
 SB3's own policy format), read by the workers as they appear, so a resumed run continues with
 its pool. Ratings (TrueSkill, from the ``trueskill`` library) of the learning policy
 (``current``), the scripted team and every snapshot are updated with every finished game,
@@ -299,6 +301,7 @@ def make_team_vec_env(
         ValueError: ``kind="ray"`` (team games run on this machine's workers), an unknown
             scenario or option.
     """
+    from robocup_gym.soccer.team_view import team_scenario
     from robocup_gym.train.vecenv import (
         BatchedSubprocVecEnv,
         InProcessBlockVecEnv,
@@ -309,6 +312,10 @@ def make_team_vec_env(
     if kind == "ray":
         raise ValueError("team scenarios train on this machine's worker processes, not on Ray")
     pool = pool or OpponentPool(None, SelfPlaySettings())
+    if team_scenario(scenario)[1] != "either":
+        # the learning team has one role (the striker, the attackers): its earlier versions
+        # cannot play the other, so the opponent is the scripted team
+        pool = OpponentPool(None, pool.settings)
     factories = [
         TeamFactory(scenario, options or {}, pool, None if seed is None else seed + i)
         for i in range(n_games)
@@ -491,9 +498,11 @@ def team_description(options: Mapping[str, Any]) -> dict[str, Any]:
     from robocup_gym.soccer.skills import SKILL_ACTION_LABELS
 
     model = nao_model(int(options["left_types"][0]))
+    mates, opponents = len(options["left_types"]) - 1, len(options["right_types"])
+    labels = observation_labels(model, bool(options.get("privileged")), mates, opponents)
     return {
         "env_config": dict(options),
-        "observation_labels": observation_labels(model, bool(options.get("privileged"))),
+        "observation_labels": labels,
         "action_labels": list(SKILL_ACTION_LABELS),
     }
 

@@ -200,7 +200,7 @@ def test_a_diverged_simulation_ends_the_episode_truncated_for_everyone(make, mon
 def test_privileged_observations_are_in_the_team_frame(make):
     env = make(game_v0, left_types=(0,), right_types=(0,), privileged=True, max_cycles=5)
     obs, _ = env.reset(seed=0)
-    labels = observation_labels(env.game.world.robots[0].model, True)
+    labels = observation_labels(env.game.world.robots[0].model, True, mates=0, opponents=1)
     x = labels.index("privileged/x")
     cos_h = labels.index("privileged/heading_cos")
     # both kick-off places are at x = -14 / +14 (the goalkeepers) facing the other goal: in
@@ -208,6 +208,35 @@ def test_privileged_observations_are_in_the_team_frame(make):
     for a in env.possible_agents:
         assert obs[a][x] == pytest.approx(-14.0 / 15.0, abs=1e-3)
         assert obs[a][cos_h] == pytest.approx(1.0, abs=1e-3)
+    # the other player's place, in the same frame: the opponent keeper at the opponent goal
+    assert labels[-2:] == ["privileged/opponent1_x", "privileged/opponent1_y"]
+    for a in env.possible_agents:
+        assert obs[a][-2] == pytest.approx(14.0 / 15.0, abs=1e-3)
+
+
+def test_privileged_observations_place_teammates_then_opponents(make):
+    env = make(game_v0, left_types=(0, 1), right_types=(0, 1), privileged=True, max_cycles=5)
+    obs, _ = env.reset(seed=0)
+    w = env.game.world
+    labels = observation_labels(w.robots[0].model, True, mates=1, opponents=2)
+    assert env.observation_space("left_1").shape == (len(labels),)
+    k = labels.index("privileged/mate1_x")
+    assert labels[k:] == [
+        "privileged/mate1_x",
+        "privileged/mate1_y",
+        "privileged/opponent1_x",
+        "privileged/opponent1_y",
+        "privileged/opponent2_x",
+        "privileged/opponent2_y",
+    ]
+    where = {a: w.torso_position(env.game.index(a))[:2] for a in env.possible_agents}
+    for a, others in (
+        ("left_1", ["left_2", "right_1", "right_2"]),
+        ("right_2", ["right_1", "left_1", "left_2"]),
+    ):
+        s = 1.0 if a.startswith("left") else -1.0
+        want = np.concatenate([s * where[o] / (15.0, 10.0) for o in others])
+        np.testing.assert_allclose(obs[a][k:], want, atol=1e-6)
 
 
 def test_a_one_minute_eleven_against_eleven_game_runs_to_its_end(make):

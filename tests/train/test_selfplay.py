@@ -151,12 +151,12 @@ def test_a_team_view_plays_either_side_and_reports_the_game():
 def test_the_vector_of_players_resets_games_and_names_a_bad_action():
     venv = make_team_vec_env("game-2v2", 2, options=SHORT, kind="dummy", seed=0)
     try:
-        assert venv.num_envs == 4 and venv.observation_space.shape == (95,)
+        assert venv.num_envs == 4 and venv.observation_space.shape == (101,)  # 95 + 3 others
         obs = venv.reset()
-        assert obs.shape == (4, 95) and np.isfinite(obs).all()
+        assert obs.shape == (4, 101) and np.isfinite(obs).all()
         for _ in range(6):
             obs, rewards, dones, infos = venv.step(np.zeros((4, 4), np.float32))
-        assert dones.all() and obs.shape == (4, 95)
+        assert dones.all() and obs.shape == (4, 101)
         assert all("terminal_observation" in i and "episode" in i for i in infos)
         assert "game" in infos[0] and "game" in infos[2] and "game" not in infos[1]
         assert rewards[0] == rewards[1]  # team-shared
@@ -294,3 +294,19 @@ def test_a_penalty_match_puts_team_a_on_the_spot_every_game():
         play_match("scripted", "standing", scenario="penalty", players=2)
     with pytest.raises(ValueError, match="scenario must be 'game' or 'penalty'"):
         play_match("scripted", "standing", scenario="corner")
+
+
+@needs_ode
+def test_a_penalty_striker_always_meets_the_scripted_goalkeeper(tmp_path):
+    for steps in (100, 200):
+        snapshot_policy(_Policy(), tmp_path, steps)
+    pool = OpponentPool(tmp_path, SelfPlaySettings(scripted_share=0.0))
+    venv = make_team_vec_env("penalty", 1, options={"max_cycles": 20}, pool=pool, kind="dummy")
+    try:
+        for _ in range(3):
+            venv.reset()
+            view = venv.block.envs[0]
+            assert isinstance(view.opponent, ScriptedTeam) and view.side == "left"
+            assert view.env.goalkeepers() == {"right_1"}
+    finally:
+        venv.close()
