@@ -82,6 +82,10 @@ def _backend(backend: str | None, engine: str | None) -> str | None:
         _fail(str(exc))
 
 
+_RESUME_OPTIONS = {"timesteps", "n_workers"}
+"""TrainConfig options a resumed run takes (its new total; where its environments step)."""
+
+
 def _placement(ray: bool | None, ray_address: str | None, n_workers: int | None) -> dict[str, Any]:
     """Where a run's environments step (``--ray/--no-ray``, ``--ray-address``, ``--n-workers``),
     as TrainConfig fields; only those given. Without Ray installed, ``--ray`` says how to get
@@ -119,6 +123,92 @@ def _parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
     return out
 
 
+_NOT_TRAIN_OPTIONS = (
+    "task",  # the command's argument
+    "env_id",  # filled in by the trainer
+    "env_config",
+    "env_kwargs",  # --env KEY=VALUE
+    "algo_kwargs",  # --hp KEY=VALUE
+    "selfplay",  # --selfplay KEY=VALUE
+    "backend",  # --engine / --backend
+    "vec_env",  # --ray / --no-ray
+    "ray_address",  # --ray-address (implies --ray)
+)
+"""TrainConfig fields the train command takes in its own way, not as ``--field-name``."""
+
+_TRAIN_OPTION_EXTRAS: dict[str, dict[str, Any]] = {
+    "init_from": {"type": Path, "exists": True, "file_okay": False},
+    "assist_max_tilt_deg": {"flags": ("--assist-max-tilt-deg", "--assist-max-tilt")},
+}
+"""Option settings beyond the field's type: a path that must exist, an extra flag name."""
+
+
+def _option_help(doc: str, default: Any) -> str:
+    """A field's docstring as an option's help: its first sentence, without reST markup, with
+    the default."""
+    import re
+
+    text = " ".join(doc.split())
+    text = re.sub(r":\w+:`~?([\w.]*\.)?([^`]+)`", r"\2", text)
+    text = text.replace("``", "")
+    m = re.match(r"(.+?[.])(\s|$)", text)
+    first = m.group(1) if m else text
+    if default in ("", None):
+        return first
+    return f"{first.rstrip('.')} (default: {default})."
+
+
+def _train_config_parameters() -> list:
+    """One keyword parameter of the train command per :class:`TrainConfig` field (but
+    :data:`_NOT_TRAIN_OPTIONS`): ``--field-name``, typed as the field, help from its docstring,
+    ``None`` when not given (the config file's or the default value then holds)."""
+    import dataclasses
+    import inspect
+    import typing
+
+    from robocup_gym.train.config import TrainConfig
+
+    hints = typing.get_type_hints(TrainConfig)
+    docs = TrainConfig.field_docs()
+    params = []
+    for f in dataclasses.fields(TrainConfig):
+        if f.name in _NOT_TRAIN_OPTIONS:
+            continue
+        extra = dict(_TRAIN_OPTION_EXTRAS.get(f.name, {}))
+        kind = extra.pop("type", hints[f.name])
+        flag = "--" + f.name.replace("_", "-")
+        flags = extra.pop("flags", (flag,))
+        if kind is bool:
+            flags = (f"{flag}/--no-{f.name.replace('_', '-')}",)
+        default = f.default if f.default is not dataclasses.MISSING else None
+        option = typer.Option(
+            *flags, help=_option_help(docs.get(f.name, ""), default), show_default=False, **extra
+        )
+        params.append(
+            inspect.Parameter(
+                f.name,
+                inspect.Parameter.KEYWORD_ONLY,
+                default=None,
+                annotation=Annotated[kind | None, option],
+            )
+        )
+    return params
+
+
+def _with_config_options(func):
+    """``func`` (which takes ``**config``) with a typed parameter per TrainConfig field added
+    to its signature, so that typer makes an option of each."""
+    import inspect
+
+    sig = inspect.signature(func, eval_str=True)
+    own = [p for p in sig.parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
+    own = [p.replace(kind=inspect.Parameter.KEYWORD_ONLY) for p in own]
+    params = own + _train_config_parameters()
+    func.__signature__ = sig.replace(parameters=params)
+    func.__annotations__ = {p.name: p.annotation for p in params}
+    return func
+
+
 if typer is not None:
     app = typer.Typer(
         name="robocup-gym",
@@ -137,7 +227,6 @@ if typer is not None:
     app.add_typer(experiments_app, name="experiments")
 
     # ------------------------------------------------------------------------------ train
-    @app.command()
     def train(
         task: Annotated[
             str | None,
@@ -146,14 +235,6 @@ if typer is not None:
                 "or a team scenario: penalty, keepaway, game-2v2, game-3v3, …"
             ),
         ] = None,
-        algo: Annotated[str | None, typer.Option(help="ppo or sac.")] = None,
-        n_envs: Annotated[
-            int | None, typer.Option("--n-envs", help="Parallel environments (paper: 16).")
-        ] = None,
-        timesteps: Annotated[
-            int | None, typer.Option(help="Total environment steps (default 1,000,000).")
-        ] = None,
-        seed: Annotated[int | None, typer.Option(help="Random seed (default 0).")] = None,
         out: Annotated[Path, typer.Option(help="Parent folder of run folders.")] = Path("runs"),
         engine: Annotated[
             str | None,
@@ -196,12 +277,12 @@ if typer is not None:
                 "--hp learning_rate=3e-4.",
             ),
         ] = None,
-        n_workers: Annotated[
-            int | None,
+        selfplay: Annotated[
+            list[str] | None,
             typer.Option(
-                "--n-workers",
-                help="Worker processes or Ray actors (default: one per CPU core; with Ray, one "
-                "per CPU of the cluster).",
+                "--selfplay",
+                help="Team scenarios: opponent setting KEY=VALUE (repeatable): snapshot_every, "
+                "pool_size, scripted_share.",
             ),
         ] = None,
         ray: Annotated[
@@ -221,71 +302,13 @@ if typer is not None:
                 "--ray.",
             ),
         ] = None,
-        checkpoint_freq: Annotated[
-            int | None, typer.Option(help="Steps between checkpoints (0 = none).")
-        ] = None,
-        checkpoint_every_s: Annotated[
-            float | None,
-            typer.Option(
-                "--checkpoint-every-s",
-                help="Also save every this many seconds of wall-clock time (default 120; "
-                "0 = never); each replaces the previous time-triggered one.",
-            ),
-        ] = None,
-        eval_freq: Annotated[
-            int | None, typer.Option(help="Steps between evaluations (0 = none).")
-        ] = None,
-        init_from: Annotated[
-            Path | None,
-            typer.Option(
-                "--init-from",
-                help="Start from this run's policy (e.g. fine-tune on --backend ode a kick "
-                "learnt on the embedded world).",
-                exists=True,
-                file_okay=False,
-            ),
-        ] = None,
-        assist_force: Annotated[
-            float | None,
-            typer.Option(
-                "--assist-force",
-                help="Push the robot's torso up while it trains, as a share of its weight "
-                "(e.g. 0.8 for get-up), fading to 0 over --assist-steps; evaluations never push.",
-            ),
-        ] = None,
-        assist_steps: Annotated[
-            int | None,
-            typer.Option("--assist-steps", help="Training steps over which --assist-force fades."),
-        ] = None,
-        assist_schedule: Annotated[
-            str | None,
-            typer.Option(
-                "--assist-schedule",
-                help="linear (over --assist-steps) or success (down with each success of the "
-                "task, e.g. get-up).",
-            ),
-        ] = None,
-        assist_max_tilt: Annotated[
-            float | None,
-            typer.Option(
-                "--assist-max-tilt",
-                help="Push only while the torso is inclined less than this, deg (default 180: "
-                "always; 60: the robot sits up by itself first).",
-            ),
-        ] = None,
-        selfplay: Annotated[
-            list[str] | None,
-            typer.Option(
-                "--selfplay",
-                help="Team scenarios: opponent setting KEY=VALUE (repeatable): snapshot_every, "
-                "pool_size, scripted_share.",
-            ),
-        ] = None,
         progress: Annotated[bool, typer.Option(help="Show the progress bar.")] = True,
+        **options: Any,
     ) -> None:
         """Train a policy with Stable-Baselines3 (defaults: the paper's PPO setup), or a team
         on a team scenario (penalty, keepaway, game-2v2, …: one policy shared by the team's
-        players, against the scripted team and the policy's earlier versions).
+        players, against the scripted team and the policy's earlier versions). Every
+        TrainConfig field is an option (--n-envs, --timesteps, …).
 
         Writes runs/<task>-<algo>-<time>/ with config.yaml, model.zip, checkpoints/, tb/
         (TensorBoard), progress.csv (learning curve) and evaluations.jsonl; a team run also
@@ -294,57 +317,57 @@ if typer is not None:
         from robocup_gym.train.config import TrainConfig
         from robocup_gym.train.trainer import train as run_training
 
+        given = {k: v for k, v in options.items() if v is not None}
+        if "init_from" in given:
+            given["init_from"] = str(given["init_from"])
         console = _console()
         try:
             if resume is not None:
-                if (
-                    task is not None
-                    or config is not None
-                    or init_from is not None
-                    or assist_force is not None
-                    or assist_steps is not None
-                    or assist_max_tilt is not None
-                    or assist_schedule is not None
-                    or selfplay
-                ):
+                refused = ["TASK"] if task is not None else []
+                refused += [
+                    name
+                    for name, value in (
+                        ("--config", config),
+                        ("--env", env),
+                        ("--hp", hp),
+                        ("--selfplay", selfplay),
+                    )
+                    if value
+                ]
+                refused += [
+                    "--" + k.replace("_", "-") for k in sorted(set(given) - _RESUME_OPTIONS)
+                ]
+                if refused:
                     _fail(
-                        "--resume continues a run with its own config; "
-                        "give no TASK/--config/--init-from/--assist-*/--selfplay"
+                        f"--resume continues a run with its own config; {', '.join(refused)} "
+                        "cannot change it (a resume takes --timesteps, --n-workers, "
+                        "--ray/--no-ray and --ray-address)"
                     )
                 result = run_training(
                     resume=resume,
-                    extra_timesteps=timesteps,
+                    extra_timesteps=given.get("timesteps"),
                     console=console,
                     progress=progress,
-                    placement=_placement(ray, ray_address, n_workers),
+                    placement=_placement(ray, ray_address, given.get("n_workers")),
                 )
             else:
                 cfg = TrainConfig.load(config) if config is not None else TrainConfig()
                 env_kw = {**cfg.env_kwargs, **_parse_assignments(env, "--env")}
                 algo_kw = dict(cfg.algo_kwargs)
+                algo = given.get("algo")
                 if algo is not None and algo.lower() != cfg.algo:
                     algo_kw = {}  # hyperparameters of another algorithm do not carry over
                 algo_kw.update(_parse_assignments(hp, "--hp"))
                 selfplay_kw = {**cfg.selfplay, **_parse_assignments(selfplay, "--selfplay")}
+                given.pop("n_workers", None)
                 cfg = cfg.merged(
                     task=task,
-                    algo=algo,
-                    n_envs=n_envs,
-                    timesteps=timesteps,
-                    seed=seed,
                     backend=_backend(backend, engine),
-                    checkpoint_freq=checkpoint_freq,
-                    checkpoint_every_s=checkpoint_every_s,
-                    eval_freq=eval_freq,
                     env_kwargs=env_kw,
                     algo_kwargs=algo_kw,
                     selfplay=selfplay_kw,
-                    init_from=None if init_from is None else str(init_from),
-                    assist_force=assist_force,
-                    assist_steps=assist_steps,
-                    assist_max_tilt_deg=assist_max_tilt,
-                    assist_schedule=assist_schedule,
-                    **_placement(ray, ray_address, n_workers),
+                    **given,
+                    **_placement(ray, ray_address, options.get("n_workers")),
                 )
                 result = run_training(cfg, out=out, console=console, progress=progress)
         except typer.Exit:
@@ -353,6 +376,8 @@ if typer is not None:
             _fail(str(exc))
         if result.interrupted:  # 128 + the signal, as a shell reports a process it stopped
             raise typer.Exit(128 + (result.signal or 2))
+
+    app.command()(_with_config_options(train))
 
     # ------------------------------------------------------------------------------ eval
     @app.command("eval")

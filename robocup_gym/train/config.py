@@ -152,18 +152,45 @@ VEC_ENVS = ("auto", "subproc", "dummy", "ray")
 """How the environments of a run are stepped (:attr:`TrainConfig.vec_env`)."""
 
 
+def _field_docs(cls: type) -> dict[str, str]:
+    """The string literal under each annotated assignment of a class body, by name."""
+    import ast
+    import inspect
+    import itertools
+    import textwrap
+
+    tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    body = tree.body[0].body  # type: ignore[attr-defined]
+    out: dict[str, str] = {}
+    for node, after in itertools.pairwise(body):
+        if (
+            isinstance(node, ast.AnnAssign)
+            and isinstance(node.target, ast.Name)
+            and isinstance(after, ast.Expr)
+            and isinstance(after.value, ast.Constant)
+            and isinstance(after.value.value, str)
+        ):
+            out[node.target.id] = inspect.cleandoc(after.value.value)
+    return out
+
+
 @dataclass
 class TrainConfig:
     """Everything that defines a training run (saved as ``config.yaml`` in the run folder)."""
 
     task: str = "velocity-kick"
-    """Task name (``velocity-kick``, ``simple-kick``, …) or any registered Gymnasium id."""
+    """Task name (``velocity-kick``, ``simple-kick``, …), a team scenario (``game-2v2``, …) or
+    any registered Gymnasium id."""
     env_id: str = ""
     """The Gymnasium id the task resolved to (filled in by the trainer)."""
     algo: str = "ppo"
+    """The algorithm: ``ppo`` or ``sac``."""
     n_envs: int = DEFAULT_N_ENVS
+    """Parallel environments (the paper's 16); with a team scenario, parallel games."""
     timesteps: int = 1_000_000
+    """Total environment steps of the run."""
     seed: int = 0
+    """Random seed (of the learner and, offset per environment, of the environments)."""
     backend: str | None = None
     """Simulator: ``ode`` (SimSpark's physics, exact, the default), ``mujoco`` (the fast
     approximation; its kicks do not work on rcssserver3d) or ``rcssserver3d`` (a real server);
@@ -194,6 +221,7 @@ class TrainConfig:
     eval_freq: int = 100_000
     """Evaluate deterministically every this many environment steps (0 = never)."""
     eval_episodes: int = 5
+    """Episodes of each periodic evaluation."""
     device: str = "cpu"
     """Torch device; small MLPs train fastest on the CPU."""
     torch_threads: int = 1
@@ -296,6 +324,11 @@ class TrainConfig:
         SelfPlaySettings.of(self.selfplay)  # an unknown setting or a bad value: named here
         if self.ray_address and self.vec_env != "ray":
             raise ValueError(f"ray_address {self.ray_address!r} needs vec_env='ray'")
+
+    @classmethod
+    def field_docs(cls) -> dict[str, str]:
+        """Each field's docstring (as written under it in the class), by field name."""
+        return _field_docs(cls)
 
     # ------------------------------------------------------------------ derived
     def resolved_algo_kwargs(self) -> dict[str, Any]:

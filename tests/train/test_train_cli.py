@@ -595,7 +595,7 @@ def test_train_with_an_assist_records_it_and_resume_keeps_it(tmp_path):
     result = CliRunner().invoke(
         app, ["train", "--resume", str(run), "--assist-force", "0.2", "--no-progress"]
     )
-    assert result.exit_code != 0 and "--assist-*" in result.output
+    assert result.exit_code != 0 and "--assist-force cannot change it" in result.output
     bad = ["train", "get-up", "--assist-force", "0.5", "--out", str(tmp_path / "x")]
     result = CliRunner().invoke(app, bad)
     assert result.exit_code == 1 and "assist_steps >= 1" in result.output
@@ -666,3 +666,35 @@ def test_export_records_the_environment_the_policy_is_meant_for(ppo_run, tmp_pat
     result = CliRunner().invoke(app, bad)
     assert result.exit_code == 1 and "do not fit this policy" in result.output
     assert not (tmp_path / "b.onnx").exists()
+
+
+def test_every_train_config_field_is_an_option_of_train(tmp_path):
+    """The train command's options come from TrainConfig: one per field (those it takes in
+    its own way aside), with the field's docstring as help, reaching the run's config."""
+    import dataclasses
+
+    import typer
+
+    from robocup_gym.cli import _NOT_TRAIN_OPTIONS, app
+    from robocup_gym.train.config import TrainConfig
+
+    command = typer.main.get_command(app).commands["train"]
+    flags = {f for p in command.params for f in (*p.opts, *p.secondary_opts)}
+    for f in dataclasses.fields(TrainConfig):
+        if f.name not in _NOT_TRAIN_OPTIONS:
+            assert "--" + f.name.replace("_", "-") in flags, f.name
+    assert "--no-normalize-obs" in flags and "--assist-max-tilt" in flags
+    helps = {p.name: p.help for p in command.params}
+    assert helps["eval_episodes"] == "Episodes of each periodic evaluation (default: 5)."
+    assert helps["torch_threads"].startswith("Torch intra-op threads")
+
+    from robocup_gym.sim.engines.ode import available
+
+    out = tmp_path / "runs"
+    args = ["train", "velocity-kick", "--n-envs", 1, "--timesteps", 64, "--out", out]
+    args += ["--checkpoint-freq", 0, "--eval-freq", 0, "--no-progress", *TINY_PPO]
+    args += ["--backend", "ode" if available() else "mujoco"]
+    invoke([*args, "--eval-episodes", 3, "--torch-threads", 2, "--checkpoint-every-s", 0])
+    (run,) = list(out.iterdir())
+    cfg = TrainConfig.load(run / "config.yaml")
+    assert (cfg.eval_episodes, cfg.torch_threads, cfg.checkpoint_every_s) == (3, 2, 0.0)
