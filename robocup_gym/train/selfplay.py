@@ -443,6 +443,9 @@ class SelfPlayCallback(_callback_base()):  # type: ignore[misc]
 
     def snapshot(self) -> Path:
         """The policy now, into the pool (with the current rating)."""
+        join = getattr(self.model, "join_update", None)
+        if join is not None:  # an update running in the background: never half of one
+            join()
         path = snapshot_policy(self.model.policy, self.pool_dir, self.num_timesteps)
         self.ratings.copy_rating(CURRENT, path.stem)
         self._save_ratings()
