@@ -492,6 +492,22 @@ def _mean(values: Sequence[float]) -> float | None:
     return round(float(np.mean(values)), 4) if len(values) else None
 
 
+def next_command(scenario: str, run: str | os.PathLike) -> str:
+    """The command that plays a team run against the scripted team (keepaway: its learning
+    curve; matches are games and penalties)."""
+    from robocup_gym.soccer.team_view import team_scenario
+
+    if scenario == "keepaway":
+        return f"robocup-gym experiments team {run}"
+    if scenario == "penalty":
+        return f"robocup-gym match {run} scripted --scenario penalty"
+    types = team_scenario(scenario)[2]["left_types"]
+    out = f"robocup-gym match {run} scripted --players {len(types)}"
+    if len(types) >= 5:  # the match's default types would include type 4
+        out += " --types " + ",".join(map(str, types))
+    return out
+
+
 # ---------------------------------------------------------------------------- export
 def team_description(options: Mapping[str, Any]) -> dict[str, Any]:
     """A team policy's observation and action layout for its export: the scenario options,

@@ -325,7 +325,9 @@ def train(
     if interrupted and steps_done < cfg.timesteps:
         say(f"continue: robocup-gym train --resume {path}")
     if team is not None:
-        say(f"next: robocup-gym match {path} scripted")
+        from robocup_gym.train.selfplay import next_command
+
+        say(f"next: {next_command(task_name(cfg.env_id), path)}")
     else:
         say(f"next: robocup-gym eval {path}")
     return result

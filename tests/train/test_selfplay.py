@@ -310,3 +310,12 @@ def test_a_penalty_striker_always_meets_the_scripted_goalkeeper(tmp_path):
             assert view.env.goalkeepers() == {"right_1"}
     finally:
         venv.close()
+
+
+def test_a_team_run_says_how_to_play_it():
+    from robocup_gym.train.selfplay import next_command
+
+    assert next_command("penalty", "R") == "robocup-gym match R scripted --scenario penalty"
+    assert next_command("game-2v2", "R") == "robocup-gym match R scripted --players 2"
+    assert next_command("game-5v5", "R").endswith("--players 5 --types 0,1,2,3,0")
+    assert next_command("keepaway", "R") == "robocup-gym experiments team R"
