@@ -20,7 +20,7 @@ from robocup_gym.backends import DEFAULT_ENGINE
 from robocup_gym.train.episodes import run_episodes
 from robocup_gym.train.metrics import summarize
 from robocup_gym.train.onnx_policy import OnnxPolicy
-from robocup_gym.train.tasks import make_env
+from robocup_gym.train.tasks import is_team_task, make_env, task_name
 
 if TYPE_CHECKING:
     from robocup_gym.backends.base import Backend
@@ -105,6 +105,13 @@ def pretrained_env(
         ValueError: the overrides give observations of another size than the policy takes.
     """
     meta = policy.metadata
+    if is_team_task(meta.get("env_id", "")):
+        name = policy.path.stem
+        raise ValueError(
+            f"{name} is a team's policy ({task_name(meta['env_id'])}): play it with "
+            f"robocup-gym match pretrained:{name} scripted"
+            + (" --scenario penalty" if meta["env_id"].endswith("/penalty") else "")
+        )
     extra = dict(env_overrides or {})
     env = make_env(
         meta["env_id"],

@@ -222,6 +222,11 @@ def test_a_team_policy_exports_to_onnx_and_plays_a_match(team_run, tmp_path):
     assert meta["verification"]["max_abs_diff"] <= 1e-5
     assert meta["env_id"] == "soccer/game-1v1" and meta["action_labels"][-1] == "kick"
     assert len(meta["observation_labels"]) == meta["input"]["shape"][1]
+    from robocup_gym.train.onnx_policy import OnnxPolicy
+    from robocup_gym.train.pretrained import pretrained_env
+
+    with pytest.raises(ValueError, match=r"team's policy.*robocup-gym match pretrained:team"):
+        pretrained_env(OnnxPolicy(onnx))  # what eval/agent --pretrained build
     # the run's folder and its export play the same games
     kwargs = {"games": 2, "players": 1, "seconds": 2.0, "robot_types": [0], "seed": 4}
     from_run = play_match(str(run), "scripted", **kwargs).summary
