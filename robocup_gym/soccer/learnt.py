@@ -40,11 +40,14 @@ class PolicyTeam:
         obs_size: int,
         name: str,
         options: Mapping[str, Any] | None = None,
+        task: str = "",
     ) -> None:
         self.act = act
         self.obs_size = int(obs_size)
         self.name = name
         self.options = dict(options or {})
+        self.task = task
+        """The team scenario it was trained on (``soccer/game-2v2``; empty if unknown)."""
 
     @property
     def privileged(self) -> bool:
@@ -88,7 +91,7 @@ class PolicyTeam:
         def act(x: np.ndarray) -> np.ndarray:
             return model.predict(x, deterministic=True)[0]
 
-        return cls(act, model.observation_space.shape[0], str(info.path), options)
+        return cls(act, model.observation_space.shape[0], str(info.path), options, cfg.env_id)
 
     @classmethod
     def from_onnx(cls, path: str | os.PathLike, name: str | None = None) -> PolicyTeam:
@@ -105,7 +108,24 @@ class PolicyTeam:
         error = team_task_error(f"policy {path}", meta.get("env_id", "?"), options)
         if error is not None:
             raise ValueError(error)
-        return cls(policy, int(meta["input"]["shape"][1]), name or str(path), options)
+        shape = int(meta["input"]["shape"][1])
+        return cls(policy, shape, name or str(path), options, meta.get("env_id", ""))
+
+    def check_fits(self, scenario: str, players: int) -> None:
+        """Raise ``ValueError`` if it was trained for another kind of match than ``scenario``
+        (``game``, ``penalty``) with ``players`` a side."""
+        if not self.task:
+            return
+        trained = self.task.split("/", 1)[-1]
+        want = "penalty" if scenario == "penalty" else f"game-{players}v{players}"
+        if trained != want:
+            hint = "--scenario penalty" if trained == "penalty" else None
+            if hint is None and trained.startswith("game-"):
+                hint = f"--players {trained.split('-')[1].split('v')[0]}"
+            raise ValueError(
+                f"team {self.name} was trained on {trained}, this match is {want}"
+                + (f" (play it with {hint})" if hint else "")
+            )
 
     # ------------------------------------------------------------------ playing
     def __call__(

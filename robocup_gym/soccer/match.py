@@ -146,6 +146,9 @@ def play_match(
     if not (math.isfinite(seconds) and seconds > 0):
         raise ValueError(f"seconds must be a positive duration, got {seconds!r}")
     a, b = make_team(team_a), make_team(team_b)
+    for team in (a, b):
+        if hasattr(team, "check_fits"):  # a learnt team plays what it was trained for
+            team.check_fits(scenario, int(players))
     types = tuple(robot_types) if robot_types is not None else tuple(k % 5 for k in range(players))
     if len(types) != players:
         raise ValueError(f"{players} players need {players} robot types, got {types!r}")

@@ -153,8 +153,7 @@ class TeamView:
                 raise ValueError(
                     f"{scenario}: the players' observations differ in size (robot types "
                     f"{c.left_types} and {c.right_types}: type 4 has two more joints); one "
-                    "policy needs one size (skill actions observe the same size for every type "
-                    "only when joint observations are left out)"
+                    "policy takes one size: use types 0-3"
                 )
         self.side = "left"
         self.opponent: Any = None

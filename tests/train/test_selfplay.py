@@ -240,6 +240,17 @@ def test_a_team_policy_exports_to_onnx_and_plays_a_match(team_run, tmp_path):
     }
 
 
+def test_a_team_plays_only_the_match_it_was_trained_for(team_run):
+    run = str(team_run[0].run_dir)  # game-1v1
+    with pytest.raises(
+        ValueError,
+        match=r"trained on game-1v1, this match is game-2v2 \(play it with --players 1\)",
+    ):
+        play_match(run, "scripted", games=1)
+    with pytest.raises(ValueError, match="trained on game-1v1, this match is penalty"):
+        play_match(run, "scripted", games=1, scenario="penalty")
+
+
 def test_policies_that_are_not_a_teams_are_refused(tmp_path):
     with pytest.raises(ValueError, match="not on a team scenario"):
         make_team("pretrained:walk")
