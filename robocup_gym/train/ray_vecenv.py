@@ -65,8 +65,13 @@ def import_ray():
 class _BlockActor:
     """The body of a Ray actor: one :class:`EnvBlock`."""
 
-    def __init__(self, env_fns: list[Callable[[], gym.Env]], first_index: int) -> None:
-        self.block = EnvBlock(env_fns, first_index)
+    def __init__(
+        self,
+        env_fns: list[Callable[[], gym.Env]],
+        first_index: int,
+        block_class: type[EnvBlock] = EnvBlock,
+    ) -> None:
+        self.block = block_class(env_fns, first_index)
 
     def handle(self, cmd: str, data: Any) -> Any:
         return self.block.handle(cmd, data)
@@ -94,6 +99,9 @@ class RayVecEnv(BlockVecEnv):
         n_workers: Actors (0 = one per CPU Ray reports, at most one per environment).
         address: ``None``: an embedded Ray on this machine; else the cluster to join.
         start_timeout_s: How long a (new) actor may take to start before the run gives up.
+        block_class: What an actor hosts: :class:`EnvBlock` (one environment per constructor)
+            or one that gives several environments per constructor (the players of a team
+            game: :class:`~robocup_gym.train.selfplay.SeatBlock`).
     """
 
     def __init__(
@@ -102,6 +110,7 @@ class RayVecEnv(BlockVecEnv):
         n_workers: int = 0,
         address: str | None = None,
         start_timeout_s: float = 60.0,
+        block_class: type[EnvBlock] = EnvBlock,
     ) -> None:
         ray = import_ray()
         self._ray = ray
@@ -129,12 +138,14 @@ class RayVecEnv(BlockVecEnv):
                 ) from None
             self._owns_ray = True
         self._env_fns = list(env_fns)
+        self._block_class = block_class
+        self._seats = block_class.seats_of(self._env_fns)
         self._last_obs: np.ndarray | None = None
-        n_envs = len(self._env_fns)
+        n_envs = len(self._env_fns) * self._seats
         cpus = int(ray.cluster_resources().get("CPU", 0))
         if n_workers <= 0:
             n_workers = max(1, cpus)
-        n_actors = max(1, min(n_workers, n_envs))
+        n_actors = max(1, min(n_workers, len(self._env_fns)))
         if n_actors > cpus:
             if self._owns_ray:
                 ray.shutdown()
@@ -142,7 +153,7 @@ class RayVecEnv(BlockVecEnv):
                 f"{n_actors} Ray actors need {n_actors} CPUs, one each; the Ray cluster has "
                 f"{cpus} (use fewer workers, --n-workers {max(1, cpus)}, or add nodes)"
             )
-        self._start_blocks(n_envs, n_actors)
+        self._start_blocks(n_envs, n_actors, self._seats)
         self._actor_class = ray.remote(num_cpus=1, max_restarts=0)(_BlockActor)
         self._pending: list[tuple[str, Any, Any] | None] = [None] * len(self.blocks)
         self._ref_block: dict[Any, int] = {}
@@ -162,7 +173,8 @@ class RayVecEnv(BlockVecEnv):
     def _new_actor(self, worker: int):
         """A new actor hosting block ``worker`` (``blocks[worker]``), once it has started."""
         block = self.blocks[worker]
-        handle = self._actor_class.remote([self._env_fns[i] for i in block], block.start)
+        fns = self._env_fns[block.start // self._seats : block.stop // self._seats]
+        handle = self._actor_class.remote(fns, block.start, self._block_class)
         try:
             self._ray.get(handle.node.remote(), timeout=self.start_timeout_s)
         except self._ray.exceptions.GetTimeoutError:

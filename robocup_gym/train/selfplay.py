@@ -291,15 +291,17 @@ def make_team_vec_env(
     kind: str = "auto",
     n_workers: int = 0,
     start_method: str = "",
+    ray_address: str = "",
+    ray_start_timeout_s: float = 60.0,
 ):
     """A vector environment of ``n_games`` games of team scenario ``scenario``, one environment
     per player of the learning team (game ``i`` seeded with ``seed + i``). ``kind``: ``"dummy"``
     (in this process), ``"subproc"`` or ``"auto"`` (worker processes, ``n_workers``: 0 = one
-    per CPU core, at most one per game).
+    per CPU core, at most one per game), or ``"ray"`` (Ray actors, on the cluster at
+    ``ray_address`` or an embedded Ray; each hosts whole games).
 
     Raises:
-        ValueError: ``kind="ray"`` (team games run on this machine's workers), an unknown
-            scenario or option.
+        ValueError: an unknown scenario or option.
     """
     from robocup_gym.soccer.team_view import team_scenario
     from robocup_gym.train.vecenv import (
@@ -309,8 +311,6 @@ def make_team_vec_env(
         resolve_n_workers,
     )
 
-    if kind == "ray":
-        raise ValueError("team scenarios train on this machine's worker processes, not on Ray")
     pool = pool or OpponentPool(None, SelfPlaySettings())
     if team_scenario(scenario)[1] != "either":
         # the learning team has one role (the striker, the attackers): its earlier versions
@@ -322,6 +322,16 @@ def make_team_vec_env(
     ]
     if kind == "dummy":
         return InProcessBlockVecEnv(factories, block_class=SeatBlock)
+    if kind == "ray":
+        from robocup_gym.train.ray_vecenv import RayVecEnv
+
+        return RayVecEnv(
+            factories,
+            n_workers=n_workers,
+            address=ray_address or None,
+            start_timeout_s=ray_start_timeout_s,
+            block_class=SeatBlock,
+        )
     workers = resolve_n_workers(n_games, n_workers)
     return BatchedSubprocVecEnv(
         factories,

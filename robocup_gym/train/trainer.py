@@ -370,6 +370,8 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
                 kind=cfg.vec_env,
                 n_workers=cfg.n_workers,
                 start_method=cfg.start_method,
+                ray_address=cfg.ray_address,
+                ray_start_timeout_s=cfg.ray_start_timeout_s,
             )
         else:
             venv = make_vec_env(

@@ -95,6 +95,29 @@ def test_ray_actors_step_what_local_workers_step():
         np.testing.assert_array_equal(a, b)
 
 
+def test_team_games_on_ray_actors_play_what_local_workers_play():
+    """Each actor hosts whole games (the players of a game are consecutive environments)."""
+    pytest.importorskip("pettingzoo")
+    from robocup_gym.sim.engines.ode import available
+    from robocup_gym.train.selfplay import make_team_vec_env
+
+    if not available():
+        pytest.skip("the shipped skills run on ODE")
+    runs = {}
+    for kind in ("subproc", "ray"):
+        venv = make_team_vec_env(
+            "game-2v2", 3, options={"max_cycles": 60}, seed=2, kind=kind, n_workers=2
+        )
+        try:
+            assert venv.num_envs == 6 and [len(b) for b in venv.blocks] == [4, 2]
+            runs[kind] = _rollout(venv, 8)  # past the end of a game: its reset too
+        finally:
+            venv.close()
+    for a, b in zip(runs["ray"], runs["subproc"], strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not ray.is_initialized()
+
+
 def test_a_run_on_ray_learns_the_same_policy_as_on_local_workers(tmp_path):
     from stable_baselines3 import PPO
 
