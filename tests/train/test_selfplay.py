@@ -335,3 +335,16 @@ def test_a_team_run_says_how_to_play_it():
     assert next_command("game-2v2", "R") == "robocup-gym match R scripted --players 2"
     assert next_command("game-5v5", "R").endswith("--players 5 --types 0,1,2,3,0")
     assert next_command("keepaway", "R") == "robocup-gym experiments team R"
+
+
+@needs_ode
+def test_the_team_games_benchmark_reports_every_size(run_benchmark):
+    res, lines = run_benchmark("team_games.py", "--quick", "--sizes", "1,2", timeout=300)
+    for n in (1, 2):
+        key = f"{n}v{n}"
+        decisions, cycles = res[f"team_{key}_decisions_per_s"], res[f"team_{key}_cycles_per_s"]
+        assert decisions > 0 and cycles > 0
+        assert decisions == pytest.approx(cycles * n / 10, rel=1e-2)  # n decisions / 10 cycles
+        ratio = cycles / res[f"physics_{key}_cycles_per_s"]
+        assert res[f"team_{key}_vs_physics"] == pytest.approx(ratio, abs=1e-3)
+    assert len(lines) == len(res)
