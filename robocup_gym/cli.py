@@ -835,6 +835,10 @@ if typer is not None:
 
         for name, env_id in registered_tasks().items():
             print(f"{name:20s} {env_id}")
+        print(
+            "\nteam scenarios (one policy for a team's players; the soccer extra): penalty, "
+            "keepaway, game-1v1 … game-11v11"
+        )
         try:
             league = ", ".join(league_robot_names()) + " (--env robot=NAME)"
         except RcsssmjUnavailableError:

@@ -539,6 +539,8 @@ def test_the_training_display_shows_each_tasks_own_measure():
         "forward 0.41 m/s (error 0.10)"
     )
     assert task_measure({"ball_dx_mean": 2.24}) == "ball Δx 2.24 m"
+    team = {"rating_mu": 26.04, "goal_difference_vs_scripted": 0.5, "ball_dx_mean": None}
+    assert task_measure(team) == "vs scripted +0.50 goals/game · rating 26.0"
 
 
 def test_train_and_eval_a_league_robot(tmp_path):
@@ -567,6 +569,7 @@ def test_tasks_lists_the_tasks_and_the_robots():
     out = invoke(["tasks"]).output
     assert "velocity-kick" in out and "RobocupGym/GetUp-v0" in out
     assert "robots: the Nao, types 0-4" in out
+    assert "team scenarios" in out and "game-1v1 … game-11v11" in out
     try:
         import rcsssmj  # noqa: F401
     except ImportError:
