@@ -563,7 +563,10 @@ if typer is not None:
             f"SB3 policy to {v['max_abs_diff']:.2e} on {v['samples']} observations"
         )
         if str(meta.get("env_id", "")).startswith("soccer/"):
-            console.print(f"play it: robocup-gym match {onnx} scripted")
+            from robocup_gym.train.selfplay import next_command
+            from robocup_gym.train.tasks import task_name
+
+            console.print(f"play it: {next_command(task_name(meta['env_id']), onnx)}")
         else:
             console.print(f"run it on a server: robocup-gym agent {onnx} --port 3100")
         print(

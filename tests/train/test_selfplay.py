@@ -348,3 +348,17 @@ def test_the_team_games_benchmark_reports_every_size(run_benchmark):
         ratio = cycles / res[f"physics_{key}_cycles_per_s"]
         assert res[f"team_{key}_vs_physics"] == pytest.approx(ratio, abs=1e-3)
     assert len(lines) == len(res)
+
+
+@needs_ode
+def test_the_shipped_striker_scores_more_penalties_than_the_scripted_one():
+    """``penalty-striker`` (trained with ``robocup-gym train penalty``) against the scripted
+    goalkeeper, and the scripted striker against it: the same 20 seeded penalties."""
+    from robocup_gym.train.pretrained import pretrained_names
+
+    assert "penalty-striker" in pretrained_names()
+    learnt = play_match("pretrained:penalty-striker", "scripted", scenario="penalty").summary
+    scripted = play_match("scripted", "scripted", scenario="penalty").summary
+    assert learnt["games"] == scripted["games"] == 20
+    assert learnt["goals_for"] >= 2 > scripted["goals_for"]
+    assert learnt["goals_against"] == 0  # a penalty: the keeper cannot score
