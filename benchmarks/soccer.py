@@ -49,7 +49,9 @@ def _steps_per_s(env, steps: int, seed: int = 0) -> float:
     return steps / (time.perf_counter() - t0)
 
 
-def _physics_per_s(env, cycles: int) -> float:
+def physics_per_s(env, cycles: int) -> float:
+    """Cycles per second of ``env``'s world stepped alone (no perception, no rules), its robots
+    moving (also used by ``team_games.py``)."""
     world = env.game.world
     env.reset(seed=0)
     rng = np.random.default_rng(1)
@@ -81,7 +83,7 @@ def main(argv: list[str] | None = None) -> dict:
         out["game_11v11_cycles_per_s"] = round(_steps_per_s(env, n // 20) * 10, 1)
     with game_v0.parallel_env(engine=args.engine, **eleven) as env:
         out["game_11v11_joint_cycles_per_s"] = round(_steps_per_s(env, n // 2), 1)
-        out["physics_22_robots_cycles_per_s"] = round(_physics_per_s(env, n // 2), 1)
+        out["physics_22_robots_cycles_per_s"] = round(physics_per_s(env, n // 2), 1)
     out["game_vs_physics"] = round(
         out["game_11v11_cycles_per_s"] / out["physics_22_robots_cycles_per_s"], 3
     )

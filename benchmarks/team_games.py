@@ -26,6 +26,7 @@ import json
 import time
 
 import numpy as np
+from soccer import physics_per_s  # the sibling benchmark (benchmarks/ is on the path)
 
 from robocup_gym.soccer.scripted import ScriptedTeam
 from robocup_gym.soccer.team_view import TeamView
@@ -47,19 +48,6 @@ def _decisions_per_s(view: TeamView, steps: int) -> tuple[float, float]:
     return steps * view.seats / dt, steps * cycles / dt
 
 
-def _physics_per_s(view: TeamView, cycles: int) -> float:
-    env = view.env
-    world = env.game.world
-    env.reset(seed=0)
-    rng = np.random.default_rng(1)
-    for p in env.game.players:  # the robots move, as in the game
-        world.command(p.index, 0.2 * rng.uniform(-1, 1, len(world.robots[p.index].model.joints)))
-    t0 = time.perf_counter()
-    for _ in range(cycles):
-        world.step()
-    return cycles / (time.perf_counter() - t0)
-
-
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps")
@@ -73,7 +61,7 @@ def main(argv: list[str] | None = None) -> dict:
         view = TeamView(f"game-{n}v{n}", lambda rng: scripted, {"max_cycles": 100_000}, seed=0)
         try:
             decisions, cycles = _decisions_per_s(view, steps)
-            physics = _physics_per_s(view, steps * 10)
+            physics = physics_per_s(view.env, steps * 10)
         finally:
             view.close()
         key = f"{n}v{n}"

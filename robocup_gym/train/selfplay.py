@@ -304,12 +304,7 @@ def make_team_vec_env(
         ValueError: an unknown scenario or option.
     """
     from robocup_gym.soccer.team_view import team_scenario
-    from robocup_gym.train.vecenv import (
-        BatchedSubprocVecEnv,
-        InProcessBlockVecEnv,
-        default_start_method,
-        resolve_n_workers,
-    )
+    from robocup_gym.train.vecenv import block_vec_env
 
     pool = pool or OpponentPool(None, SelfPlaySettings())
     if team_scenario(scenario)[1] != "either":
@@ -320,23 +315,13 @@ def make_team_vec_env(
         TeamFactory(scenario, options or {}, pool, None if seed is None else seed + i)
         for i in range(n_games)
     ]
-    if kind == "dummy":
-        return InProcessBlockVecEnv(factories, block_class=SeatBlock)
-    if kind == "ray":
-        from robocup_gym.train.ray_vecenv import RayVecEnv
-
-        return RayVecEnv(
-            factories,
-            n_workers=n_workers,
-            address=ray_address or None,
-            start_timeout_s=ray_start_timeout_s,
-            block_class=SeatBlock,
-        )
-    workers = resolve_n_workers(n_games, n_workers)
-    return BatchedSubprocVecEnv(
+    return block_vec_env(
         factories,
-        n_workers=workers,
-        start_method=start_method or default_start_method(),
+        kind=kind,
+        n_workers=n_workers,
+        start_method=start_method,
+        ray_address=ray_address,
+        ray_start_timeout_s=ray_start_timeout_s,
         block_class=SeatBlock,
     )
 

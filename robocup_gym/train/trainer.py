@@ -354,6 +354,13 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
             torch.set_num_threads(cfg.torch_threads)
         set_random_seed(cfg.seed)
         seed = cfg.seed if start_from is None else cfg.seed + 7919 * (1 + _n_ckpt(path))
+        placement = {
+            "kind": cfg.vec_env,
+            "n_workers": cfg.n_workers,
+            "start_method": cfg.start_method,
+            "ray_address": cfg.ray_address,
+            "ray_start_timeout_s": cfg.ray_start_timeout_s,
+        }
         if is_team_task(cfg.env_id):
             from robocup_gym.train.selfplay import (
                 OpponentPool,
@@ -367,11 +374,7 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
                 options=cfg.env_options(),
                 pool=OpponentPool(path / "opponents", SelfPlaySettings.of(cfg.selfplay)),
                 seed=seed,
-                kind=cfg.vec_env,
-                n_workers=cfg.n_workers,
-                start_method=cfg.start_method,
-                ray_address=cfg.ray_address,
-                ray_start_timeout_s=cfg.ray_start_timeout_s,
+                **placement,
             )
         else:
             venv = make_vec_env(
@@ -380,11 +383,7 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
                 backend=cfg.backend,
                 env_kwargs=cfg.env_options(),
                 seed=seed,
-                kind=cfg.vec_env,
-                start_method=cfg.start_method,
-                n_workers=cfg.n_workers,
-                ray_address=cfg.ray_address,
-                ray_start_timeout_s=cfg.ray_start_timeout_s,
+                **placement,
                 assist={
                     "share": cfg.assist_force,
                     "decay_steps": cfg.assist_steps,

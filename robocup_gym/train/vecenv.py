@@ -113,22 +113,53 @@ def make_vec_env(
         env_id, n_envs, backend=backend, env_kwargs=env_kwargs, seed=seed, assist=assist
     )
     wrapped = [_Monitored(f) for f in factories]
+    if kind == "dummy" or (kind == "auto" and n_envs == 1):
+        return DummyVecEnv(wrapped)
+    if kind != "ray" and resolve_n_workers(n_envs, n_workers) == n_envs:
+        return SubprocVecEnv(wrapped, start_method=start_method or default_start_method())
+    return block_vec_env(
+        wrapped,
+        kind=kind,
+        n_workers=n_workers,
+        start_method=start_method,
+        ray_address=ray_address,
+        ray_start_timeout_s=ray_start_timeout_s,
+    )
+
+
+def block_vec_env(
+    env_fns: list[Callable[[], Any]],
+    *,
+    kind: str = "auto",
+    n_workers: int = 0,
+    start_method: str = "",
+    ray_address: str = "",
+    ray_start_timeout_s: float = 60.0,
+    block_class: type[EnvBlock] | None = None,
+) -> BlockVecEnv:
+    """A :class:`BlockVecEnv` of ``env_fns`` (each giving ``block_class.seats_of`` environments)
+    in blocks: ``kind`` ``"dummy"`` (one block in this process), ``"ray"`` (Ray actors on the
+    cluster at ``ray_address`` or an embedded Ray) or else worker processes; ``n_workers``
+    (0 = one per CPU core, or per CPU of the Ray cluster) blocks, at most one per constructor."""
+    block_class = block_class or EnvBlock
+    if kind == "dummy":
+        return InProcessBlockVecEnv(env_fns, block_class=block_class)
     if kind == "ray":
         from robocup_gym.train.ray_vecenv import RayVecEnv
 
         return RayVecEnv(
-            wrapped,
+            env_fns,
             n_workers=n_workers,
             address=ray_address or None,
             start_timeout_s=ray_start_timeout_s,
+            block_class=block_class,
         )
-    if kind == "dummy" or (kind == "auto" and n_envs == 1):
-        return DummyVecEnv(wrapped)
-    workers = resolve_n_workers(n_envs, n_workers)
-    method = start_method or default_start_method()
-    if workers == n_envs:
-        return SubprocVecEnv(wrapped, start_method=method)
-    return BatchedSubprocVecEnv(wrapped, n_workers=workers, start_method=method)
+    return BatchedSubprocVecEnv(
+        env_fns,
+        n_workers=resolve_n_workers(len(env_fns), n_workers),
+        start_method=start_method or default_start_method(),
+        block_class=block_class,
+    )
 
 
 def resolve_n_workers(n_envs: int, n_workers: int = 0) -> int:
