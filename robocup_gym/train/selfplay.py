@@ -200,21 +200,10 @@ class SeatBlock(EnvBlock):
             raise ValueError(f"the games of one vector environment differ in size: {seats}")
         return seats.pop()
 
-    def __init__(self, env_fns: Sequence[Callable[[], Any]], first_index: int = 0) -> None:
-        self.first_index = first_index
-        self.seats = self.seats_of(env_fns)
-        self.envs: list = []
-        self.broken: _WorkerError | None = None
-        self._policy_key: str | None = None
-        self._policy: Any = None
-        for k, fn in enumerate(env_fns):
-            try:
-                self.envs.append(fn())
-            except Exception as e:  # reported to the parent at its first command
-                self.broken = _WorkerError(
-                    f"creating game {first_index // self.seats + k} failed: {type(e).__name__}: {e}"
-                )
-                break
+    what = "game"
+
+    def _make(self, fn: Callable[[], Any]) -> Any:
+        return fn()
 
     def handle(self, cmd: str, data: Any) -> Any:
         if self.broken is not None:

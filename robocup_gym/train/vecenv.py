@@ -192,22 +192,31 @@ class EnvBlock:
     an exception in an environment comes back as a :class:`_WorkerError` naming the
     environment instead of ending the worker."""
 
-    def __init__(self, env_fns: Sequence[Callable[[], gym.Env]], first_index: int = 0) -> None:
-        from stable_baselines3.common.vec_env.patch_gym import _patch_env
+    what = "environment"
+    """What each constructor builds, for error messages."""
 
+    def __init__(self, env_fns: Sequence[Callable[[], Any]], first_index: int = 0) -> None:
         self.first_index = first_index
+        self.seats = self.seats_of(env_fns)
         self.envs: list = []
         self.broken: _WorkerError | None = None
         self._policy_key: str | None = None
         self._policy: Any = None
         for k, fn in enumerate(env_fns):
             try:
-                self.envs.append(_patch_env(fn()))
+                self.envs.append(self._make(fn))
             except Exception as e:  # reported to the parent at its first command
                 self.broken = _WorkerError(
-                    f"creating environment {first_index + k} failed: {type(e).__name__}: {e}"
+                    f"creating {self.what} {first_index // self.seats + k} failed: "
+                    f"{type(e).__name__}: {e}"
                 )
                 break
+
+    def _make(self, fn: Callable[[], Any]) -> Any:
+        """One environment from its constructor (an old-Gym one converted to Gymnasium)."""
+        from stable_baselines3.common.vec_env.patch_gym import _patch_env
+
+        return _patch_env(fn())
 
     @staticmethod
     def seats_of(env_fns: Sequence[Callable[[], Any]]) -> int:
