@@ -226,6 +226,10 @@ class TeamView:
                 info["episode"] = {"r": float(self._return[k]), "l": self._length, "t": wall}
         return self._stack(self._obs, mine), r, terminated, truncated, out_infos
 
+    def get_wrapper_attr(self, name: str) -> Any:
+        """An attribute, as a Gymnasium environment answers it (for vector environments)."""
+        return getattr(self, name)
+
     def close(self) -> None:
         self.env.close()
 

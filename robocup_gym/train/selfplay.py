@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.train.vecenv import EnvBlock, _WorkerError
+from robocup_gym.train.vecenv import EnvBlock
 
 __all__ = [
     "SELFPLAY_FIELDS",
@@ -205,69 +205,40 @@ class SeatBlock(EnvBlock):
     def _make(self, fn: Callable[[], Any]) -> Any:
         return fn()
 
-    def handle(self, cmd: str, data: Any) -> Any:
-        if self.broken is not None:
-            return self.broken
-        s, games = self.seats, self.envs
-        g = 0
-        try:
-            if cmd in ("step", "reset") and len(data) != s * len(games):
-                return _WorkerError(f"{cmd}: {len(data)} entries for {s * len(games)} players")
-            if cmd == "step":
-                obs_rows, rewards, dones, infos, reset_infos = [], [], [], [], []
-                for g, game in enumerate(games):
-                    obs, r, terminated, truncated, info = game.step(data[g * s : (g + 1) * s])
-                    done = terminated or truncated
-                    resets: list[dict[str, Any]] = [{} for _ in range(s)]
-                    for k in range(s):
-                        info[k]["TimeLimit.truncated"] = truncated and not terminated
-                        if done:
-                            info[k]["terminal_observation"] = obs[k]
-                    if done:
-                        obs, resets = game.reset()
-                    obs_rows.append(obs)
-                    rewards.append(r)
-                    dones += [done] * s
-                    infos += info
-                    reset_infos += resets
-                return (
-                    np.concatenate(obs_rows),
-                    np.concatenate(rewards),
-                    np.array(dones, dtype=bool),
-                    infos,
-                    reset_infos,
-                )
-            if cmd == "reset":
-                out = []
-                for g, game in enumerate(games):
-                    obs, infos = game.reset(seed=data[g * s][0])
-                    out += list(zip(obs, infos, strict=True))
-                return out
-            if cmd == "rollout":
-                return self.rollout(*data)
-            if cmd == "get_spaces":
-                return games[0].observation_space, games[0].action_space
-            if cmd == "get_attr":
-                k, name = data
-                g = k // s
-                return getattr(games[g], name)
-            if cmd == "has_attr":
-                return hasattr(games[0], data)
-            if cmd == "set_attr":
-                k, name, value = data
-                g = k // s
-                return setattr(games[g], name, value)
-            if cmd == "env_method":
-                k, name, args, kwargs = data
-                g = k // s
-                return getattr(games[g], name)(*args, **kwargs)
-            if cmd == "is_wrapped":
-                return False
-            return _WorkerError(f"a team game does not answer {cmd!r}")
-        except Exception as e:
-            return _WorkerError(
-                f"{cmd} failed in game {self.first_index // s + g}: {type(e).__name__}: {e}"
-            )
+    def _step(self, data: Any) -> tuple:
+        s = self.seats
+        obs_rows, rewards, dones, infos, reset_infos = [], [], [], [], []
+        for g, game in enumerate(self.envs):
+            self._current = g
+            obs, r, terminated, truncated, info = game.step(data[g * s : (g + 1) * s])
+            done = terminated or truncated
+            resets: list[dict[str, Any]] = [{} for _ in range(s)]
+            for k in range(s):
+                info[k]["TimeLimit.truncated"] = truncated and not terminated
+                if done:
+                    info[k]["terminal_observation"] = obs[k]
+            if done:
+                obs, resets = game.reset()
+            obs_rows.append(obs)
+            rewards.append(r)
+            dones += [done] * s
+            infos += info
+            reset_infos += resets
+        return (
+            np.concatenate(obs_rows),
+            np.concatenate(rewards),
+            np.array(dones, dtype=bool),
+            infos,
+            reset_infos,
+        )
+
+    def _reset(self, data: Any) -> list:
+        out = []
+        for g, game in enumerate(self.envs):
+            self._current = g
+            obs, infos = game.reset(seed=data[g * self.seats][0])  # the game's first player's
+            out += list(zip(obs, infos, strict=True))
+        return out
 
 
 def make_team_vec_env(

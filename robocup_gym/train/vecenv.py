@@ -202,6 +202,8 @@ class EnvBlock:
         self.broken: _WorkerError | None = None
         self._policy_key: str | None = None
         self._policy: Any = None
+        self._current = 0
+        """The built environment a command is at (for its error)."""
         for k, fn in enumerate(env_fns):
             try:
                 self.envs.append(self._make(fn))
@@ -229,72 +231,87 @@ class EnvBlock:
 
     def handle(self, cmd: str, data: Any) -> Any:
         """The answer to one command (``step``, ``reset``, ``get_spaces``, ``env_method``,
-        ``get_attr``, ``has_attr``, ``set_attr``, ``is_wrapped``, ``render``)."""
+        ``get_attr``, ``has_attr``, ``set_attr``, ``is_wrapped``, ``render``); ``k`` in a
+        command is an environment of the vector environment (``seats`` of them per built
+        one)."""
         if self.broken is not None:
             return self.broken
         envs = self.envs
-        if cmd in ("step", "reset") and len(data) != len(envs):
-            return _WorkerError(f"{cmd}: {len(data)} entries for {len(envs)} environments")
-        k = 0
+        n = len(envs) * self.seats
+        if cmd in ("step", "reset") and len(data) != n:
+            return _WorkerError(f"{cmd}: {len(data)} entries for {n} environments")
+        self._current = 0
         try:
             if cmd == "step":
-                # the block's answer as one array per quantity (one pickle each, not one per
-                # environment): obs, rewards, dones, infos, reset infos
-                n = len(envs)
-                obs_block: list = [None] * n
-                rewards = np.empty(n)
-                dones = np.empty(n, dtype=bool)
-                infos: list = [None] * n
-                reset_infos: list = [{} for _ in range(n)]
-                for k in range(n):
-                    env = envs[k]
-                    obs, reward, terminated, truncated, info = env.step(data[k])
-                    done = terminated or truncated
-                    info["TimeLimit.truncated"] = truncated and not terminated
-                    if done:
-                        info["terminal_observation"] = obs
-                        obs, reset_infos[k] = env.reset()
-                    obs_block[k], rewards[k], dones[k], infos[k] = obs, reward, done, info
-                return np.stack(obs_block), rewards, dones, infos, reset_infos
+                return self._step(data)
             if cmd == "reset":
-                out = []
-                for k in range(len(envs)):
-                    seed, options = data[k]
-                    kw = {"options": options} if options else {}
-                    out.append(envs[k].reset(seed=seed, **kw))
-                return out
+                return self._reset(data)
             if cmd == "rollout":
                 return self.rollout(*data)
             if cmd == "get_spaces":
                 return envs[0].observation_space, envs[0].action_space
-            if cmd == "env_method":
-                k, name, args, kwargs = data
-                return envs[k].get_wrapper_attr(name)(*args, **kwargs)
-            if cmd == "get_attr":
-                k, name = data
-                return envs[k].get_wrapper_attr(name)
             if cmd == "has_attr":
                 try:
                     envs[0].get_wrapper_attr(data)
                     return True
                 except AttributeError:
                     return False
+            k = data[0] if isinstance(data, tuple) else data  # (k, …), or render's k
+            self._current = k // self.seats
+            env = envs[self._current]
+            if cmd == "env_method":
+                _, name, args, kwargs = data
+                return env.get_wrapper_attr(name)(*args, **kwargs)
+            if cmd == "get_attr":
+                return env.get_wrapper_attr(data[1])
             if cmd == "set_attr":
-                k, name, value = data
-                return setattr(envs[k], name, value)
+                _, name, value = data
+                return setattr(env, name, value)
             if cmd == "is_wrapped":
                 from stable_baselines3.common.env_util import is_wrapped
 
-                k, cls = data
-                return is_wrapped(envs[k], cls)
+                return is_wrapped(env, data[1])
             if cmd == "render":
-                k = data
-                return envs[k].render()
+                return env.render()
             return _WorkerError(f"unknown worker command {cmd!r}")
         except Exception as e:
             return _WorkerError(
-                f"{cmd} failed in environment {self.first_index + k}: {type(e).__name__}: {e}"
+                f"{cmd} failed in {self.what} {self.first_index // self.seats + self._current}: "
+                f"{type(e).__name__}: {e}"
             )
+
+    def _step(self, data: Any) -> tuple:
+        """One step of every environment, those that end reset: the block's answer as one
+        array per quantity (one pickle each, not one per environment): obs, rewards, dones,
+        infos, reset infos."""
+        envs = self.envs
+        n = len(envs)
+        obs_block: list = [None] * n
+        rewards = np.empty(n)
+        dones = np.empty(n, dtype=bool)
+        infos: list = [None] * n
+        reset_infos: list = [{} for _ in range(n)]
+        for k in range(n):
+            self._current = k
+            env = envs[k]
+            obs, reward, terminated, truncated, info = env.step(data[k])
+            done = terminated or truncated
+            info["TimeLimit.truncated"] = truncated and not terminated
+            if done:
+                info["terminal_observation"] = obs
+                obs, reset_infos[k] = env.reset()
+            obs_block[k], rewards[k], dones[k], infos[k] = obs, reward, done, info
+        return np.stack(obs_block), rewards, dones, infos, reset_infos
+
+    def _reset(self, data: Any) -> list:
+        """Every environment reset with its ``(seed, options)``: ``[(obs, info), …]``."""
+        out = []
+        for k, env in enumerate(self.envs):
+            self._current = k
+            seed, options = data[k]
+            kw = {"options": options} if options else {}
+            out.append(env.reset(seed=seed, **kw))
+        return out
 
     def rollout(self, key: str, spec: bytes, state: dict, steps: int, obs0, eps, mats) -> Any:
         """The block plays ``steps`` steps with a policy: ``spec`` is its class and constructor
