@@ -7,15 +7,15 @@ the robot got up for good (the target: ≥ 90 % within 80 cycles; the reference 
 from the front and ~55 from the back on rcssserver3d).
 
 ``zero`` runs a zero-action policy (on the Nao: the scripted get-up alone, GetUp's
-``reference_motion``); ``pretrained:get-up`` the policy shipped with the package. The environment
-is deterministic: an episode from the same lying pose repeats. Each episode starts from one of
-the run's ``lying_poses`` drops per side (tilt and joints varied ±10°; ``--lying-poses N``
-another number), or with ``--pose-from N`` from pose N + k (``--pose-from 32``: poses a run
-trained on up to 32 never met); ``--robot-type N`` another Nao type (``--script-robot-type N``:
-under another type's scripted get-up). A policy meant for one side
-(``start_side`` ``front`` or ``back`` in its options) is measured on that side only.
-Prints one line per side and, as the last line, one JSON object (``success_rate``,
-``cycles_to_up_median``, per side the same).
+``reference_motion``); ``pretrained:get-up`` the policy shipped with the package. The
+environment is deterministic: an episode from the same lying pose repeats. Each episode starts
+from one of the run's ``lying_poses`` drops per side (tilt and joints varied ±10°;
+``--lying-poses N`` another number), or with ``--pose-from N`` from pose N + k (``--pose-from
+32``: poses a run trained on up to 32 never met); ``--robot-type N`` another Nao type
+(``--script-robot-type N``: under another type's scripted get-up), ``--backend rcssserver3d`` a
+real server. A policy meant for one side (``start_side`` ``front`` or ``back`` in its options)
+is measured on that side only. Prints one line per side and, as the last line, one JSON object
+(``success_rate``, ``cycles_to_up_median``, per side the same).
 
     python benchmarks/getup.py runs/get-up-ppo-<time> --episodes 20
 """
@@ -55,21 +55,11 @@ def run(
 
 
 def main(argv: list[str] | None = None) -> dict:
+    from robocup_gym.train.evaluate import add_benchmark_options, benchmark_policy_and_env
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "policy",
-        help="a GetUp run folder, 'pretrained:get-up' (the shipped policy) or 'zero' (a "
-        "zero-action baseline)",
-    )
-    parser.add_argument("--episodes", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=100_000)
+    add_benchmark_options(parser, "GetUp", episodes=20)
     parser.add_argument("--within", type=int, default=80, help="cycles that count as success")
-    parser.add_argument(
-        "--engine",
-        choices=("ode", "mujoco"),
-        default=None,
-        help="default: the run's own (ode for 'zero')",
-    )
     parser.add_argument(
         "--lying-poses",
         type=int,
@@ -86,9 +76,6 @@ def main(argv: list[str] | None = None) -> dict:
         "lying_poses <= 32 never met",
     )
     parser.add_argument(
-        "--robot-type", type=int, default=None, help="Nao type 0-4 (default: the run's own)"
-    )
-    parser.add_argument(
         "--script-robot-type",
         type=int,
         default=None,
@@ -96,16 +83,14 @@ def main(argv: list[str] | None = None) -> dict:
         "script_robot_type; default: the run's own, for 'zero' the robot's type's)",
     )
     args = parser.parse_args(argv)
-    from robocup_gym.train.evaluate import policy_and_env
-
     overrides = {}
     if args.lying_poses is not None:
         overrides["lying_poses"] = args.lying_poses
-    if args.robot_type is not None:
-        overrides["robot_type"] = args.robot_type
     if args.script_robot_type is not None:
         overrides["script_robot_type"] = args.script_robot_type
-    env, act = policy_and_env(args.policy, "RobocupGym/GetUp-v0", args.engine, overrides)
+    env, act = benchmark_policy_and_env(args, "RobocupGym/GetUp-v0", overrides)
+    if args.robot_type is not None:
+        overrides["robot_type"] = args.robot_type
     fixed = getattr(env.unwrapped.config, "start_side", "random")
     sides = (fixed,) if fixed in ("front", "back") else ("front", "back")
     out: dict = {"policy": args.policy, "within_cycles": args.within, **overrides}

@@ -10,9 +10,9 @@ default engine for ``--episodes`` episodes per command, each as long as the run'
 * turning 30 deg/s: mean error of the turn rate.
 
 ``pretrained:NAME`` runs a shipped policy; ``zero`` runs a policy that sends zero actions (a
-baseline, and a smoke test without a trained run). ``--robot-type N`` runs another Nao type.
-Prints one line per command and, as the last line, one JSON object (``forward_speed_mps``,
-``falls``, ``sideways_error_mps``, ``turn_error_deg_s``, …).
+baseline, and a smoke test without a trained run). ``--robot-type N`` runs another Nao type,
+``--backend rcssserver3d`` a real server. Prints one line per command and, as the last line, one
+JSON object (``forward_speed_mps``, ``falls``, ``sideways_error_mps``, ``turn_error_deg_s``, …).
 
     python benchmarks/walk.py runs/walk-ppo-<time> --episodes 20
 """
@@ -81,31 +81,12 @@ def _wrap(a: float) -> float:
 
 
 def main(argv: list[str] | None = None) -> dict:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "policy",
-        help="a Walk run folder, 'pretrained:NAME' (a shipped policy) or 'zero' (a zero-action "
-        "baseline)",
-    )
-    parser.add_argument("--episodes", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=100_000)
-    parser.add_argument(
-        "--engine",
-        choices=("ode", "mujoco"),
-        default=None,
-        help="default: the run's own (ode for 'zero')",
-    )
-    parser.add_argument(
-        "--robot-type",
-        type=int,
-        default=None,
-        help="Nao type 0-4 (default: the run's own; a policy takes only types with its joints)",
-    )
-    args = parser.parse_args(argv)
-    from robocup_gym.train.evaluate import policy_and_env
+    from robocup_gym.train.evaluate import add_benchmark_options, benchmark_policy_and_env
 
-    overrides = {} if args.robot_type is None else {"robot_type": args.robot_type}
-    env, act = policy_and_env(args.policy, "RobocupGym/Walk-v0", args.engine, overrides)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_benchmark_options(parser, "Walk", episodes=20)
+    args = parser.parse_args(argv)
+    env, act = benchmark_policy_and_env(args, "RobocupGym/Walk-v0")
     out: dict = {
         "policy": args.policy,
         "episodes_per_command": args.episodes,

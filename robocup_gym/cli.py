@@ -53,6 +53,16 @@ def _usage_error(message: str) -> Exception:
     return exceptions.UsageError(message, ctx=globals_.get_current_context(silent=True))
 
 
+def _task_measure_rows() -> list[tuple[str, str]]:
+    """(summary key, label) of the tasks' own measures: GetUp's success rate and
+    :data:`~robocup_gym.train.metrics.TASK_MEASURES`."""
+    from robocup_gym.train.metrics import TASK_MEASURES
+
+    return [("success_rate", "success rate")] + [
+        (f"{key}_mean", label) for key, label in TASK_MEASURES.items()
+    ]
+
+
 def _fail(message: str, code: int = 1):
     from rich.console import Console
     from rich.markup import escape
@@ -483,11 +493,7 @@ if typer is not None:
         table.add_row("episode return", fmt(summary["return_mean"]), fmt(summary["return_std"]))
         table.add_row("fall rate", fmt(summary["fall_rate"]), "")
         table.add_row("episode length (steps)", fmt(summary["length_mean"]), "")
-        for key, label in (  # the locomotion tasks' own measures, where the task has them
-            ("success_rate", "success rate"),
-            ("forward_speed_mps_mean", "forward speed (m/s)"),
-            ("forward_error_mps_mean", "forward tracking error (m/s)"),
-        ):
+        for key, label in _task_measure_rows():  # the task's own measures, where it has them
             if summary.get(key) is not None:
                 table.add_row(label, fmt(summary[key]), "")
         console.print(table)
@@ -511,9 +517,7 @@ if typer is not None:
             ("return_mean", "episode return"),
             ("fall_rate", "fall rate"),
             ("length_mean", "episode length (steps)"),
-            ("success_rate", "success rate"),
-            ("forward_speed_mps_mean", "forward speed (m/s)"),
-            ("forward_error_mps_mean", "forward tracking error (m/s)"),
+            *_task_measure_rows(),
             ("ball_dx_mean", "ball x-displacement (m)"),
         )
         console.print(

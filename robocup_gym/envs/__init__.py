@@ -24,10 +24,16 @@ from robocup_gym.envs.config import (
 )
 from robocup_gym.envs.observations import COMPONENTS, component_names
 from robocup_gym.envs.tasks import (
+    Dribble,
+    DribbleConfig,
     GetUp,
     GetUpConfig,
+    LongKick,
+    LongKickConfig,
     SimpleKick,
     SimpleKickConfig,
+    TargetKick,
+    TargetKickConfig,
     VelocityKick,
     VelocityKickConfig,
     Walk,
@@ -41,14 +47,20 @@ __all__ = [
     "REGISTERED_IDS",
     "ActionMode",
     "BaseEnv",
+    "Dribble",
+    "DribbleConfig",
     "EnvConfig",
     "EnvConfigError",
     "EpisodeStart",
     "GetUp",
     "GetUpConfig",
+    "LongKick",
+    "LongKickConfig",
     "Normalisation",
     "SimpleKick",
     "SimpleKickConfig",
+    "TargetKick",
+    "TargetKickConfig",
     "VelocityKick",
     "VelocityKickConfig",
     "Walk",
@@ -62,6 +74,9 @@ _ENTRY_POINTS = {
     "RobocupGym/VelocityKick-v0": "robocup_gym.envs.tasks.velocity_kick:VelocityKick",
     "RobocupGym/Walk-v0": "robocup_gym.envs.tasks.walk:Walk",
     "RobocupGym/GetUp-v0": "robocup_gym.envs.tasks.getup:GetUp",
+    "RobocupGym/TargetKick-v0": "robocup_gym.envs.tasks.target_kick:TargetKick",
+    "RobocupGym/LongKick-v0": "robocup_gym.envs.tasks.long_kick:LongKick",
+    "RobocupGym/Dribble-v0": "robocup_gym.envs.tasks.dribble:Dribble",
 }
 REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 """Every Gymnasium id this package registers."""

@@ -384,7 +384,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.reward_terms: dict[str, float] = {}
         """The last step's reward by term (:meth:`_reward_terms`)."""
         self._vision_ball = np.zeros(4)
-        self._needs_heading = "ball_rel" in config.observations or "ball_vel" in config.observations
+        self._needs_heading = bool(
+            {"ball_rel", "ball_vel", "target_rel"} & set(config.observations)
+        )
         self._heading = (1.0, 0.0)
         self._started = False
         self.perception: Perception | None = None
@@ -394,6 +396,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         self.fallen = False
         self.ball_spawn_pos = config.ball_start.copy()
         self.kick_target = np.array(config.kick_target, dtype=float)
+        self.target_pos = np.zeros(2)
+        """A point a task asks for, world (x, y) m (the ``target_rel`` observation); the origin
+        unless the task sets it."""
         self.velocity_command = np.zeros(3)
         """The planar velocity a task commands (forward m/s, left m/s, turn deg/s; the
         ``velocity_command`` observation); zeros unless the task sets it."""

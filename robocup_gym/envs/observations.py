@@ -165,6 +165,13 @@ def _write_kick_target(env, out: np.ndarray) -> None:
     out[:] = env.kick_target
 
 
+def _write_target_rel(env, out: np.ndarray) -> None:
+    c, s = env._heading
+    d = env.target_pos - env.ground_truth.torso_pos[:2]
+    out[0] = c * d[0] + s * d[1]
+    out[1] = c * d[1] - s * d[0]
+
+
 def _write_velocity_command(env, out: np.ndarray) -> None:
     out[:] = env.velocity_command
 
@@ -328,6 +335,17 @@ COMPONENTS: dict[str, Component] = {
             _const([0.0, -90.0], [20.0, 90.0]),
             _labels("kick_target", ["distance", "angle"]),
             write=_write_kick_target,
+        ),
+        Component(
+            "target_rel",
+            "The point a task asks for (Dribble: where the ball should go) relative to the "
+            "torso, in its heading frame (forward, left). Ground truth.",
+            "m",
+            "[-20, 20]",
+            _const([-20.0, -20.0], [20.0, 20.0]),
+            _labels("target_rel", ["x", "y"]),
+            needs_ground_truth=True,
+            write=_write_target_rel,
         ),
         Component(
             "velocity_command",

@@ -45,6 +45,21 @@ BALL_LINEAR_DRAG = 0.01
 """N·s/m (reference §5)."""
 BALL_ANGULAR_DRAG = 0.00005
 """N·m·s/rad (reference §5)."""
+BALL_ROLLING_TIME_S = (
+    (1.0 + 2.0 / 5.0) * BALL_MASS / (BALL_LINEAR_DRAG + BALL_ANGULAR_DRAG / BALL_RADIUS**2)
+)
+"""Time constant of a ball rolling on the ground, s (0.95): it rolls without slipping (μ = ∞),
+so its inertia is that of a solid sphere, m (1 + 2/5), and both drags brake it, the angular one
+as a force ``BALL_ANGULAR_DRAG``·v / r²; its speed decays as exp(−t / this)."""
+
+
+def ball_rest_point(pos: Sequence[float], vel: Sequence[float]) -> np.ndarray:
+    """Where a ball rolling on the ground at ``pos`` (m) with velocity ``vel`` (m/s) comes to
+    rest, (x, y) m: ``pos`` + ``vel`` × :data:`BALL_ROLLING_TIME_S` (the drags' exponential
+    decay; a ball in the air is treated as rolling at its horizontal velocity)."""
+    return np.array([pos[0] + vel[0] * BALL_ROLLING_TIME_S, pos[1] + vel[1] * BALL_ROLLING_TIME_S])
+
+
 BODY_LINEAR_DRAG = 0.01
 """Drag on every robot body, N·s/m (reference §7.5)."""
 BODY_ANGULAR_DRAG = 0.01

@@ -19,7 +19,8 @@ from robocup_gym.train.metrics import episode_record, summarize
 def task_measure(summary: dict[str, Any]) -> str:
     """The task's own measure in a summary, for the training display: a team's goal difference
     against the scripted team and its rating, GetUp's success rate, Walk's forward speed and
-    tracking error, else (the kicks) the ball's x-displacement."""
+    tracking error, Dribble's ball speed toward the target, TargetKick's errors, else (the other
+    kicks) the ball's x-displacement."""
     if "rating_mu" in summary:  # a team: its recent games
         return (
             f"vs scripted {_fmt(summary.get('goal_difference_vs_scripted'), '+.2f')} goals/game"
@@ -27,6 +28,16 @@ def task_measure(summary: dict[str, Any]) -> str:
         )
     if summary.get("success_rate") is not None:
         return f"success {_fmt(summary['success_rate'])}"
+    if summary.get("ball_speed_to_target_mps_mean") is not None:  # Dribble
+        return (
+            f"ball → target {_fmt(summary['ball_speed_to_target_mps_mean'])} m/s "
+            f"(losses {_fmt(summary.get('losses_mean'), '.1f')})"
+        )
+    if summary.get("distance_error_mean") is not None:  # TargetKick
+        return (
+            f"distance error {_fmt(summary['distance_error_mean'])} · direction error "
+            f"{_fmt(summary.get('direction_error_deg_mean'), '.1f')}°"
+        )
     if summary.get("forward_speed_mps_mean") is not None:
         return (
             f"forward {_fmt(summary['forward_speed_mps_mean'])} m/s "

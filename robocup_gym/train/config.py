@@ -64,16 +64,19 @@ which acts with the policy from before that update (a one-rollout policy lag;
 SAC_PAPER_DEFAULTS: dict[str, Any] = {}
 """SAC: Stable-Baselines3's defaults, as in the paper."""
 
+_GAIT_RESIDUAL_PPO: dict[str, Any] = {
+    "learning_rate": 3e-4,
+    "batch_size": 256,
+    # a residual over the reference gait wants small, plain Gaussian noise: with gSDE's
+    # state-dependent noise, even at log_std_init -1.5, a fresh policy's actions average
+    # 0.77 (of ±30°) and it falls within 30 steps (docs/training.md, *Walk*)
+    "use_sde": False,
+    "policy_kwargs": {"log_std_init": -2.0},
+}
+
 TASK_ALGO_DEFAULTS: dict[tuple[str, str], dict[str, Any]] = {
-    ("RobocupGym/Walk-v0", "ppo"): {
-        "learning_rate": 3e-4,
-        "batch_size": 256,
-        # a residual over the reference gait wants small, plain Gaussian noise: with gSDE's
-        # state-dependent noise, even at log_std_init -1.5, a fresh policy's actions average
-        # 0.77 (of ±30°) and it falls within 30 steps (docs/training.md, *Walk*)
-        "use_sde": False,
-        "policy_kwargs": {"log_std_init": -2.0},
-    },
+    ("RobocupGym/Walk-v0", "ppo"): _GAIT_RESIDUAL_PPO,
+    ("RobocupGym/Dribble-v0", "ppo"): _GAIT_RESIDUAL_PPO,
     ("RobocupGym/GetUp-v0", "ppo"): {
         # a residual over the scripted get-up (5° of reach): σ = e^-2 of it is 0.7°, which the
         # script (searched under 1.5° of noise) stands (docs/training.md, *Get-up*)

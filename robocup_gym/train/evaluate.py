@@ -58,6 +58,50 @@ def policy_and_env(
     return env, act
 
 
+def add_benchmark_options(parser, task: str, episodes: int) -> None:
+    """The options every skill benchmark (``benchmarks/walk.py``, ``getup.py``, ``kick.py``,
+    ``dribble.py``) takes, on an ``argparse`` parser: the policy (a ``task`` run folder,
+    ``pretrained:NAME`` or ``zero``), ``--episodes`` (default ``episodes``), ``--seed``,
+    ``--backend`` (also ``--engine``: ode, mujoco or rcssserver3d) and ``--robot-type``."""
+    parser.add_argument(
+        "policy",
+        help=f"a {task} run folder, 'pretrained:NAME' (a shipped policy) or 'zero' (a "
+        "zero-action baseline)",
+    )
+    parser.add_argument("--episodes", type=int, default=episodes)
+    parser.add_argument("--seed", type=int, default=100_000)
+    parser.add_argument(
+        "--backend",
+        "--engine",
+        dest="backend",
+        choices=("ode", "mujoco", "rcssserver3d"),
+        default=None,
+        help="the simulator: ode, mujoco or rcssserver3d (a real server, RCSSSERVER3D names "
+        "its binary); default: the run's own (ode for 'zero')",
+    )
+    parser.add_argument(
+        "--robot-type",
+        type=int,
+        default=None,
+        help="Nao type 0-4 (default: the run's own; a policy takes only types with its joints)",
+    )
+
+
+def benchmark_policy_and_env(args, env_id: str, env_overrides: dict[str, Any] | None = None):
+    """:func:`policy_and_env` for the options of :func:`add_benchmark_options` (``env_id`` for
+    ``zero``), ``--robot-type`` among the overrides.
+
+    Raises:
+        SystemExit: ``--episodes`` below 1 (named).
+    """
+    if args.episodes < 1:
+        raise SystemExit(f"--episodes must be at least 1, got {args.episodes}")
+    extra = dict(env_overrides or {})
+    if args.robot_type is not None:
+        extra["robot_type"] = args.robot_type
+    return policy_and_env(args.policy, env_id, args.backend, extra)
+
+
 # ---------------------------------------------------------------------------------- video
 def ensure_gl_backend() -> str:
     """Choose a headless OpenGL backend for MuJoCo when none is configured.

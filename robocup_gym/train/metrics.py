@@ -23,6 +23,18 @@ BALL_DIST_KEYS = ("ball_distance", "ball_total_distance")
 FALL_KEYS = ("fallen", "has_fallen", "fell", "robot_fallen")
 """Whether the robot fell during the episode."""
 
+TASK_MEASURES: dict[str, str] = {
+    "forward_speed_mps": "forward speed (m/s)",
+    "forward_error_mps": "forward tracking error (m/s)",
+    "distance_error": "kick distance error (fraction)",
+    "direction_error_deg": "kick direction error (deg)",
+    "ball_speed_to_target_mps": "ball speed toward the target (m/s)",
+    "losses": "ball losses per episode",
+}
+"""The tasks' own measures in the ``info`` of an episode's last step (Walk's speed and tracking
+error, TargetKick's errors, Dribble's progress and losses), with their labels: a summary has
+each one's mean as ``<key>_mean``."""
+
 _SKIP = {
     "episode",
     "terminal_observation",
@@ -90,7 +102,7 @@ def episode_record(info: Mapping[str, Any], ep_return: float, ep_length: int) ->
     assist = _first(info, ("assist_share",))  # a training run's TorsoAssist
     if assist is not None:
         rec["assist_share"] = float(assist)
-    for key in ("forward_speed_mps", "forward_error_mps"):  # Walk
+    for key in TASK_MEASURES:
         v = _first(info, (key,))
         if v is not None:
             rec[key] = float(v)
@@ -127,7 +139,6 @@ def summarize(records: Iterable[Mapping[str, float]]) -> dict[str, float | int |
         "return_std": ret_std,
         "length_mean": len_mean,
         "success_rate": stats("success")[0],
-        "forward_speed_mps_mean": stats("forward_speed_mps")[0],
-        "forward_error_mps_mean": stats("forward_error_mps")[0],
+        **{f"{key}_mean": stats(key)[0] for key in TASK_MEASURES},
         "assist_share_mean": stats("assist_share")[0],
     }

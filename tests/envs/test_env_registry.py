@@ -22,6 +22,9 @@ def test_registry_lists_the_tasks():
         "RobocupGym/VelocityKick-v0",
         "RobocupGym/Walk-v0",
         "RobocupGym/GetUp-v0",
+        "RobocupGym/TargetKick-v0",
+        "RobocupGym/LongKick-v0",
+        "RobocupGym/Dribble-v0",
     }
     for env_id in rg_envs.REGISTERED_IDS:
         assert env_id in gym.registry

@@ -510,6 +510,20 @@ def test_episode_metrics_carry_the_locomotion_measures():
     assert kick["assist_share_mean"] is None
     helped = [episode_record({"success": False, "assist_share": a}, 0.0, 5) for a in (0.8, 0.6)]
     assert summarize(helped)["assist_share_mean"] == pytest.approx(0.7)
+    aimed = summarize(
+        [
+            episode_record({"distance_error": d, "direction_error_deg": a}, 0.0, 60)
+            for d, a in ((0.2, 4.0), (0.4, 8.0))
+        ]
+    )
+    assert aimed["distance_error_mean"] == pytest.approx(0.3)
+    assert aimed["direction_error_deg_mean"] == pytest.approx(6.0)
+    dribbles = [
+        episode_record({"ball_speed_to_target_mps": v, "losses": n}, 0.0, 500)
+        for v, n in ((0.5, 1), (0.7, 3))
+    ]
+    assert summarize(dribbles)["ball_speed_to_target_mps_mean"] == pytest.approx(0.6)
+    assert summarize(dribbles)["losses_mean"] == pytest.approx(2.0)
 
 
 def test_walk_reports_its_forward_speed_and_tracking_error():
@@ -539,6 +553,13 @@ def test_the_training_display_shows_each_tasks_own_measure():
         "forward 0.41 m/s (error 0.10)"
     )
     assert task_measure({"ball_dx_mean": 2.24}) == "ball Δx 2.24 m"
+    assert task_measure(
+        {"distance_error_mean": 0.25, "direction_error_deg_mean": 7.04, "ball_dx_mean": 2.0}
+    ) == ("distance error 0.25 · direction error 7.0°")
+    dribble = {"ball_speed_to_target_mps_mean": 0.55, "losses_mean": 1.0}
+    assert task_measure({**dribble, "forward_speed_mps_mean": 0.4}) == (
+        "ball → target 0.55 m/s (losses 1.0)"
+    )
     team = {"rating_mu": 26.04, "goal_difference_vs_scripted": 0.5, "ball_dx_mean": None}
     assert task_measure(team) == "vs scripted +0.50 goals/game · rating 26.0"
 
