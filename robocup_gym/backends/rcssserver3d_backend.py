@@ -724,7 +724,16 @@ class Rcssserver3dBackend(Backend):
         else:  # the fork's rot turns the robot (joints as driven) about its torso centre
             rot = tc.rot_from_quat(pose.quat)
             place = tc.agent(self.unum, team, move=(pose.x, pose.y, z, yaw), rot=rot)
-        final = tc.play_mode(play_mode) + place + tc.ball(bpos, bvel) + tc.set_time(0.0)
+        # a ball that starts moving is put down at rest, and given its velocity in the last
+        # cycle of the reset (below), so that it has not rolled on by the first observation
+        moving = any(bvel)
+        rest = [0.0, 0.0, 0.0]
+        final = (
+            tc.play_mode(play_mode)
+            + place
+            + tc.ball(bpos, rest if moving else bvel)
+            + tc.set_time(0.0)
+        )
         # the two cycles after the placement get the smallest non-zero joint velocities the wire
         # carries (1e-4 rad/s: 2e-6 rad a cycle): a non-zero command wakes the joint's body, so
         # the robot is awake once it is put down, as the in-process engines place it, instead of
@@ -751,6 +760,11 @@ class Rcssserver3dBackend(Backend):
                     "after the trainer commands (is the monitor port that of the same server?)"
                 )
             p = self._exchange(self._velocity_text(np.zeros(self._n)), wait=False)
+            settle += 1
+        if moving:
+            # a trainer command takes effect after the physics of the cycle it arrives in: the
+            # ball leaves its start with its velocity in the first step, as in-process
+            p = self._exchange(self._velocity_text(np.zeros(self._n)), tc.ball(bpos, bvel))
             settle += 1
         self._tracker.restart_velocities(
             bvel, p.game.game_time, p.game.play_mode not in FROZEN_CLOCK_MODES

@@ -290,6 +290,35 @@ def test_real_resets_start_awake_and_standing_as_in_process(real_binary, pose_na
         ode.close()
 
 
+def test_a_ball_started_rolling_rolls_as_in_process(real_binary):
+    """A reset that starts the ball moving (``ball_vel``): in the first observation the ball is
+    where it was put, with that velocity, and each step moves it as the in-process ODE engine
+    does (the reset's own cycles do not roll it on), episode after episode."""
+    from robocup_gym.backends import make_backend
+
+    pose = RobotPose(-1.0, 0.0)
+    ode = make_backend("ode")
+    real = Rcssserver3dBackend(binary=real_binary, startup_timeout=60, timeout=20)
+    try:
+        for vel in ((3.0, 0.0, 0.0), (-1.0, 2.0, 0.0)):
+            ball = (0.5, -0.5, 0.041)
+            want = ode.reset_episode(pose, ball_pos=ball, ball_vel=vel)
+            got = real.reset_episode(pose, ball_pos=ball, ball_vel=vel)
+            np.testing.assert_allclose(
+                got.ground_truth.ball_pos[:2], want.ground_truth.ball_pos[:2], atol=1e-3
+            )
+            for _ in range(20):
+                want, got = ode.step(AgentCommand()), real.step(AgentCommand())
+                np.testing.assert_allclose(
+                    got.ground_truth.ball_pos, want.ground_truth.ball_pos, atol=1e-3
+                )
+            moved = np.hypot(*(want.ground_truth.ball_pos[:2] - np.array(ball[:2])))
+            assert moved > 0.5
+    finally:
+        real.close()
+        ode.close()
+
+
 @pytest.mark.parametrize("side", ["front", "back"])
 def test_getup_lies_on_the_real_server_as_in_process(real_binary, side):
     """GetUp on a real rcssserver3d whose trainer turns robots (the SPL fork's ``rot``): the
