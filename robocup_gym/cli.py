@@ -241,8 +241,9 @@ if typer is not None:
         task: Annotated[
             str | None,
             typer.Argument(
-                help="Task: velocity-kick, simple-kick, walk, getup (see `robocup-gym tasks`), "
-                "or a team scenario: penalty, keepaway, game-2v2, game-3v3, …"
+                help="Task: velocity-kick, simple-kick, walk, get-up, target-kick, long-kick, "
+                "dribble (see `robocup-gym tasks`), or a team scenario: penalty, keepaway, "
+                "game-2v2, game-3v3, …"
             ),
         ] = None,
         out: Annotated[Path, typer.Option(help="Parent folder of run folders.")] = Path("runs"),
