@@ -420,3 +420,16 @@ def test_getups_lying_poses_are_reached_on_the_real_server(real_binary, side):
         np.testing.assert_allclose(p1, p0, atol=0.005)
         off.append(float(np.abs(j1 - j0).max()))
     assert sum(d > 0.5 for d in off) <= 1 and sorted(off)[-2] < 0.5, off
+
+
+def test_the_skill_benchmarks_run_on_a_real_server(real_binary, run_benchmark):
+    """``benchmarks/dribble.py --backend rcssserver3d``: the guide and the reference gait
+    dribble on the real server too (zero actions, no fall)."""
+    import os
+
+    env = {**os.environ, "RCSSSERVER3D": real_binary}
+    res, lines = run_benchmark(
+        "dribble.py", "zero", "--episodes", 1, "--backend", "rcssserver3d", env=env, timeout=600
+    )
+    assert res["episodes"] == 3 and len(lines) == 3
+    assert res["falls"] == 0 and res["ball_speed_to_target_mps"] > 0.15
