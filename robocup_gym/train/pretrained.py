@@ -99,7 +99,9 @@ def pretrained_env(
     """The environment an exported ``policy`` (an :class:`~robocup_gym.train.export.OnnxPolicy`)
     is meant for: its task with its recorded options (:func:`recorded_env_options`;
     ``env_overrides`` over them) on ``backend`` (a backend's name or a built backend, such as
-    the agent's connection to a server; default: the engine it was trained on).
+    the agent's connection to a server; default: the engine it was trained on). The policy
+    drives the joints it was trained with (``controlled_joints`` of its description): on Nao
+    type 4 the toes of a policy trained on types 0–3 are held still.
 
     Raises:
         ValueError: the overrides give observations of another size than the policy takes.
@@ -113,10 +115,14 @@ def pretrained_env(
             + (" --scenario penalty" if meta["env_id"].endswith("/penalty") else "")
         )
     extra = dict(env_overrides or {})
+    options = {**recorded_env_options(meta), **extra}
+    joints = meta.get("controlled_joints")
+    if joints and options.get("controlled_joints") is None:
+        # the joints the policy drives, named: on a Nao type with more joints than the one it
+        # was trained on (type 4's toes) the others are held still (0 rad/s)
+        options["controlled_joints"] = tuple(joints)
     env = make_env(
-        meta["env_id"],
-        backend=backend or meta.get("backend") or DEFAULT_ENGINE,
-        env_kwargs={**recorded_env_options(meta), **extra},
+        meta["env_id"], backend=backend or meta.get("backend") or DEFAULT_ENGINE, env_kwargs=options
     )
     want = int(meta["input"]["shape"][1])
     if env.observation_space.shape != (want,):
