@@ -60,7 +60,12 @@ MAX_SUM_TWO_TYPES = 9
 
 BEAM_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
 PAUSED_MODES = ("BeforeKickOff", "GameOver")
-"""Play modes in which the game clock stands still and the players' fouls are not counted."""
+"""Play modes in which the game clock stands still."""
+FOULS_PAUSED_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
+"""Play modes in which the game is paused for the fouls: they are not counted and their counters
+start again. rcssserver3d pauses the game in these modes' updates and resumes it in every other
+mode's (pass and offside modes keep play-on's), so a game put into play-on by a trainer command
+counts fouls at once, and one in a goal's pause does not."""
 NOT_STANDING_Z = 0.25
 """A robot whose torso centre is lower than this (m) is not standing (reference §9.5)."""
 ON_GROUND_Z = 0.15
@@ -430,7 +435,7 @@ class Referee:
             return
         pm = self.play_mode
         t = self.game_time
-        if pm in PAUSED_MODES:
+        if pm in FOULS_PAUSED_MODES:
             self.posture.clear()
         elif rules.fallen_robots:
             self._take_off_fallen(players)

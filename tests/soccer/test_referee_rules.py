@@ -58,3 +58,21 @@ def test_time_while_the_game_is_paused_does_not_count():
     _run(game, INCAPABLE_S["not_standing"][0] + 1.0)
     assert game.world.torso_position(1)[2] < 0.25
     game.close()
+
+
+def test_time_in_a_goals_pause_does_not_count_and_starts_the_count_again():
+    """rcssserver3d pauses the fouls in a goal's pause (not only before a kick-off): a robot
+    lying through a long Goal_Left (goals off, so the mode stays) is left alone, and in play-on
+    it gets its whole 30 s again."""
+    game = _lying_game(2, rules={"goals": False})
+    down_s = INCAPABLE_S["not_standing"][0]
+    _run(game, down_s - 10.0)
+    game.referee.set_play_mode("Goal_Left")
+    _run(game, down_s + 1.0)
+    assert game.world.torso_position(1)[2] < 0.25
+    game.referee.set_play_mode("PlayOn")
+    _run(game, down_s - 0.5)
+    assert game.world.torso_position(1)[2] < 0.25
+    _run(game, 0.6)
+    assert game.world.torso_position(1)[2] > 0.9
+    game.close()
