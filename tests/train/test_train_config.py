@@ -175,5 +175,9 @@ def test_task_names():
     assert resolve_task("Pendulum-v1") == "Pendulum-v1"
     assert kebab("VelocityKick") == "velocity-kick"
     assert task_name("RobocupGym/VelocityKick-v0") == "velocity-kick"
-    with pytest.raises(ValueError, match="known tasks: get-up, simple-kick, velocity-kick, walk"):
+    with pytest.raises(
+        ValueError,
+        match="known tasks: dribble, get-up, long-kick, simple-kick, target-kick, velocity-kick, "
+        "walk",
+    ):
         resolve_task("penalty-kick")
