@@ -102,18 +102,14 @@ def _write_joint_vel(env, out: np.ndarray) -> None:
 
 def _write_ball_rel(env, out: np.ndarray) -> None:
     gt = env.ground_truth
-    c, s = env._heading
     d = gt.ball_pos - gt.torso_pos
-    out[0] = c * d[0] + s * d[1]
-    out[1] = c * d[1] - s * d[0]
+    out[0], out[1] = in_heading_frame(env._heading, d[0], d[1])
     out[2] = d[2]
 
 
 def _write_ball_vel(env, out: np.ndarray) -> None:
-    c, s = env._heading
     v = env.ground_truth.ball_vel
-    out[0] = c * v[0] + s * v[1]
-    out[1] = c * v[1] - s * v[0]
+    out[0], out[1] = in_heading_frame(env._heading, v[0], v[1])
     out[2] = v[2]
 
 
@@ -166,10 +162,8 @@ def _write_kick_target(env, out: np.ndarray) -> None:
 
 
 def _write_target_rel(env, out: np.ndarray) -> None:
-    c, s = env._heading
     d = env.target_pos - env.ground_truth.torso_pos[:2]
-    out[0] = c * d[0] + s * d[1]
-    out[1] = c * d[1] - s * d[0]
+    out[0], out[1] = in_heading_frame(env._heading, d[0], d[1])
 
 
 def _write_velocity_command(env, out: np.ndarray) -> None:
@@ -187,10 +181,8 @@ def _write_torso_velocity(env, out: np.ndarray) -> None:
     if gt.torso_vel is None or gt.torso_ang_vel is None:  # a backend without velocities
         out[:] = 0.0
         return
-    c, s = heading_frame(gt.torso_quat)
     v = gt.torso_vel
-    out[0] = c * v[0] + s * v[1]
-    out[1] = c * v[1] - s * v[0]
+    out[0], out[1] = in_heading_frame(heading_frame(gt.torso_quat), v[0], v[1])
     out[2] = v[2]
     out[3] = math.degrees(gt.torso_ang_vel[2])
 
@@ -409,6 +401,20 @@ def heading_frame(quat: np.ndarray) -> tuple[float, float]:
     if n < 1e-9:
         return 1.0, 0.0
     return fx / n, fy / n
+
+
+def in_heading_frame(heading: tuple[float, float], x: float, y: float) -> tuple[float, float]:
+    """A world-frame planar vector (``x``, ``y``) in the heading frame of a robot whose heading
+    is ``heading`` (cos ψ, sin ψ, :func:`heading_frame`): (forward, left)."""
+    c, s = heading
+    return c * x + s * y, c * y - s * x
+
+
+def turn_to_deg(heading: tuple[float, float], direction: float) -> float:
+    """How far a robot with heading ``heading`` (cos ψ, sin ψ) must turn to face the world
+    direction ``direction`` (rad), deg in [−180, 180), counter-clockwise positive."""
+    c, s = heading
+    return math.degrees((direction - math.atan2(s, c) + math.pi) % (2.0 * math.pi) - math.pi)
 
 
 def up_z(quat: np.ndarray) -> float:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.envs.observations import heading_frame
+from robocup_gym.envs.observations import heading_frame, in_heading_frame, turn_to_deg
 from robocup_gym.sim.field import FIELD_HALF_LENGTH
 from robocup_gym.soccer.skills import MAX_FORWARD_MPS, MAX_SIDEWAYS_MPS, MAX_TURN_DPS
 
@@ -47,12 +47,9 @@ def _walk_to(
 ) -> np.ndarray:
     """A skill action walking from ``pos`` (heading (cos, sin)) to ``target``, turning to face
     the point ``face`` on the way (all world frame), at most ``top`` of the walk's speeds."""
-    c, s = heading
     d = target - pos
-    forward = c * d[0] + s * d[1]
-    left = -s * d[0] + c * d[1]
-    want = math.atan2(face[1] - pos[1], face[0] - pos[0])
-    err = math.degrees((want - math.atan2(s, c) + math.pi) % (2 * math.pi) - math.pi)
+    forward, left = in_heading_frame(heading, d[0], d[1])
+    err = turn_to_deg(heading, math.atan2(face[1] - pos[1], face[0] - pos[0]))
     if abs(err) > 45.0:  # turn first: walking fast while turning hard falls
         top = min(top, 0.3)
     return np.array(
@@ -73,7 +70,7 @@ def _in_kick_reach(
     stance), the robot facing the goal within 15°."""
     c, s = heading
     d = ball - pos
-    ahead, left = c * d[0] + s * d[1], -s * d[0] + c * d[1]
+    ahead, left = in_heading_frame(heading, d[0], d[1])
     facing = c * to_goal[0] + s * to_goal[1] > math.cos(math.radians(15))
     return bool(0.08 < ahead < 0.15 and -0.10 < left < -0.02 and facing)
 

@@ -226,3 +226,18 @@ def test_velocity_kick_default_observation_layout(make_env):
     }
     assert env.observation_space.shape == (62,)
     assert env.observation_space.dtype == np.float32
+
+
+def test_vectors_and_turns_in_the_heading_frame():
+    """A robot facing +y (heading 90°): the world's +y is ahead, +x to its right; to face +x it
+    turns 90° clockwise, to face −y 180° (the short way's sign: [−180, 180))."""
+    from robocup_gym.envs.observations import in_heading_frame, turn_to_deg
+
+    facing_y = (math.cos(math.pi / 2), math.sin(math.pi / 2))
+    forward, left = in_heading_frame(facing_y, 0.0, 2.0)
+    assert forward == pytest.approx(2.0) and left == pytest.approx(0.0, abs=1e-12)
+    forward, left = in_heading_frame(facing_y, 1.0, 0.0)
+    assert forward == pytest.approx(0.0, abs=1e-12) and left == pytest.approx(-1.0)
+    assert turn_to_deg(facing_y, 0.0) == pytest.approx(-90.0)
+    assert turn_to_deg(facing_y, math.pi) == pytest.approx(90.0)
+    assert turn_to_deg(facing_y, -math.pi / 2) == pytest.approx(-180.0)

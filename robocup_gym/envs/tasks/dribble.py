@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.envs.config import EnvConfigError
-from robocup_gym.envs.observations import heading_frame
+from robocup_gym.envs.observations import heading_frame, in_heading_frame, turn_to_deg
 from robocup_gym.envs.tasks.walk import WALK_OBSERVATIONS, Walk, WalkConfig
 from robocup_gym.sim.physics import BALL_RADIUS, CYCLE_S
 
@@ -96,11 +96,9 @@ def dribble_guide(
     behind = along < 0.0 and lateral < 0.1
     aim = ball_xy + 0.5 * u if behind else ball_xy - (c.guide_behind + BALL_RADIUS) * u
     d = aim - robot_xy
-    cos, sin = heading
-    fwd, left = cos * d[0] + sin * d[1], cos * d[1] - sin * d[0]
+    fwd, left = in_heading_frame(heading, d[0], d[1])
     bearing = math.atan2(left, fwd)
-    want = math.atan2(u[1], u[0])
-    error = math.degrees((want - math.atan2(sin, cos) + math.pi) % (2.0 * math.pi) - math.pi)
+    error = turn_to_deg(heading, math.atan2(u[1], u[0]))
     return np.array(
         [
             c.guide_speed * max(0.0, math.cos(bearing)),

@@ -20,7 +20,7 @@ from robocup_gym.envs.config import (
     EnvConfig,
     EnvConfigError,
 )
-from robocup_gym.envs.observations import heading_frame, up_z
+from robocup_gym.envs.observations import heading_frame, in_heading_frame, up_z
 from robocup_gym.sim.physics import CYCLE_S
 
 __all__ = [
@@ -454,10 +454,10 @@ class Walk(BaseEnv):
 
     def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         gt = self.ground_truth
-        cos, sin = heading_frame(gt.torso_quat)
         v = gt.torso_vel if gt.torso_vel is not None else np.zeros(3)
         w = gt.torso_ang_vel if gt.torso_ang_vel is not None else np.zeros(3)
-        velocity = np.array([cos * v[0] + sin * v[1], cos * v[1] - sin * v[0], v[2]])
+        forward, left = in_heading_frame(heading_frame(gt.torso_quat), v[0], v[1])
+        velocity = np.array([forward, left, v[2]])
         upright = up_z(gt.torso_quat)
         touchdowns = []
         down: list[bool] = []
