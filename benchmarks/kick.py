@@ -1,10 +1,11 @@
 """How well does a policy kick? Distance and direction against the command, and standing after.
 
 Runs a kick policy deterministically (a run folder of ``robocup-gym train target-kick``,
-``long-kick`` or ``velocity-kick``; ``pretrained:NAME``; or ``zero``, a policy of zero actions,
-on TargetKick) for ``--episodes`` episodes per command. A TargetKick policy gets every command of
-a grid (distances 2, 4, 6, 8, 10 m × directions −30°, 0°, +30° of its heading); the other kicks
-have no command and are scored against the robot's heading. For each episode:
+``long-kick`` or ``velocity-kick``; ``pretrained:NAME``; or ``zero``, zero actions: the
+reference kick alone, on TargetKick) for ``--episodes`` episodes per command. A TargetKick
+policy gets every command of a grid (distances 2, 4, 6, 8, 10 m × directions −30°, 0°, +30° of
+its heading); the other kicks have no command and are scored against the robot's heading. For
+each episode:
 
 * where the ball comes to rest, predicted from its position and velocity at the end of the
   episode's wait (``robocup_gym.sim.physics.ball_rest_point``; within 1 % of where it stops);

@@ -63,6 +63,16 @@ def _task_measure_rows() -> list[tuple[str, str]]:
     ]
 
 
+def _robot_types(types: str | None) -> list[int] | None:
+    """``--types 0,1,2`` as numbers (``None`` stays ``None``); exits with a clear error."""
+    if types is None:
+        return None
+    try:
+        return [int(t) for t in types.split(",")]
+    except ValueError:
+        _fail(f"--types expects numbers like 0,1,2, got {types!r}")
+
+
 def _fail(message: str, code: int = 1):
     from rich.console import Console
     from rich.markup import escape
@@ -775,12 +785,7 @@ if typer is not None:
             from robocup_gym.soccer.match import play_match
         except ImportError as exc:
             _fail(str(exc))
-        robot_types = None
-        if types is not None:
-            try:
-                robot_types = [int(t) for t in types.split(",")]
-            except ValueError:
-                _fail(f"--types expects numbers like 0,1,2, got {types!r}")
+        robot_types = _robot_types(types)
         console = _console()
 
         def progress(k: int, g) -> None:
@@ -833,6 +838,69 @@ if typer is not None:
         )
         console.print(table)
         print(json.dumps(summary))
+
+    # ------------------------------------------------------------------------------ team
+    @app.command()
+    def team(
+        policy: Annotated[
+            str,
+            typer.Argument(
+                help="The team: scripted, standing, a team run's folder, an exported team "
+                "policy (.onnx) or pretrained:NAME."
+            ),
+        ],
+        host: Annotated[str, typer.Option(help="The server's address.")] = "127.0.0.1",
+        port: Annotated[int, typer.Option(help="The server's agent port.")] = 3100,
+        team_name: Annotated[
+            str, typer.Option("--team", help="The team's name on the server.")
+        ] = "RoboCupGym",
+        players: Annotated[int, typer.Option(help="Players (1-11), each its own connection.")] = 2,
+        types: Annotated[
+            str | None,
+            typer.Option(help="The players' robot types, e.g. 0,1 (default 0,1,2,3 in turn)."),
+        ] = None,
+        seconds: Annotated[
+            float | None,
+            typer.Option(help="Stop after this much game time, s (default: until GameOver)."),
+        ] = None,
+        timeout: Annotated[
+            float, typer.Option(help="Seconds without a percept before the server counts as gone.")
+        ] = 10.0,
+    ) -> None:
+        """Play a team on a server (robocup-gym serve or rcssserver3d): each player its own
+        agent connection, acting on its own perceptors (it places itself from the landmarks it
+        sees) with the shipped skills; the server's referee starts the game. Prints the goals
+        as they come and, last, one JSON object."""
+        import json
+
+        if not 1 <= port <= 65535:
+            _fail(f"port {port} is not a port number (1-65535)")
+        robot_types = _robot_types(types)
+        try:
+            from robocup_gym.soccer.match import make_team
+            from robocup_gym.soccer.remote import ServerTeam
+        except ImportError as exc:
+            _fail(str(exc))
+        console = _console()
+        try:
+            chosen = make_team(policy)
+            check = getattr(chosen, "check_fits", None)
+            if check is not None:
+                check("game", players, penalties=False)
+            with ServerTeam(
+                chosen, host, port, team_name, players, robot_types, timeout=timeout
+            ) as playing:
+                console.print(
+                    f"{team_name}: {players} player(s) on {host}:{port}, playing "
+                    f"{playing.side}; waiting for the kick-off",
+                    highlight=False,
+                )
+                result = playing.play(seconds, on_event=lambda e: console.print(e, highlight=False))
+        except (OSError, ValueError, RuntimeError) as exc:
+            _fail(str(exc))
+        print(json.dumps(result.summary))
+        if result.end not in ("GameOver", "time"):
+            _fail(result.end)
 
     # ------------------------------------------------------------------------------ tasks
     @app.command()

@@ -3,6 +3,8 @@ the Nao (:class:`ActionMapper`), PD commands for the league's robots (:class:`PD
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from robocup_gym.envs.config import ActionMode
@@ -76,10 +78,26 @@ class ActionMapper:
             lo, hi, self.joints, around_deg, spread_deg
         )
         self._limits = (self._limits[0] + stop_margin_deg, self._limits[1] - stop_margin_deg)
+        self._slots: dict[str, int] | None = None
         self.target_offset_deg = np.zeros(n)
         """Added to every target angle (deg, per controlled joint, in action order) before the
         clip to the joint's range: a task's reference motion (Walk's gait), set each step."""
         self._command = np.zeros(len(model.joints))
+
+    def set_offsets(self, offsets_deg: Mapping[str, float]) -> None:
+        """Set :attr:`target_offset_deg` for the next step from offsets by effector name (deg):
+        the joints named get theirs, every other controlled joint 0; a name this mapper does
+        not control is ignored (a reference motion may move joints the action leaves out)."""
+        slots = self._slots
+        if slots is None:
+            names = self.model.effector_names
+            slots = self._slots = {names[j]: k for k, j in enumerate(self.joints)}
+        offsets = self.target_offset_deg
+        offsets[:] = 0.0
+        for name, value in offsets_deg.items():
+            k = slots.get(name)
+            if k is not None:
+                offsets[k] = value
 
     def set_window(self, centre_deg: float | np.ndarray, half_deg: float | np.ndarray) -> None:
         """Let an action of ±1 span ``centre_deg`` ± ``half_deg`` (deg, per controlled joint or

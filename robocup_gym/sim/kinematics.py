@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["resting_torso_height"]
+__all__ = ["resting_height_and_feet", "resting_torso_height"]
 
 _KINEMATICS_WORLDS: dict[int, object] = {}
 """One MuJoCo world per Nao type, for :func:`resting_torso_height` (kinematics only)."""
@@ -30,3 +30,21 @@ def resting_torso_height(
         0, 0.0, 0.0, joint_angles_deg=np.asarray(joint_angles_deg, float), quat=quat, forward=False
     )
     return float(world.torso_position(0)[2])  # type: ignore[attr-defined]
+
+
+def resting_height_and_feet(
+    robot_type: int, joint_angles_deg: np.ndarray, quat: Sequence[float] | None = None
+) -> tuple[float, np.ndarray]:
+    """:func:`resting_torso_height`, and where the feet are: the left and the right foot's
+    centre relative to the torso centre, world-aligned axes, m (shape (2, 3)), for the same
+    joint angles and torso orientation."""
+    height = resting_torso_height(robot_type, joint_angles_deg, quat)
+    world = _KINEMATICS_WORLDS[robot_type]
+    r = world.robot(0)  # type: ignore[attr-defined]
+    xpos = world.data.xpos  # type: ignore[attr-defined]
+    torso = xpos[r.torso_body]
+    from robocup_gym.sim.vision import PLAYER_PARTS
+
+    left, right = (r.part_bodies[PLAYER_PARTS.index(f)] for f in ("lfoot", "rfoot"))
+    feet = np.array([xpos[left] - torso, xpos[right] - torso])
+    return height, feet

@@ -57,9 +57,11 @@ except ImportError as exc:  # pragma: no cover - depends on the installation
     ) from exc
 
 from robocup_gym.envs.actions import ActionMapper, ActionMode
+from robocup_gym.envs.observations import heading_frame
 from robocup_gym.sim.referee import Rules
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
 from robocup_gym.soccer.observations import PlayerObserver
+from robocup_gym.soccer.scripted import TeamView
 from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, SkillSet
 
 __all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel"]
@@ -198,7 +200,7 @@ class SoccerParallelEnv(ParallelEnv):
                 c.target_gain,
                 stop_margin_deg=0.5 if c.action_mode == "target_angle" else 0.0,
             )
-        self.skills = SkillSet(self.game) if c.actions == "skills" else None
+        self.skills = SkillSet(self.game.robot_types) if c.actions == "skills" else None
         self._angles: dict[str, np.ndarray] = {}
         self._cycles = 0
         self._rng = np.random.default_rng()
@@ -393,6 +395,17 @@ class SoccerParallelEnv(ParallelEnv):
         several players; a scenario may say otherwise."""
         teams = teams_of(self.config)
         return {names[0] for names in teams.values() if len(names) > 1}
+
+    def team_view(self, agents: list[str]) -> TeamView:
+        """What a scripted team of ``agents`` (one side's) decides from, from ground truth."""
+        world, game = self.game.world, self.game
+        return TeamView(
+            side=self.side_of(agents[0]),
+            ball=world.ball_position()[:2].copy(),
+            positions={a: world.torso_position(game.index(a))[:2].copy() for a in agents},
+            headings={a: heading_frame(world.torso_quat(game.index(a))) for a in agents},
+            keepers=self.goalkeepers() & set(agents),
+        )
 
     def side_of(self, agent: str) -> str:
         """``"left"`` or ``"right"``."""

@@ -111,15 +111,16 @@ class PolicyTeam:
         shape = int(meta["input"]["shape"][1])
         return cls(policy, shape, name or str(path), options, meta.get("env_id", ""))
 
-    def check_fits(self, scenario: str, players: int) -> None:
+    def check_fits(self, scenario: str, players: int, penalties: bool = True) -> None:
         """Raise ``ValueError`` if it was trained for another kind of match than ``scenario``
-        (``game``, ``penalty``) with ``players`` a side."""
+        (``game``, ``penalty``) with ``players`` a side (``penalties``: whether the command
+        plays penalties too, so that the message may suggest it)."""
         if not self.task:
             return
         trained = self.task.split("/", 1)[-1]
         want = "penalty" if scenario == "penalty" else f"game-{players}v{players}"
         if trained != want:
-            hint = "--scenario penalty" if trained == "penalty" else None
+            hint = "--scenario penalty" if trained == "penalty" and penalties else None
             if hint is None and trained.startswith("game-"):
                 hint = f"--players {trained.split('-')[1].split('v')[0]}"
             raise ValueError(

@@ -4,27 +4,36 @@ game.
 :class:`ScriptedTeam` plays the obvious football: the player nearest the ball walks to the spot
 from which the scripted kick sends the ball toward the opponent goal, turns, and kicks; the
 goalkeeper (the scenario's: uniform number 1 of a team of several; the penalty's keeper) stays
-between the ball and the middle of its goal; the others
-follow the play 3 m behind the ball. It reads the positions of the ball and its own players
-from ground truth (a team on a real server would localise from vision). :class:`StandingTeam`
-stands still.
+between the ball and the middle of its goal; the others follow the play 3 m behind the ball. It
+reads the positions of the ball and its own players from what the game tells it
+(``team_view(agents)`` → :class:`TeamView`: ground truth in-process; on a server, each player's
+own estimate, :mod:`robocup_gym.soccer.localisation`). :class:`StandingTeam` stands still.
 
-A team is called with the environment, the names of its agents and (optionally) their
-observations, and returns their skill actions (``robocup_gym.soccer.skills.SKILL_ACTION_LABELS``).
+A team is called with the game (an environment, or a team's connection to a server), the names
+of its agents and (optionally) their observations, and returns their skill actions
+(``robocup_gym.soccer.skills.SKILL_ACTION_LABELS``).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from robocup_gym.envs.observations import heading_frame, in_heading_frame, turn_to_deg
+from robocup_gym.envs.observations import in_heading_frame, turn_to_deg
 from robocup_gym.sim.field import FIELD_HALF_LENGTH
 from robocup_gym.soccer.skills import MAX_FORWARD_MPS, MAX_SIDEWAYS_MPS, MAX_TURN_DPS
 
-__all__ = ["KICK_SPOT_BEHIND_M", "KICK_SPOT_RIGHT_M", "TEAMS", "ScriptedTeam", "StandingTeam"]
+__all__ = [
+    "KICK_SPOT_BEHIND_M",
+    "KICK_SPOT_RIGHT_M",
+    "TEAMS",
+    "ScriptedTeam",
+    "StandingTeam",
+    "TeamView",
+]
 
 KICK_SPOT_BEHIND_M = 0.11
 """Where the torso must be for the scripted kick: this far behind the ball, …"""
@@ -36,6 +45,22 @@ _CREEP = 0.3
 """Share of the walk's speeds for the last steps onto the kicking spot."""
 _GOALIE_DISTANCE_M = 1.2
 _SUPPORT_DISTANCE_M = 3.0
+
+
+@dataclass
+class TeamView:
+    """What a scripted team decides from, world frame (m)."""
+
+    side: str
+    """``"left"`` or ``"right"``: the team attacks +x or −x."""
+    ball: np.ndarray
+    """The ball's (x, y)."""
+    positions: dict[str, np.ndarray]
+    """Each of the team's agents' torso (x, y)."""
+    headings: dict[str, tuple[float, float]]
+    """Each agent's heading as (cos, sin)."""
+    keepers: set[str]
+    """The agents that play goalkeeper."""
 
 
 def _walk_to(
@@ -94,18 +119,13 @@ class ScriptedTeam:
     def __call__(
         self, env: Any, agents: list[str], obs: dict[str, np.ndarray] | None = None
     ) -> dict[str, np.ndarray]:
-        game = env.game
-        world = game.world
-        ball = world.ball_position()[:2]
         if not agents:
             return {}
-        side = env.side_of(agents[0])
-        attack = 1.0 if side == "left" else -1.0
+        view = env.team_view(agents)
+        ball, positions, headings, keepers = view.ball, view.positions, view.headings, view.keepers
+        attack = 1.0 if view.side == "left" else -1.0
         goal = np.array([attack * FIELD_HALF_LENGTH, 0.0])
         own_goal = -goal
-        positions = {a: world.torso_position(game.index(a))[:2] for a in agents}
-        headings = {a: heading_frame(world.torso_quat(game.index(a))) for a in agents}
-        keepers = env.goalkeepers()
         field_players = [a for a in agents if a not in keepers]
         chaser = min(
             field_players, key=lambda a: float(np.hypot(*(positions[a] - ball))), default=None

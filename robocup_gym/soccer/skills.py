@@ -18,6 +18,7 @@ faces, then the robot usually falls and gets up.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -88,14 +89,14 @@ KICK_CYCLES = 25 + KICK_FOLLOW_THROUGH_CYCLES
 
 
 class PlayerBackend(Backend):
-    """A backend over one player of a running game: the world is moved and stepped by the game,
-    never by the task on top. :meth:`reset_episode` starts an episode where the player is (the
-    perception given to :meth:`see`), counting a start's settle cycles as run."""
+    """A backend over one player of a running game (in-process, or a player connected to a
+    server): the world is moved and stepped by the game, never by the task on top.
+    :meth:`reset_episode` starts an episode where the player is (the perception given to
+    :meth:`see`), counting a start's settle cycles as run."""
 
     name = "game-player"
 
-    def __init__(self, world: Any, index: int) -> None:
-        model = world.robots[index].model
+    def __init__(self, model: NaoModel) -> None:
         super().__init__(robot_type=model.robot_type.index, seed=None, vision=False)
         self._model = model
         self.perception: Perception | None = None
@@ -127,9 +128,9 @@ class _Skill:
 class PlayerSkills:
     """One player's walk and get-up tasks and what it is doing (``mode``: walk, kick, get-up)."""
 
-    def __init__(self, world: Any, index: int, walk: Any, getup: Any) -> None:
+    def __init__(self, model: NaoModel, index: int, walk: Any, getup: Any) -> None:
         self.index = index
-        self.backend = PlayerBackend(world, index)
+        self.backend = PlayerBackend(model)
         self.walk = _Skill(walk(self.backend))
         self.getup = _Skill(getup(self.backend))
         self.mode = "walk"
@@ -158,32 +159,33 @@ class PlayerSkills:
 
 
 class SkillSet:
-    """The skills of every player of a game.
+    """The skills of a game's players (player ``k`` is the ``k``-th of ``robot_types``).
 
     Args:
-        game: The :class:`~robocup_gym.soccer.game.SoccerGame`.
+        robot_types: The players' Nao types, in player order.
         walk, getup: Names of the shipped policies that walk and get up.
     """
 
-    def __init__(self, game: Any, walk: str = "walk", getup: str = "get-up") -> None:
+    def __init__(
+        self, robot_types: Sequence[int], walk: str = "walk", getup: str = "get-up"
+    ) -> None:
         from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
 
-        self.game = game
+        self.robot_types = tuple(int(t) for t in robot_types)
         self.walk_policy = pretrained_policy(walk)
         self.getup_policy = pretrained_policy(getup)
         if len(kick_sequence()) != KICK_CYCLES:
             raise RuntimeError(f"the scripted kick has {len(kick_sequence())} cycles")
-        world = game.world
         self.players: list[PlayerSkills] = []
         self.uses_policy: dict[str, set[int]] = {"walk": set(), "get-up": set()}
-        for p, t in zip(game.players, game.robot_types, strict=True):
+        for index, t in enumerate(self.robot_types):
             made = {}
             for skill, policy, extra in (
                 ("walk", self.walk_policy, {"command_change_steps": 0}),
                 ("get-up", self.getup_policy, {}),
             ):
-                made[skill] = self._maker(pretrained_env, policy, skill, p.index, t, extra)
-            self.players.append(PlayerSkills(world, p.index, made["walk"], made["get-up"]))
+                made[skill] = self._maker(pretrained_env, policy, skill, index, t, extra)
+            self.players.append(PlayerSkills(nao_model(t), index, made["walk"], made["get-up"]))
 
     def _maker(self, pretrained_env, policy, skill: str, index: int, robot_type: int, extra):
         def make(backend: PlayerBackend):
@@ -243,7 +245,7 @@ class SkillSet:
                 if a is None:
                     a = np.zeros(env.action_space.shape, np.float32)
                 out[s.index] = env.act(a)
-        for s, t in zip(self.players, self.game.robot_types, strict=True):
+        for s, t in zip(self.players, self.robot_types, strict=True):
             if s.mode == "kick":
                 out[s.index] = AgentCommand(kick_sequence(t)[s.kick_cycle])
         return out

@@ -305,7 +305,7 @@ def test_mirrored_actions_are_the_naos_only():
 
 def test_the_reference_gait_is_the_naos_only():
     env = Walk(robot="T1")
-    assert env.config.reference_gait is False and env._gait_slots is None
+    assert env.config.reference_gait is False and env._gait is False
     env.close()
     with pytest.raises(EnvConfigError, match="reference_gait is a stepping pattern for the Nao"):
         Walk(robot="T1", reference_gait=True)

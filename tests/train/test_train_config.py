@@ -43,6 +43,10 @@ def test_a_task_can_need_other_hyperparameters_than_the_papers():
     assert mine["use_sde"] is True and mine["policy_kwargs"]["log_std_init"] == -1.0
     assert mine["batch_size"] == 256 and mine["policy_kwargs"]["net_arch"] == [256, 256]
     assert TrainConfig(task="velocity-kick").resolved_algo_kwargs()["use_sde"] is True
+    for kick in ("target-kick", "long-kick"):  # a residual over the reference kick
+        hp = TrainConfig(task=kick).resolved_algo_kwargs()
+        assert hp["use_sde"] is False and hp["policy_kwargs"]["log_std_init"] == -2.0
+        assert (hp["n_steps"], hp["learning_rate"], hp["batch_size"]) == (256, 1e-4, 256)
     assert TrainConfig(task="walk", algo="sac").resolved_algo_kwargs() == {}
     assert TrainConfig(task="no-such-task").resolved_algo_kwargs()["use_sde"] is True
 

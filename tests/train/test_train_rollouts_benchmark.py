@@ -10,7 +10,9 @@ import pytest
 
 def test_rollouts_quick_prints_json_last(run_benchmark):
     pytest.importorskip("stable_baselines3")
-    result, lines = run_benchmark("rollouts.py", "--quick", "--n-envs", 4, timeout=300)
+    result, lines = run_benchmark(
+        "rollouts.py", "--quick", "--n-envs", 4, "--steps", 1024, timeout=300
+    )
     names = ["lockstep", "pipelined", "overlapped", "workers"]
     assert [line.split()[0] for line in lines] == names
     for name in names:

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.envs.base_env import BaseEnv
-from robocup_gym.envs.config import DEFAULT_OBSERVATIONS, EnvConfig, EnvConfigError
+from robocup_gym.envs.config import DEFAULT_OBSERVATIONS, EnvConfigError
+from robocup_gym.envs.tasks.reference_kick import ReferenceKickConfig, ReferenceKickTask
 from robocup_gym.sim.physics import ball_rest_point
 
 __all__ = ["TARGET_KICK_OBSERVATIONS", "TargetKick", "TargetKickConfig", "kick_outcome"]
@@ -22,8 +23,9 @@ CONTACT_SPEED = 0.1
 
 
 @dataclass
-class TargetKickConfig(EnvConfig):
-    """:class:`EnvConfig` plus TargetKick's command and reward options."""
+class TargetKickConfig(ReferenceKickConfig):
+    """:class:`ReferenceKickConfig` (the reference kick, target angles around the crouched pose)
+    plus TargetKick's command and reward options."""
 
     observations: tuple[str, ...] = TARGET_KICK_OBSERVATIONS
     randomise_kick_target: bool = True
@@ -33,8 +35,8 @@ class TargetKickConfig(EnvConfig):
     kick_target_angle_range: tuple[float, float] = (-45.0, 45.0)
     """Commanded direction relative to the robot's heading, deg (CCW positive)."""
     ball_spawn_noise: float = 0.03
-    """The ball starts 3 cm from its nominal spot (0.2 m ahead of the robot, in front of the
-    right foot), in a random direction."""
+    """The ball starts 3 cm from its spot (``ball_start_pos``: 0.16 m ahead of the right foot),
+    in a random direction."""
     max_episode_steps: int = 60
     """1.2 s to reach the ball and kick."""
     wait_steps: int = 50
@@ -42,9 +44,9 @@ class TargetKickConfig(EnvConfig):
     must still be up then."""
     w_accuracy: float = 1.0
     """Weight of 1 − |rest − target| / distance: 1 on target, 0 for a ball that did not move."""
-    fall_penalty: float = 0.5
-    """Subtracted when the robot is down after the wait (half the most accuracy pays: a kick
-    that falls still earns more than standing still)."""
+    fall_penalty: float = 1.0
+    """Subtracted when the robot is down after the wait (as much as the best kick earns: no
+    kick is worth a fall)."""
 
     def validate(self) -> None:
         super().validate()
@@ -101,15 +103,20 @@ def kick_outcome(
     }
 
 
-class TargetKick(BaseEnv):
+class TargetKick(ReferenceKickTask, BaseEnv):
     """Kick the ball to a commanded point: a distance (2–10 m) and a direction (±45° of the
     robot's heading), and still stand 1 s later.
 
     Every episode draws the command (observed as ``kick_target``: distance m, direction deg) and
     places the ball 3 cm from its spot in front of the right foot; the robot sees where the ball
-    is (``ball_rel``, its own frame). Paid once, after the episode and ``wait_steps`` more cycles
-    with the joints stopped, from where the ball will come to rest (its position and velocity
-    then, :func:`~robocup_gym.sim.physics.ball_rest_point`):
+    is (``ball_rel``, its own frame). The robot starts in the crouched standing pose and its
+    actions are target angles added to a reference kick (:mod:`.reference_kick`: lean onto the
+    left foot, swing the right through the ball, back to the stance), which alone moves the
+    ball about 2.7 m straight ahead and stays up.
+
+    Paid once, after the episode and ``wait_steps`` more cycles with the joints stopped, from
+    where the ball will come to rest (its position and velocity then,
+    :func:`~robocup_gym.sim.physics.ball_rest_point`):
 
     .. code-block:: text
 
@@ -129,7 +136,12 @@ class TargetKick(BaseEnv):
     ``max_episode_steps``             60          steps to kick (1.2 s)
     ``wait_steps``                    50          stopped cycles before the outcome (1 s)
     ``w_accuracy``                    1.0         weight of the accuracy term
-    ``fall_penalty``                  0.5         paid when down after the wait
+    ``fall_penalty``                  1.0         paid when down after the wait
+    ``reference_kick``                True        actions correct the reference kick
+    ``action_mode``                   target      target angles, start pose ± 30°
+                                      angle
+    ``ball_start_pos``                (−0.84,     0.16 m ahead of the right foot
+                                      −0.055)
     ================================  ==========  ============================================
 
     ``reset(options={"kick_target": (m, deg)})`` fixes the command (evaluation). Everything

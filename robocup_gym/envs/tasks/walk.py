@@ -376,11 +376,10 @@ class Walk(BaseEnv):
     def __init__(self, config: WalkConfig | None = None, **kwargs: Any) -> None:
         self._forward = [0.0, 0.0, 0]
         super().__init__(config, **kwargs)
-        self._gait_slots: dict[str, int] | None = None
-        """Action slot of each controlled joint by effector name, with the reference gait."""
-        if self.config.reference_gait and self.config.action_mode is not ActionMode.VELOCITY:
-            names = self.robot_model.effector_names
-            self._gait_slots = {names[j]: k for k, j in enumerate(self._actions.joints)}
+        self._gait = (
+            self.config.reference_gait and self.config.action_mode is not ActionMode.VELOCITY
+        )
+        """Whether the reference gait is added to the target angles."""
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
 
@@ -429,9 +428,7 @@ class Walk(BaseEnv):
     def _before_action(self) -> None:
         c = self.config
         self._phase_acted = self.gait_phase  # the phase the policy saw when choosing the action
-        if self._gait_slots is not None:
-            offsets = self._actions.target_offset_deg
-            offsets[:] = 0.0
+        if self._gait:
             # the pattern eases in and out over a gait cycle, and follows command changes with a
             # time constant of one cycle: no step starts, stops or changes all at once
             rate = min(1.0, CYCLE_S * c.gait_frequency_hz)
@@ -440,11 +437,9 @@ class Walk(BaseEnv):
             self._gait_command += (self.velocity_command - self._gait_command) * rate
             lead = c.gait_lead_s * c.gait_frequency_hz  # in cycles
             phase = (self._phase_acted + lead) % 1.0
-            reference = reference_gait_deg(c, phase, self._gait_command, self._gait_level)
-            for name, value in reference.items():
-                k = self._gait_slots.get(name)
-                if k is not None:
-                    offsets[k] = value
+            self._actions.set_offsets(
+                reference_gait_deg(c, phase, self._gait_command, self._gait_level)
+            )
         if (
             c.command_change_steps
             and self.episode_step

@@ -1,0 +1,448 @@
+"""A team on a server: ``robocup-gym team POLICY --host H --port P --team NAME --players N``.
+
+Each player is its own agent connection (``scene``, ``init`` with its uniform number, then a
+command every cycle), as a real team's players are, on ``robocup-gym serve`` or a real
+rcssserver3d. The players run in one process and share nothing a server would not tell them
+except their own estimates (no ``say``/``hear`` yet).
+
+A player knows only what its perceptors tell it: its state and the ball come from its
+:class:`~robocup_gym.soccer.localisation.Estimator` (landmarks seen, head joints, gyroscope,
+accelerometer), never from ground truth, which competition servers do not send. The skills are
+the game's (:class:`~robocup_gym.soccer.skills.SkillSet`: the shipped walk and get-up, the
+scripted kick) reading that estimate; the team decides every ``decision_cycles`` cycles as in
+the in-process game (a scripted team from :meth:`ServerTeam.team_view`, a learnt one from its
+players' observations, the privileged part filled from the estimates: its teammates' and the
+ball's, and the opponents where its players last saw them).
+
+Before kick-off and after a goal every player beams to its place in the kick-off formation
+(:func:`~robocup_gym.soccer.formation.kickoff_positions`) and stands. The game starts when the
+server's referee (or a trainer, RoboViz, …) says kick-off; the team plays until ``GameOver``,
+``seconds`` of game time, or the server closes the connections.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import select
+import socket
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from robocup_gym.envs.observations import heading_frame
+from robocup_gym.protocol.effectors import format_command, format_init, format_scene
+from robocup_gym.protocol.framing import (
+    FrameDecoder,
+    connect,
+    decode_payload,
+    recv_frame,
+    send_frame,
+)
+from robocup_gym.protocol.perceptors import parse_perception
+from robocup_gym.robot.nao import nao_model
+from robocup_gym.soccer.formation import kickoff_positions
+from robocup_gym.soccer.localisation import Estimator, level_offsets
+from robocup_gym.soccer.scripted import TeamView
+from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, SkillSet
+from robocup_gym.types import AgentCommand, Perception
+
+__all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
+
+STOPPED_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
+"""Play modes in which players may beam, and the team stands in its formation."""
+
+
+class ServerGoneError(ConnectionError):
+    """The server closed a player's connection or stopped answering."""
+
+
+class RemotePlayer:
+    """One player's connection: ``scene`` and ``init``, then one percept and one command a cycle.
+
+    Raises:
+        ConnectionError: nothing listens at ``host:port``, or the server closes the connection.
+    """
+
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        team: str,
+        unum: int,
+        robot_type: int,
+        *,
+        timeout: float = 10.0,
+        connect_s: float = 5.0,
+    ) -> None:
+        self.team, self.unum, self.robot_type = team, int(unum), int(robot_type)
+        self.timeout = float(timeout)
+        try:
+            self.sock: socket.socket = connect(host, int(port), retry_s=connect_s)
+        except OSError as exc:
+            raise ConnectionError(
+                f"no server at {host}:{port} ({exc.strerror or exc}); start one with "
+                "`robocup-gym serve` or rcssserver3d"
+            ) from None
+        self.decoder = FrameDecoder()
+        self.side: str | None = None
+        self.model = nao_model(self.robot_type)
+        self.estimator = Estimator(self.model)
+        self.last: Perception | None = None
+        self.stage = "scene"
+        """Handshake: ``scene`` sent, ``init`` sent, ``ready`` (the server told side and
+        number)."""
+        self._send(format_scene(self.robot_type))
+
+    def handshake_step(self) -> None:
+        """Read the percept waiting and answer it with the handshake's next message."""
+        p = self.perceive()
+        if self.stage == "scene":
+            self._send(format_init(self.unum, self.team))
+            self.stage = "init"
+            return
+        if self.stage == "init" and self.side is not None and p.game.play_mode:
+            self.stage = "ready"
+        self._send("")
+
+    def _send(self, text: str) -> None:
+        if not text.endswith("(syn)"):
+            text += "(syn)"
+        try:
+            send_frame(self.sock, text, self.timeout)
+        except OSError as exc:
+            raise ServerGoneError(f"player {self.unum}: the server is gone ({exc})") from None
+
+    def _recv(self) -> str:
+        try:
+            return decode_payload(recv_frame(self.sock, self.decoder, self.timeout))
+        except (ConnectionError, TimeoutError) as exc:
+            raise ServerGoneError(f"player {self.unum}: the server is gone ({exc})") from None
+
+    def perceive(self) -> Perception:
+        """The newest percept (older ones waiting in the socket are skipped: a team that fell
+        behind a real-time server acts on what is now), its ground truth set to the player's
+        own estimate."""
+        text = self._recv()
+        while True:
+            frame = self.decoder.pop_frame()
+            if frame is None:
+                if not select.select([self.sock], [], [], 0.0)[0]:
+                    break
+                text = self._recv()
+            else:
+                text = decode_payload(frame)
+        p = parse_perception(text, robot_type=self.robot_type)
+        if p.game.team_side is not None:
+            self.side = p.game.team_side
+        if p.game.unum is not None:
+            self.unum = p.game.unum
+        p.ground_truth = self.estimator.update(p)
+        self.last = p
+        return p
+
+    def send(self, command: AgentCommand) -> None:
+        self._send(format_command(command, self.robot_type, sync=True))
+
+    def beam(self, x: float, y: float, heading_deg: float) -> AgentCommand:
+        """The command that beams to ``(x, y, heading)`` (own team's frame) and standing still
+        there; the estimate starts from that pose (world frame)."""
+        s = -1.0 if self.side == "right" else 1.0
+        self.estimator.place(s * x, s * y, heading_deg + (180.0 if s < 0 else 0.0))
+        return AgentCommand(np.zeros(len(self.model.joints)), beam=(x, y, heading_deg))
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            self.sock.close()
+
+
+@dataclass
+class TeamResult:
+    """How a team's game on a server went, from its side."""
+
+    team: str
+    side: str
+    goals_for: int = 0
+    goals_against: int = 0
+    game_time: float = 0.0
+    cycles: int = 0
+    end: str = ""
+    """Why it ended: ``GameOver``, ``time`` or the server's going."""
+    falls: int = 0
+    """Times a player went down (its get-up started)."""
+    events: list[str] = field(default_factory=list)
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        return {
+            "team": self.team,
+            "side": self.side,
+            "goals_for": self.goals_for,
+            "goals_against": self.goals_against,
+            "game_time": round(self.game_time, 2),
+            "cycles": self.cycles,
+            "falls": self.falls,
+            "end": self.end,
+        }
+
+
+class ServerTeam:
+    """``players`` agents on a server, playing with ``team`` (``team(self, agents, obs) →
+    {agent: skill action}``, as the in-process game calls it).
+
+    Args:
+        team: The team (:func:`robocup_gym.soccer.match.make_team`).
+        host, port: The server's agent port.
+        name: The team's name (``init``).
+        players: How many players (uniform numbers 1…N; number 1 keeps goal in a team of
+            several).
+        robot_types: Their Nao types (default 0, 1, 2, 3, 4 in turn … as the in-process game).
+        decision_cycles: Cycles between the team's decisions (the skill actions' 10).
+        timeout: Seconds to wait for a percept before the server counts as gone.
+    """
+
+    def __init__(
+        self,
+        team: Callable[..., dict[str, np.ndarray]],
+        host: str = "127.0.0.1",
+        port: int = 3100,
+        name: str = "RoboCupGym",
+        players: int = 2,
+        robot_types: Sequence[int] | None = None,
+        *,
+        decision_cycles: int = 10,
+        timeout: float = 10.0,
+    ) -> None:
+        if not 1 <= int(players) <= 11:
+            raise ValueError(f"a team has 1-11 players, got {players}")
+        types = list(robot_types) if robot_types is not None else [k % 4 for k in range(players)]
+        if len(types) != players or not all(0 <= int(t) <= 4 for t in types):
+            raise ValueError(f"give {players} robot types of 0-4, got {robot_types!r}")
+        self.team = team
+        self.name = name
+        self.decision_cycles = int(decision_cycles)
+        self.players: list[RemotePlayer] = []
+        try:
+            for k in range(players):
+                self.players.append(
+                    RemotePlayer(host, port, name, k + 1, int(types[k]), timeout=timeout)
+                )
+            self._handshake(timeout)
+        except BaseException:
+            self.close()
+            raise
+        self.skills = SkillSet(types)
+        self._observers: dict[str, Any] = {}
+        self._opponents: dict[int, np.ndarray] = {}
+        """Where the team's players last saw each opponent (by uniform number), world (x, y)."""
+
+    def _handshake(self, timeout: float) -> None:
+        """Answer every player's percepts as they come (a server in sync mode waits for each
+        connected player's reply before the next cycle) until the server has told every player
+        its side and number."""
+        deadline = time.monotonic() + timeout
+        by_sock = {p.sock: p for p in self.players}
+        while any(p.stage != "ready" for p in self.players):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise ServerGoneError(
+                    f"the server did not take all {len(self.players)} players within "
+                    f"{timeout:g} s (is the team full, or another team named {self.name!r} "
+                    "playing?)"
+                )
+            ready = {p.sock for p in self.players if p.decoder.pending}
+            ready |= set(select.select(list(by_sock), [], [], min(left, 0.5))[0])
+            for sock in ready:
+                by_sock[sock].handshake_step()
+
+    # ------------------------------------------------------------------ what teams ask
+    @property
+    def side(self) -> str:
+        return self.players[0].side or "left"
+
+    @property
+    def agents(self) -> list[str]:
+        return [f"{self.side}_{p.unum}" for p in self.players]
+
+    def goalkeepers(self) -> set[str]:
+        """Uniform number 1 of a team of several."""
+        return {self.agents[0]} if len(self.players) > 1 else set()
+
+    def side_of(self, agent: str) -> str:
+        return self.side
+
+    def team_view(self, agents: list[str]) -> TeamView:
+        """What a scripted team decides from: each player's own estimate, and the ball where the
+        player that saw it last saw it."""
+        gts = {a: p.last.ground_truth for a, p in zip(self.agents, self.players, strict=True)}
+        seen = [p for p in self.players if p.estimator.localiser.ball_xy is not None]
+        ball = np.zeros(2)
+        if seen:
+            freshest = min(seen, key=lambda p: p.estimator.localiser.cycles_since_ball)
+            ball = freshest.estimator.localiser.ball_xy.copy()
+        return TeamView(
+            side=self.side,
+            ball=ball,
+            positions={a: gts[a].torso_pos[:2].copy() for a in agents},
+            headings={a: heading_frame(gts[a].torso_quat) for a in agents},
+            keepers=self.goalkeepers() & set(agents),
+        )
+
+    # ------------------------------------------------------------------ observations
+    def _see_opponents(self, p: RemotePlayer) -> None:
+        v = p.last.vision
+        gt = p.last.ground_truth
+        if v is None or gt is None:
+            return
+        fix = p.estimator.localiser.fix
+        if fix is None:
+            return
+        offsets = level_offsets(
+            {
+                pl.unum: pl.parts["head"]
+                for pl in v.players
+                if pl.team != self.name and "head" in pl.parts
+            },
+            p.last.joint("hj1"),
+            p.last.joint("hj2"),
+            p.estimator.up,
+        )
+        c, s = heading_frame(gt.torso_quat)  # forward (c, s); right = (s, -c)
+        for unum, rel in offsets.items():
+            right, forward = np.array([s, -c]), np.array([c, s])
+            self._opponents[int(unum)] = gt.torso_pos[:2] + rel[0] * right + rel[1] * forward
+
+    def _observations(self) -> dict[str, np.ndarray] | None:
+        privileged = getattr(self.team, "privileged", None)
+        if privileged is None:  # a scripted team: no observations
+            return None
+        from robocup_gym.soccer.observations import PlayerObserver
+
+        n = len(self.players)
+        agents = self.agents
+        if not self._observers:
+            for a, p in zip(agents, self.players, strict=True):
+                self._observers[a] = PlayerObserver(p.model, self.side, privileged, n - 1, n)
+        mates = {
+            a: p.last.ground_truth.torso_pos[:2] for a, p in zip(agents, self.players, strict=True)
+        }
+        ball = self.team_view(agents).ball
+        out = {}
+        for a, p in zip(agents, self.players, strict=True):
+            others = None
+            if privileged:
+                opp = [self._opponents.get(u, np.zeros(2)) for u in range(1, n + 1)]
+                others = np.array([mates[m] for m in agents if m != a] + opp)
+                gt = p.last.ground_truth
+                gt.ball_pos[:2] = ball  # the team's freshest sighting
+            out[a] = self._observers[a](p.last, others)
+        return out
+
+    # ------------------------------------------------------------------ the game
+    def play(
+        self,
+        seconds: float | None = None,
+        on_event: Callable[[str], None] | None = None,
+    ) -> TeamResult:
+        """Play until ``GameOver``, ``seconds`` of game time (from the first percept) or the
+        server's going; returns the result (the connections stay open: :meth:`close`)."""
+        result = TeamResult(self.name, self.side)
+
+        def event(text: str) -> None:
+            result.events.append(text)
+            if on_event is not None:
+                on_event(text)
+
+        places = kickoff_positions("left", len(self.players))
+        started = False
+        start_time: float | None = None
+        beamed_in: str | None = None
+        actions = {k: np.zeros(len(SKILL_ACTION_LABELS)) for k in range(len(self.players))}
+        score = (0, 0)
+        try:
+            while True:
+                perceptions = {k: p.perceive() for k, p in enumerate(self.players)}
+                first = perceptions[0]
+                g = first.game
+                result.side = self.side
+                if start_time is None:
+                    start_time = g.game_time
+                result.game_time = g.game_time
+                result.cycles += 1
+                own, other = (
+                    (g.score_left, g.score_right)
+                    if self.side == "left"
+                    else (g.score_right, g.score_left)
+                )
+                if (own, other) != score:
+                    who = self.name if own > score[0] else "the opponents"
+                    event(f"{g.game_time:.1f} s: goal for {who}, {own}:{other}")
+                    score = (own, other)
+                result.goals_for, result.goals_against = score
+                if g.play_mode == "GameOver":
+                    result.end = "GameOver"
+                    break
+                if seconds is not None and g.game_time - start_time >= seconds:
+                    result.end = "time"
+                    break
+                commands: dict[int, AgentCommand] = {}
+                if g.play_mode in STOPPED_MODES:
+                    if beamed_in != g.play_mode:  # beam once per stop, then stand
+                        for k, p in enumerate(self.players):
+                            commands[k] = p.beam(*places[k])
+                        beamed_in = g.play_mode
+                        started = False
+                    elif not started:
+                        self.skills.reset(perceptions)
+                        started = True
+                else:
+                    beamed_in = None
+                    if not started:
+                        self.skills.reset(perceptions)
+                        started = True
+                if started:
+                    before = self.skills.modes()
+                    self.skills.observe(perceptions)
+                    result.falls += sum(
+                        a != "get-up" and b == "get-up"
+                        for a, b in zip(before, self.skills.modes(), strict=True)
+                    )
+                    if result.cycles % self.decision_cycles == 0:
+                        for p in self.players:
+                            self._see_opponents(p)
+                        if g.play_mode in STOPPED_MODES:
+                            decided = {a: np.zeros(len(SKILL_ACTION_LABELS)) for a in self.agents}
+                        else:
+                            decided = self.team(self, self.agents, self._observations())
+                        for k, a in enumerate(self.agents):
+                            act = np.asarray(decided.get(a, actions[k]), dtype=float)
+                            if (
+                                act.shape != (len(SKILL_ACTION_LABELS),)
+                                or not np.isfinite(act).all()
+                            ):
+                                raise ValueError(
+                                    f"team gave {a} the action {act!r}: expected "
+                                    f"{len(SKILL_ACTION_LABELS)} finite values "
+                                    f"({', '.join(SKILL_ACTION_LABELS)})"
+                                )
+                            actions[k] = np.clip(act, -1.0, 1.0)
+                            self.skills.decide(k, actions[k])
+                    for k, c in self.skills.commands().items():
+                        commands.setdefault(k, c)
+                for k, p in enumerate(self.players):
+                    p.send(commands.get(k, AgentCommand()))
+        except ServerGoneError as exc:
+            result.end = f"the server went away ({exc})"
+        return result
+
+    def close(self) -> None:
+        for p in self.players:
+            p.close()
+
+    def __enter__(self) -> ServerTeam:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

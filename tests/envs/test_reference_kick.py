@@ -1,0 +1,81 @@
+"""The reference kick the kicking tasks' actions correct: it kicks and stays up on every Nao
+type, and only plays where it can."""
+
+import numpy as np
+import pytest
+
+from robocup_gym.envs import EnvConfigError, LongKick, TargetKick
+from robocup_gym.envs.actions import ActionMapper
+from robocup_gym.envs.config import ActionMode
+from robocup_gym.envs.tasks.reference_kick import (
+    REFERENCE_KICK_KEYFRAMES,
+    reference_kick_deg,
+)
+from robocup_gym.envs.tasks.target_kick import TargetKickConfig
+from robocup_gym.robot.nao import nao_model
+
+
+def test_the_reference_kick_interpolates_its_keyframes():
+    assert all(v == 0.0 for v in reference_kick_deg(0.0).values())
+    last = REFERENCE_KICK_KEYFRAMES[-1][0]
+    assert all(v == 0.0 for v in reference_kick_deg(last + 1.0).values())
+    swing = reference_kick_deg(0.56)
+    assert swing["rle3"] == pytest.approx(50.0) and swing["rle4"] == pytest.approx(20.0)
+    halfway = reference_kick_deg(0.53)  # halfway between the draw-back and the swing
+    assert halfway["rle3"] == pytest.approx(30.0) and halfway["rle4"] == pytest.approx(-10.0)
+    # the left leg only leans: it carries the robot
+    assert swing["lle2"] == pytest.approx(-8.0) and "lle3" not in swing
+
+
+def test_offsets_by_name_reach_their_action_slots():
+    model = nao_model(0)
+    legs = [model.effector_names.index(n) for n in ("lle3", "rle3", "rle4")]
+    mapper = ActionMapper(model, np.array(legs), ActionMode.TARGET_ANGLE, 1.0)
+    mapper.target_offset_deg[:] = 7.0
+    mapper.set_offsets({"rle4": -40.0, "rle3": 10.0, "he1": 5.0})  # he1: not controlled
+    assert mapper.target_offset_deg.tolist() == [0.0, 10.0, -40.0]
+
+
+def _play(env, seed):
+    env.reset(seed=seed)
+    zero = np.zeros(env.action_space.shape)
+    while True:
+        _, reward, terminated, truncated, info = env.step(zero)
+        if terminated or truncated:
+            return reward, info
+
+
+@pytest.mark.parametrize("robot_type", [0, 1, 2, 3, 4])
+def test_zero_actions_kick_and_stay_up_on_every_nao_type(robot_type):
+    """Zero actions play the reference kick alone: the ball goes 1.5 m or more, about straight
+    ahead, and the robot still stands after the 1 s wait."""
+    env = TargetKick(robot_type=robot_type, randomise_kick_target=False, kick_target=(3.0, 0.0))
+    try:
+        reward, info = _play(env, seed=robot_type)
+        assert not info["fallen"] and "fall" not in info["reward_terms"]
+        assert info["kick_distance_m"] > 1.5 and info["direction_error_deg"] < 25.0
+        assert 20 <= info["contact_step"] <= 40  # the swing through the ball at 0.5-0.56 s
+        assert reward > 0.3
+    finally:
+        env.close()
+
+
+def test_without_the_reference_zero_actions_hold_the_stance():
+    env = LongKick(reference_kick=False)
+    try:
+        reward, info = _play(env, seed=0)
+        assert not info["fallen"]
+        assert np.linalg.norm(env.ball_pos[:2] - env.ball_spawn_pos[:2]) < 1e-3
+        assert abs(reward) < 1e-3  # the ball never moved
+    finally:
+        env.close()
+
+
+def test_the_reference_kick_refuses_what_it_cannot_play():
+    with pytest.raises(EnvConfigError, match="reference_kick adds to target angles"):
+        TargetKickConfig(action_mode="velocity")
+    with pytest.raises(EnvConfigError, match="reference_kick is a motion of the Nao"):
+        TargetKickConfig(robot="T1", joint_start_deg=None)
+    # the league's robots take their own defaults: no reference kick
+    assert TargetKick.league_defaults("T1")["reference_kick"] is False
+    TargetKickConfig(action_mode="velocity", reference_kick=False)  # the paper's way: allowed

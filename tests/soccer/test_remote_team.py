@@ -1,0 +1,199 @@
+"""``robocup-gym team``: a team on a server, each player its own connection, playing from its
+own perceptors."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pettingzoo")
+
+from robocup_gym.protocol import trainer as trainer_cmds
+from robocup_gym.protocol.framing import connect, send_frame
+from robocup_gym.server.bench import start_server_process, stop_server_process
+from robocup_gym.soccer.match import make_team
+from robocup_gym.soccer.remote import ServerTeam
+
+
+@pytest.fixture
+def server():
+    """``robocup-gym serve`` in sync mode, as fast as the agents go, with the See ground-truth
+    extensions on (the test compares the players' estimates with them; the players never read
+    them)."""
+    proc, agent_port, monitor_port = start_server_process(
+        "--sync", "--no-real-time", "--ground-truth", "--seed", "5"
+    )
+    try:
+        yield proc, agent_port, monitor_port
+    finally:
+        stop_server_process(proc)
+
+
+def _kick_off(monitor_port: int, when) -> None:
+    """Send the kick-off through the trainer port once ``when()`` says both teams are in."""
+    deadline = time.monotonic() + 60.0
+    while not when() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    sock = connect("127.0.0.1", monitor_port)
+    send_frame(sock, trainer_cmds.kick_off("Left"))
+    time.sleep(0.5)
+    sock.close()
+
+
+def test_two_teams_play_on_serve_from_their_own_perceptors(server):
+    """The scripted team against the standing one, 2 a side, 20 s of game time: each team gets
+    its side, every player places itself from what it sees within decimetres of where the
+    server says it is, and the scripted team goes for the ball."""
+    _, agent_port, monitor_port = server
+    results, teams, errors = {}, {}, []
+    truth: dict[str, list] = {"A": [], "B": []}
+
+    def play(spec: str, name: str) -> None:
+        try:
+            with ServerTeam(make_team(spec), port=agent_port, name=name, players=2) as t:
+                teams[name] = t
+                perceive = [p.perceive for p in t.players]
+
+                def watched(k):
+                    def run():
+                        p = perceive[k]()
+                        v = p.vision
+                        if v is not None and v.my_pos is not None and p.ground_truth is not None:
+                            s = -1.0 if t.players[k].side == "right" else 1.0
+                            head = np.asarray(v.my_pos[:2]) * s  # team frame → world
+                            ball = np.asarray(v.ball_pos[:2]) * s
+                            truth[name].append((k, head, p.ground_truth.torso_pos[:2].copy(), ball))
+                        return p
+
+                    return run
+
+                for k, pl in enumerate(t.players):
+                    pl.perceive = watched(k)
+                results[name] = t.play(seconds=20.0)
+        except Exception as exc:  # reported below, on the test's thread
+            errors.append(exc)
+
+    threads = [
+        threading.Thread(target=play, args=("scripted", "A")),
+        threading.Thread(target=play, args=("standing", "B")),
+    ]
+    threads[0].start()
+    time.sleep(0.5)
+    threads[1].start()
+    _kick_off(monitor_port, lambda: len(teams) == 2 or errors)
+    for t in threads:
+        t.join(timeout=300)
+    assert not errors, errors
+    a, b = results["A"], results["B"]
+    assert (a.side, b.side) == ("left", "right")
+    assert a.end == b.end == "time" and a.game_time >= 20.0
+    assert a.goals_for == b.goals_against and a.goals_against == b.goals_for
+    for name in ("A", "B"):
+        # the torso estimate against the server's head position (the head sits above the
+        # torso, a few centimetres off when the robot leans)
+        errs = [float(np.hypot(*(head - est))) for _, head, est, _ in truth[name]]
+        assert len(errs) > 200
+        assert np.median(errs) < 0.15, (name, np.median(errs))
+    # the scripted team's nearer player came within half a metre of the ball
+    nearest = min(float(np.hypot(*(head - ball))) for _, head, _, ball in truth["A"])
+    assert nearest < 0.5, nearest
+
+
+def _team_cli(*args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "robocup_gym.cli", "team", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+    )
+
+
+def test_the_team_command_plays_and_prints_json_last(server):
+    _, agent_port, monitor_port = server
+    proc = _team_cli("standing", "--port", str(agent_port), "--players", "1", "--seconds", "3")
+    try:
+        assert "waiting for the kick-off" in proc.stdout.readline()
+        _kick_off(monitor_port, lambda: True)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0, err
+    import json
+
+    summary = json.loads(out.strip().splitlines()[-1])
+    assert summary["team"] == "RoboCupGym" and summary["side"] == "left"
+    assert summary["end"] == "time" and summary["game_time"] >= 3.0
+    assert summary["goals_for"] == summary["goals_against"] == 0
+
+
+def test_a_server_that_dies_mid_game_is_one_line_and_a_failure():
+    proc, agent_port, _ = start_server_process("--sync", "--no-real-time")
+    team = _team_cli("standing", "--port", str(agent_port), "--players", "2", "--timeout", "3")
+    try:
+        assert "waiting for the kick-off" in team.stdout.readline()
+        stop_server_process(proc)
+        _out, err = team.communicate(timeout=60)
+    finally:
+        stop_server_process(proc)
+        if team.poll() is None:
+            team.kill()
+            team.communicate()
+    assert team.returncode == 1
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and "the server went away" in lines[0], err
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["nosuch"], "unknown team 'nosuch'"),
+        (["pretrained:penalty-striker"], "was trained on penalty"),
+        (["scripted", "--port", "1"], "no server at 127.0.0.1:1"),
+        (["scripted", "--players", "12"], "a team has 1-11 players"),
+    ],
+)
+def test_the_team_command_refuses_what_it_cannot_play(args, message):
+    proc = _team_cli(*args)
+    _out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1
+    assert message in err and "Traceback" not in err, err
+
+
+def test_a_learnt_team_plays_on_its_players_observations(server):
+    """A policy team with the privileged part (as ``robocup-gym train game-1v1`` learns one)
+    gets, every decision, an observation of the size the in-process game gives, filled from the
+    player's estimate."""
+    from robocup_gym.soccer import game_v0
+    from robocup_gym.soccer.learnt import PolicyTeam
+
+    _, agent_port, monitor_port = server
+    env = game_v0.parallel_env(left_types=(0,), right_types=(0,), actions="skills", privileged=True)
+    size = env.observation_space("left_1").shape[0]
+    env.close()
+    seen = []
+
+    def act(x: np.ndarray) -> np.ndarray:
+        seen.append(x.copy())
+        return np.tile([0.5, 0.0, 0.0, -1.0], (len(x), 1))  # walk forward
+
+    team = PolicyTeam(act, size, "walker", {"privileged": True}, "soccer/game-1v1")
+    with ServerTeam(team, port=agent_port, name="L", players=1) as t:
+        threading.Thread(target=_kick_off, args=(monitor_port, lambda: True)).start()
+        result = t.play(seconds=4.0)
+    assert result.end == "time" and result.falls == 0
+    assert len(seen) >= 15 and all(x.shape == (1, size) for x in seen)
+    assert all(np.isfinite(x).all() and np.abs(x).max() <= 1.0 for x in seen)
+    # the privileged part's own x (its 10 values follow 2 n joints, 6 IMU, 12 FRP, 5 ball,
+    # 12 goals and 6 game values; the last 2 are the opponent's) grows as it walks forward
+    k = 2 * 22 + 6 + 12 + 5 + 12 + 6
+    xs = [float(x[0, k]) for x in seen]
+    assert xs[-1] > xs[0] + 0.5 / 15.0, xs
