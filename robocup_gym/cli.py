@@ -864,7 +864,11 @@ if typer is not None:
             typer.Option(help="Stop after this much game time, s (default: until GameOver)."),
         ] = None,
         timeout: Annotated[
-            float, typer.Option(help="Seconds without a percept before the server counts as gone.")
+            float,
+            typer.Option(
+                help="Seconds without a percept before the server counts as gone (and, up to "
+                "5 s, to wait for a starting server)."
+            ),
         ] = 10.0,
     ) -> None:
         """Play a team on a server (robocup-gym serve or rcssserver3d): each player its own
@@ -875,6 +879,8 @@ if typer is not None:
 
         if not 1 <= port <= 65535:
             _fail(f"port {port} is not a port number (1-65535)")
+        if not timeout > 0:
+            _fail(f"--timeout must be a positive number of seconds, got {timeout}")
         robot_types = _robot_types(types)
         try:
             from robocup_gym.soccer.match import make_team

@@ -200,7 +200,8 @@ class ServerTeam:
             several).
         robot_types: Their Nao types (default 0, 1, 2, 3, 4 in turn … as the in-process game).
         decision_cycles: Cycles between the team's decisions (the skill actions' 10).
-        timeout: Seconds to wait for a percept before the server counts as gone.
+        timeout: Seconds to wait for a percept before the server counts as gone (and, up to
+            5 s, for a server that is still starting to take the connection).
     """
 
     def __init__(
@@ -227,7 +228,15 @@ class ServerTeam:
         try:
             for k in range(players):
                 self.players.append(
-                    RemotePlayer(host, port, name, k + 1, int(types[k]), timeout=timeout)
+                    RemotePlayer(
+                        host,
+                        port,
+                        name,
+                        k + 1,
+                        int(types[k]),
+                        timeout=timeout,
+                        connect_s=min(float(timeout), 5.0),
+                    )
                 )
             self._handshake(timeout)
         except BaseException:

@@ -157,7 +157,7 @@ def test_a_server_that_dies_mid_game_is_one_line_and_a_failure():
     [
         (["nosuch"], "unknown team 'nosuch'"),
         (["pretrained:penalty-striker"], "was trained on penalty"),
-        (["scripted", "--port", "1"], "no server at 127.0.0.1:1"),
+        (["scripted", "--port", "1", "--timeout", "0.5"], "no server at 127.0.0.1:1"),
         (["scripted", "--players", "12"], "a team has 1-11 players"),
     ],
 )
@@ -197,3 +197,32 @@ def test_a_learnt_team_plays_on_its_players_observations(server):
     k = 2 * 22 + 6 + 12 + 5 + 12 + 6
     xs = [float(x[0, k]) for x in seen]
     assert xs[-1] > xs[0] + 0.5 / 15.0, xs
+
+
+def test_a_team_plays_on_a_real_rcssserver3d():
+    """Where a real rcssserver3d is installed (``RCSSSERVER3D`` or on ``PATH``): a player of
+    the standing team connects, beams to its place, stands through the kick-off and 5 s of
+    play without falling, and places itself where it beamed."""
+    from robocup_gym.backends.process import RcssServerNotFoundError, ServerProcess, find_binary
+
+    try:
+        binary = find_binary()
+    except RcssServerNotFoundError as exc:
+        pytest.skip(f"no real rcssserver3d here: {str(exc).split('. ')[0]}")
+    with open(binary, "rb") as f:
+        if f.read(2) == b"#!":
+            pytest.skip(f"{binary} is a script, not a real rcssserver3d")
+    server = ServerProcess(binary, sync=True, real_time=False)
+    server.start()
+    try:
+        with ServerTeam(make_team("standing"), port=server.agent_port, name="R", players=1) as t:
+            threading.Thread(target=_kick_off, args=(server.monitor_port, lambda: True)).start()
+            result = t.play(seconds=5.0)
+            fix = t.players[0].estimator.localiser.fix
+    finally:
+        server.stop()
+    assert result.end == "time" and result.side == "left" and result.falls == 0
+    # the goalkeeper's place of the kick-off formation, (-14, 0) (told to stand, the walk
+    # steps on the spot and turns a little: the heading is not checked)
+    assert fix is not None and fix.landmarks >= 2
+    assert abs(fix.x + 14.0) < 0.3 and abs(fix.y) < 0.3

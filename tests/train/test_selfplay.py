@@ -353,12 +353,15 @@ def test_the_team_games_benchmark_reports_every_size(run_benchmark):
 @needs_ode
 def test_the_shipped_striker_scores_more_penalties_than_the_scripted_one():
     """``penalty-striker`` (trained with ``robocup-gym train penalty``) against the scripted
-    goalkeeper, and the scripted striker against it: the same 20 seeded penalties."""
+    goalkeeper, and the scripted striker against it: the same 10 seeded penalties (the first
+    half of the 20 the shipped figure is measured on)."""
     from robocup_gym.train.pretrained import pretrained_names
 
     assert "penalty-striker" in pretrained_names()
-    learnt = play_match("pretrained:penalty-striker", "scripted", scenario="penalty").summary
-    scripted = play_match("scripted", "scripted", scenario="penalty").summary
-    assert learnt["games"] == scripted["games"] == 20
+    learnt = play_match(
+        "pretrained:penalty-striker", "scripted", scenario="penalty", games=10
+    ).summary
+    scripted = play_match("scripted", "scripted", scenario="penalty", games=10).summary
+    assert learnt["games"] == scripted["games"] == 10
     assert learnt["goals_for"] >= 2 > scripted["goals_for"]
     assert learnt["goals_against"] == 0  # a penalty: the keeper cannot score
