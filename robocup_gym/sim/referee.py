@@ -77,6 +77,8 @@ INCAPABLE_S = {"ground": (15.0, 30.0), "not_standing": (30.0, 60.0)}
 is taken off the field."""
 FOUL_HOLD_S = 0.5
 """A penalised robot is held in the air this long, then put beside the field."""
+MAX_PLAYERS_IN_OWN_AREA = 3
+"""More of a team's robots than this in its own penalty area is illegal defence."""
 _SET_PIECES = {
     "KickIn_Left": "left",
     "KickIn_Right": "right",
@@ -237,6 +239,11 @@ class Rules:
     fallen_robots: bool = True
     """While the game runs, a robot on the ground for 15 s (goalkeeper 30 s) or not standing for
     30 s (60 s) is lifted for 0.5 s and put beside the field (reference §9.5)."""
+    illegal_defence: bool = True
+    """While the game runs, a team with more than 3 robots (torso centres) in its own penalty
+    area has the one that entered last moved out, 0.4 m beyond the area's nearest edge; when the
+    goalkeeper (number 1) entered last, the field player farthest from the goal of those already
+    inside (reference §9.5)."""
 
     @property
     def any(self) -> bool:
@@ -318,6 +325,8 @@ class Referee:
         self.players: list[Player] = []
         self.posture: dict[int, _Posture] = {}
         """Each player's standing counters (by :attr:`Player.key`)."""
+        self.in_own_area: dict[int, bool] = {}
+        """Whether each player's torso was in its own penalty area last cycle (by key)."""
 
     # ------------------------------------------------------------------ state
     @property
@@ -437,8 +446,13 @@ class Referee:
         t = self.game_time
         if pm in FOULS_PAUSED_MODES:
             self.posture.clear()
-        elif rules.fallen_robots:
-            self._take_off_fallen(players)
+            self.in_own_area.clear()
+        else:
+            if rules.illegal_defence:
+                for side in ("left", "right"):
+                    self._illegal_defence([p for p in players if p.side == side])
+            if rules.fallen_robots:
+                self._take_off_fallen(players)
         if rules.half_time and pm != "GameOver" and pm != "BeforeKickOff":
             if self.half == 1 and t >= HALF_TIME:
                 self.half = 2
@@ -632,6 +646,74 @@ class Referee:
                 s.held, s.why = 1, "on the ground too long"
             elif s.not_standing > cycles["not_standing"][keeper]:
                 s.held, s.why = 1, "not standing too long"
+
+    def _illegal_defence(self, team: list[Player]) -> None:
+        """More than :data:`MAX_PLAYERS_IN_OWN_AREA` of ``team`` (one side's players) in their
+        own penalty area: move out the one that just entered (in random order, until few enough
+        are left), or, when the goalkeeper just entered, the one ranked
+        ``MAX_PLAYERS_IN_OWN_AREA + 1`` by distance to the own goal of those already inside."""
+        if not team:
+            return
+        w = self.host.world
+        sign = -1.0 if team[0].side == "left" else 1.0
+        present = [p for p in team if not self.posture.get(p.key, _Posture()).held]
+        pos = {p.key: w.torso_position(p.index) for p in present}
+        inside = {
+            k: sign * float(v[0]) >= PENALTY_X
+            and abs(float(v[0])) <= FIELD_HALF_LENGTH
+            and abs(float(v[1])) <= PENALTY_HALF_WIDTH
+            for k, v in pos.items()
+        }
+        before = {p.key: self.in_own_area.get(p.key, False) for p in present}
+        self.in_own_area.update(inside)
+        count = sum(inside.values())
+        if count <= MAX_PLAYERS_IN_OWN_AREA:
+            return
+        goal = np.array([sign * FIELD_HALF_LENGTH, 0.0])
+        far = 1000.0
+        dist = {}
+        for p in present:
+            if not inside[p.key]:
+                dist[p.unum] = far
+            elif p.unum == 1:
+                dist[p.unum] = 0.0
+            else:
+                dist[p.unum] = float(np.hypot(*(pos[p.key][:2] - goal))) if before[p.key] else far
+        # rcssserver3d's ranking: 1 + those nearer, a tie going to the higher number
+        rank = {
+            u: 1 + sum(d2 < d or (d2 == d and u2 > u) for u2, d2 in dist.items() if u2 != u)
+            for u, d in dist.items()
+        }
+        keeper = next((p for p in present if p.unum == 1), None)
+        keeper_entered = keeper is not None and inside[keeper.key] and not before[keeper.key]
+        for k in self.rng.permutation(len(present)):
+            p = present[int(k)]
+            if count <= MAX_PLAYERS_IN_OWN_AREA:
+                break
+            if p.unum == 1 or not inside[p.key]:
+                continue
+            if not before[p.key] or (
+                keeper_entered and rank[p.unum] == MAX_PLAYERS_IN_OWN_AREA + 1
+            ):
+                self._out_of_area(p, pos[p.key], sign)
+                count -= 1
+                log.info("%s #%d moved out of its penalty area (illegal defence)", p.side, p.unum)
+
+    def _out_of_area(self, p: Player, pos: np.ndarray, sign: float) -> None:
+        """Move ``p`` (torso at ``pos``) 0.4 m beyond its penalty area's nearest edge."""
+        x, y = float(pos[0]), float(pos[1])
+        xs = (sign * FIELD_HALF_LENGTH, sign * PENALTY_X)
+        lo_x, hi_x = min(xs), max(xs)
+        to_x = lo_x - AGENT_RADIUS if abs(lo_x - x) < abs(hi_x - x) else hi_x + AGENT_RADIUS
+        lo_y, hi_y = -PENALTY_HALF_WIDTH, PENALTY_HALF_WIDTH
+        to_y = lo_y - AGENT_RADIUS if abs(lo_y - y) < abs(hi_y - y) else hi_y + AGENT_RADIUS
+        if abs(to_y - y) < abs(to_x - x):
+            y = to_y
+        else:
+            x = to_x
+        if abs(x) > FIELD_HALF_LENGTH and abs(y) < GOAL_HALF_WIDTH + AGENT_RADIUS:
+            y = (GOAL_HALF_WIDTH + AGENT_RADIUS + 0.001) * (-1.0 if y < 0 else 1.0)
+        self.host.teleport(p.index, (x, y, float(pos[2])))
 
     def _move_x(self, index: int, x: float) -> None:
         p = self.host.world.torso_position(index)

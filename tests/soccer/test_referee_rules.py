@@ -1,11 +1,11 @@
-"""The referee's fallen-robot rule (reference §9.5) on an in-process game."""
+"""The referee's fallen-robot and illegal-defence rules (reference §9.5) on an in-process game."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from robocup_gym.sim.referee import INCAPABLE_S, Rules
+from robocup_gym.sim.referee import INCAPABLE_S, MAX_PLAYERS_IN_OWN_AREA, Rules
 from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply, yaw_quat
 from robocup_gym.soccer.game import SoccerGame, Start
 
@@ -76,3 +76,159 @@ def test_time_in_a_goals_pause_does_not_count_and_starts_the_count_again():
     _run(game, 0.6)
     assert game.world.torso_position(1)[2] > 0.9
     game.close()
+
+
+def _defence_game(side: str = "left", rules=True) -> SoccerGame:
+    """Five players of ``side`` in play-on: the goalkeeper and two field players in their
+    own penalty area, two outside it."""
+    s = 1.0 if side == "left" else -1.0
+    left, right = ((0,) * 5, ()) if side == "left" else ((), (0,) * 5)
+    game = SoccerGame(left, right, engine="mujoco", rules=rules, seed=0)
+    places = [(-14.5, 0.0), (-14.0, 1.0), (-14.0, -1.0), (-11.0, 0.0), (-11.0, 4.0)]
+    heading = 0.0 if side == "left" else 180.0
+    game.reset(
+        Start(
+            players={f"{side}_{k + 1}": (s * x, s * y, heading) for k, (x, y) in enumerate(places)}
+        )
+    )
+    game.referee.set_play_mode("PlayOn")
+    _run(game, 0.1)
+    return game
+
+
+def _xy(game: SoccerGame, index: int) -> tuple[float, float]:
+    x, y, _ = game.world.torso_position(index)
+    return float(x), float(y)
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_a_fourth_player_entering_its_own_area_is_moved_out(side):
+    """Goalkeeper and two field players inside; a third field player walks in: it is moved
+    0.4 m beyond the nearest edge of the area (the front edge at |x| = 13.2), the others stay."""
+    s = 1.0 if side == "left" else -1.0
+    game = _defence_game(side)
+    assert MAX_PLAYERS_IN_OWN_AREA == 3
+    before = [_xy(game, k) for k in range(3)]
+    game.world.place_robot(3, s * -13.5, s * 0.5, heading_deg=0.0 if s > 0 else 180.0)
+    game.step({})
+    x, y = _xy(game, 3)
+    assert x == pytest.approx(s * -12.8, abs=0.02) and y == pytest.approx(s * 0.5, abs=0.02)
+    for k in range(3):
+        assert np.allclose(_xy(game, k), before[k], atol=0.02)
+    game.close()
+
+
+def test_when_the_goalkeeper_enters_last_the_farthest_field_player_goes():
+    game = _defence_game()
+    # three field players inside, the goalkeeper just outside
+    for k, (x, y) in ((0, (-12.5, 0.0)), (1, (-14.8, 0.5)), (2, (-14.5, -0.5)), (3, (-13.4, 1.0))):
+        game.world.place_robot(k, x, y)
+    _run(game, 0.06)
+    assert _xy(game, 3)[0] == pytest.approx(-13.4, abs=0.02)  # three inside: legal
+    game.world.place_robot(0, -14.6, 0.0)  # the goalkeeper comes back
+    game.step({})
+    assert _xy(game, 3)[0] == pytest.approx(-12.8, abs=0.02)  # the farthest from the goal
+    assert _xy(game, 0)[0] == pytest.approx(-14.6, abs=0.02)
+    assert _xy(game, 1)[0] == pytest.approx(-14.8, abs=0.02)
+    game.close()
+
+
+def test_illegal_defence_waits_while_the_game_is_paused_and_can_be_off():
+    for rules, mode in ((True, "BeforeKickOff"), ({"illegal_defence": False}, "PlayOn")):
+        game = _defence_game(rules=rules)
+        game.referee.set_play_mode(mode)
+        game.world.place_robot(3, -13.5, 0.5)
+        _run(game, 0.1)
+        assert _xy(game, 3)[0] == pytest.approx(-13.5, abs=0.02)
+        game.close()
+
+
+def _replay_illegal_defence(agent_port: int, monitor_port: int) -> tuple[float, float]:
+    """On a server: five standing players of one team; a trainer puts the goalkeeper and two
+    field players in their penalty area, then a third field player at (−13.5, 0.5) (by the
+    game's clock, from the team's own loop). Returns where the server's monitor stream shows
+    that player's torso 0.1 s later, world (x, y)."""
+    import select
+
+    from robocup_gym.backends.rcssserver3d_monitor import MonitorTracker
+    from robocup_gym.protocol import trainer as trainer_cmds
+    from robocup_gym.protocol.framing import FrameDecoder, connect, recv_frame, send_frame
+    from robocup_gym.soccer.remote import ServerTeam
+    from robocup_gym.soccer.scripted import StandingTeam
+
+    trainer = connect("127.0.0.1", monitor_port, retry_s=10.0)
+    decoder, tracker = FrameDecoder(), MonitorTracker()
+    tracker.set_agent("left", 4)
+    first = [(1, (-14.5, 0.0)), (2, (-14.0, 1.0)), (3, (-14.0, -1.0))]
+    script = [
+        (lambda t, n: n == 60, trainer_cmds.play_mode("PlayOn")),
+        (
+            lambda t, n: t >= 0.5,
+            "".join(trainer_cmds.agent_move(u, "Left", (x, y, 0.4), -90.0) for u, (x, y) in first),
+        ),
+        (lambda t, n: t >= 1.0, trainer_cmds.agent_move(4, "Left", (-13.5, 0.5, 0.4), -90.0)),
+    ]
+    seen: list = []
+    try:
+        with ServerTeam(StandingTeam(), port=agent_port, name="D", players=5, timeout=30) as team:
+            goalie = team.players[0]
+            perceive, cycles = goalie.perceive, [0]
+
+            def perceive_and_direct():
+                p = perceive()
+                cycles[0] += 1
+                while select.select([trainer], [], [], 0.0)[0] or decoder.pending:
+                    tracker.feed(recv_frame(trainer, decoder, 5.0))
+                    if tracker.need_full:
+                        send_frame(trainer, trainer_cmds.reqfullstate())
+                    snap = tracker.newest()
+                    if snap is not None and snap.torso is not None:
+                        seen.append((snap.game_time, snap.torso[:2, 3].copy()))
+                if script and script[0][0](p.game.game_time, cycles[0]):
+                    send_frame(trainer, script.pop(0)[1])
+                return p
+
+            goalie.perceive = perceive_and_direct
+            result = team.play(seconds=1.5)
+    finally:
+        trainer.close()
+    assert result.end == "time" and not script
+    after = [xy for t, xy in seen if t >= 1.1]
+    assert after, seen[-3:]
+    return float(after[0][0]), float(after[0][1])
+
+
+@pytest.mark.parametrize("server", ["serve", "rcssserver3d"])
+def test_illegal_defence_decided_as_the_real_server_decides(server):
+    """The same situation on ``robocup-gym serve`` and, where installed, a real rcssserver3d: the
+    fourth player in the area is moved 0.4 m beyond its front edge on both (where the monitor
+    stream shows it 0.1 s after it came in)."""
+    if server == "serve":
+        from robocup_gym.server.bench import start_server_process, stop_server_process
+
+        proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time")
+        try:
+            x, y = _replay_illegal_defence(agent_port, monitor_port)
+        finally:
+            stop_server_process(proc)
+    else:
+        from robocup_gym.backends.process import (
+            RcssServerNotFoundError,
+            ServerProcess,
+            find_binary,
+        )
+
+        try:
+            binary = find_binary()
+        except RcssServerNotFoundError as exc:
+            pytest.skip(f"no real rcssserver3d here: {str(exc).split('. ')[0]}")
+        with open(binary, "rb") as f:
+            if f.read(2) == b"#!":
+                pytest.skip(f"{binary} is a script, not a real rcssserver3d")
+        real = ServerProcess(binary, sync=True, real_time=False)
+        real.start()
+        try:
+            x, y = _replay_illegal_defence(real.agent_port, real.monitor_port)
+        finally:
+            real.stop()
+    assert x == pytest.approx(-12.8, abs=0.05) and y == pytest.approx(0.5, abs=0.05)
