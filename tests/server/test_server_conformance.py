@@ -169,6 +169,16 @@ def test_serve_reads_a_config_file_and_flags_win(tmp_path, monkeypatch, capsys):
         assert exit_.value.code == 2 and expected in err and len(err.strip().splitlines()) == 1
 
 
+def _quiet(server, cycle: int) -> None:
+    """Wait until the server has finished the cycle after ``cycle`` (its percept goes out
+    before its physics step runs): in sync mode it then waits for the next (syn) and its world
+    can be read without racing the step."""
+    deadline = time.monotonic() + 10.0
+    while server.cycle <= cycle:
+        assert time.monotonic() < deadline, "the server did not finish its cycle"
+        time.sleep(0.001)
+
+
 def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
     """rcssserver3d (fixtures README): after a trainer move a resting robot (ODE's auto-disable
     has put it to sleep) hangs where it was put (accelerometer 9.81, gyro 0, no foot contact),
@@ -185,8 +195,10 @@ def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
         time.sleep(0.05)
         percepts = []
         for _ in range(6):
+            cycle = server.cycle
             c.send("(syn)")
             percepts.append(parse_perception(_answer(c)))
+        _quiet(server, cycle)
         i = server.world_host.index(server.agents[0].key)
         assert server.world.torso_position(i)[2] == pytest.approx(0.386, abs=1e-7)
         last = percepts[-1]
@@ -196,8 +208,10 @@ def test_a_robot_moved_at_rest_hangs_asleep_until_a_motor_wakes_it(server):
         c.send("(he1 0.5)(syn)")  # the first non-zero joint velocity wakes it
         for _ in range(4):
             _answer(c)
+            cycle = server.cycle
             c.send("(syn)")
         _answer(c)
+        _quiet(server, cycle)
         assert server.world.torso_position(i)[2] < 0.385  # landed
 
 
