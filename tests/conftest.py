@@ -98,3 +98,19 @@ def run_benchmark():
         return json.loads(lines[-1]), lines[:-1]
 
     return run
+
+
+@pytest.fixture
+def real_rcssserver3d() -> str:
+    """The real rcssserver3d binary (``RCSSSERVER3D`` or on ``PATH``); the test is skipped, with
+    the reason, where there is none (or only the other tests' fake script)."""
+    from robocup_gym.backends.process import RcssServerNotFoundError, find_binary
+
+    try:
+        binary = find_binary()
+    except RcssServerNotFoundError as exc:
+        pytest.skip(f"no real rcssserver3d here: {str(exc).split('. ')[0]}")
+    with open(binary, "rb") as f:
+        if f.read(2) == b"#!":
+            pytest.skip(f"{binary} is a script, not a real rcssserver3d")
+    return binary

@@ -284,22 +284,15 @@ def test_the_real_servers_kick_procedure_gives_its_result(trainer_first):
     assert run.ball_travel() == pytest.approx(fixture["ball_displacement_xy_m"], abs=1e-3)
 
 
-def test_the_kick_procedure_on_a_real_server_equals_serve():
+def test_the_kick_procedure_on_a_real_server_equals_serve(real_rcssserver3d):
     """Where a real rcssserver3d is installed: the same client against it and against ``serve``
     sees the same foot contacts in every cycle until the kick (none while the robot hangs, then
     its landing) and the same ball travel (to 0.5 mm: the real server repeats its own result
     only to ~0.3 mm, and single foot contacts in the kick and the fall that follows flip from
     run to run)."""
-    from robocup_gym.backends.process import RcssServerNotFoundError, ServerProcess, find_binary
+    from robocup_gym.backends.process import ServerProcess
 
-    try:
-        binary = find_binary()
-    except RcssServerNotFoundError as exc:
-        pytest.skip(f"no real rcssserver3d here: {str(exc).split('. ')[0]}")
-    with open(binary, "rb") as f:
-        if f.read(2) == b"#!":
-            pytest.skip(f"{binary} is a script, not a real rcssserver3d")
-    real = ServerProcess(binary, monitor_step=0.04)
+    real = ServerProcess(real_rcssserver3d, monitor_step=0.04)
     agent_port, monitor_port = real.start()
     try:
         real_run = kick_procedure.run(HOST, agent_port, monitor_port)

@@ -198,37 +198,27 @@ def _replay_illegal_defence(agent_port: int, monitor_port: int) -> tuple[float, 
     return float(after[0][0]), float(after[0][1])
 
 
-@pytest.mark.parametrize("server", ["serve", "rcssserver3d"])
-def test_illegal_defence_decided_as_the_real_server_decides(server):
-    """The same situation on ``robocup-gym serve`` and, where installed, a real rcssserver3d: the
-    fourth player in the area is moved 0.4 m beyond its front edge on both (where the monitor
-    stream shows it 0.1 s after it came in)."""
-    if server == "serve":
-        from robocup_gym.server.bench import start_server_process, stop_server_process
+def test_illegal_defence_on_serve():
+    """The situation replayed on ``robocup-gym serve``: the fourth player in the area is moved
+    0.4 m beyond its front edge (where the monitor stream shows it 0.1 s after it came in)."""
+    from robocup_gym.server.bench import start_server_process, stop_server_process
 
-        proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time")
-        try:
-            x, y = _replay_illegal_defence(agent_port, monitor_port)
-        finally:
-            stop_server_process(proc)
-    else:
-        from robocup_gym.backends.process import (
-            RcssServerNotFoundError,
-            ServerProcess,
-            find_binary,
-        )
+    proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time")
+    try:
+        x, y = _replay_illegal_defence(agent_port, monitor_port)
+    finally:
+        stop_server_process(proc)
+    assert x == pytest.approx(-12.8, abs=0.05) and y == pytest.approx(0.5, abs=0.05)
 
-        try:
-            binary = find_binary()
-        except RcssServerNotFoundError as exc:
-            pytest.skip(f"no real rcssserver3d here: {str(exc).split('. ')[0]}")
-        with open(binary, "rb") as f:
-            if f.read(2) == b"#!":
-                pytest.skip(f"{binary} is a script, not a real rcssserver3d")
-        real = ServerProcess(binary, sync=True, real_time=False)
-        real.start()
-        try:
-            x, y = _replay_illegal_defence(real.agent_port, real.monitor_port)
-        finally:
-            real.stop()
+
+def test_illegal_defence_on_a_real_server_as_on_serve(real_rcssserver3d):
+    """The same situation on a real rcssserver3d, where one is installed: the same decision."""
+    from robocup_gym.backends.process import ServerProcess
+
+    real = ServerProcess(real_rcssserver3d, sync=True, real_time=False)
+    real.start()
+    try:
+        x, y = _replay_illegal_defence(real.agent_port, real.monitor_port)
+    finally:
+        real.stop()
     assert x == pytest.approx(-12.8, abs=0.05) and y == pytest.approx(0.5, abs=0.05)

@@ -199,20 +199,13 @@ def test_a_learnt_team_plays_on_its_players_observations(server):
     assert xs[-1] > xs[0] + 0.5 / 15.0, xs
 
 
-def test_a_team_plays_on_a_real_rcssserver3d():
+def test_a_team_plays_on_a_real_rcssserver3d(real_rcssserver3d):
     """Where a real rcssserver3d is installed (``RCSSSERVER3D`` or on ``PATH``): a player of
     the standing team connects, beams to its place, stands through the kick-off and 5 s of
     play without falling, and places itself where it beamed."""
-    from robocup_gym.backends.process import RcssServerNotFoundError, ServerProcess, find_binary
+    from robocup_gym.backends.process import ServerProcess
 
-    try:
-        binary = find_binary()
-    except RcssServerNotFoundError as exc:
-        pytest.skip(f"no real rcssserver3d here: {str(exc).split('. ')[0]}")
-    with open(binary, "rb") as f:
-        if f.read(2) == b"#!":
-            pytest.skip(f"{binary} is a script, not a real rcssserver3d")
-    server = ServerProcess(binary, sync=True, real_time=False)
+    server = ServerProcess(real_rcssserver3d, sync=True, real_time=False)
     server.start()
     try:
         with ServerTeam(make_team("standing"), port=server.agent_port, name="R", players=1) as t:
