@@ -78,7 +78,8 @@ class ActionMapper:
             lo, hi, self.joints, around_deg, spread_deg
         )
         self._limits = (self._limits[0] + stop_margin_deg, self._limits[1] - stop_margin_deg)
-        self._slots: dict[str, int] | None = None
+        self._slots = {model.effector_names[j]: k for k, j in enumerate(self.joints)}
+        """Action slot of each controlled joint by effector name."""
         self.target_offset_deg = np.zeros(n)
         """Added to every target angle (deg, per controlled joint, in action order) before the
         clip to the joint's range: a task's reference motion (Walk's gait), set each step."""
@@ -89,9 +90,6 @@ class ActionMapper:
         the joints named get theirs, every other controlled joint 0; a name this mapper does
         not control is ignored (a reference motion may move joints the action leaves out)."""
         slots = self._slots
-        if slots is None:
-            names = self.model.effector_names
-            slots = self._slots = {names[j]: k for k, j in enumerate(self.joints)}
         offsets = self.target_offset_deg
         offsets[:] = 0.0
         for name, value in offsets_deg.items():

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
+
+from robocup_gym.robot.nao import nao_model
 
 __all__ = ["resting_height_and_feet", "resting_torso_height"]
 
@@ -36,15 +39,16 @@ def resting_height_and_feet(
     robot_type: int, joint_angles_deg: np.ndarray, quat: Sequence[float] | None = None
 ) -> tuple[float, np.ndarray]:
     """:func:`resting_torso_height`, and where the feet are: the left and the right foot's
-    centre relative to the torso centre, world-aligned axes, m (shape (2, 3)), for the same
-    joint angles and torso orientation."""
+    centre relative to the torso centre, torso frame, m (shape (2, 3)), for the same joint
+    angles (the orientation does not change them)."""
     height = resting_torso_height(robot_type, joint_angles_deg, quat)
-    world = _KINEMATICS_WORLDS[robot_type]
-    r = world.robot(0)  # type: ignore[attr-defined]
-    xpos = world.data.xpos  # type: ignore[attr-defined]
-    torso = xpos[r.torso_body]
-    from robocup_gym.sim.vision import PLAYER_PARTS
+    pos, rot = _KINEMATICS_WORLDS[robot_type].body_frames(0)  # type: ignore[attr-defined]
+    return height, (pos[_feet(robot_type)] - pos[0]) @ rot[0]
 
-    left, right = (r.part_bodies[PLAYER_PARTS.index(f)] for f in ("lfoot", "rfoot"))
-    feet = np.array([xpos[left] - torso, xpos[right] - torso])
-    return height, feet
+
+@functools.cache
+def _feet(robot_type: int) -> list[int]:
+    """The left and the right foot's places among the bodies (``body_frames``' order, the
+    model's, torso first)."""
+    names = [b.name for b in nao_model(robot_type).bodies]
+    return [names.index("lfoot"), names.index("rfoot")]

@@ -62,7 +62,12 @@ from robocup_gym.sim.referee import Rules
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
 from robocup_gym.soccer.observations import PlayerObserver
 from robocup_gym.soccer.scripted import TeamView
-from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, SkillSet
+from robocup_gym.soccer.skills import (
+    SKILL_ACTION_LABELS,
+    SKILL_ACTION_WHAT,
+    SkillSet,
+    checked_action,
+)
 
 __all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel"]
 
@@ -363,25 +368,11 @@ class SoccerParallelEnv(ParallelEnv):
             if name not in actions:
                 raise KeyError(f"no action for {name!r} (every agent acts every step)")
             if self.skills is not None:
-                labels, what = (
-                    list(SKILL_ACTION_LABELS),
-                    "a skill action: " + ", ".join(SKILL_ACTION_LABELS),
-                )
+                labels, what = list(SKILL_ACTION_LABELS), SKILL_ACTION_WHAT
             else:
                 labels = self._mappers[name].labels()
                 what = f"one value per joint of its type-{self._type(name)} robot"
-            a = np.asarray(actions[name], dtype=float)
-            if a.shape != (len(labels),):
-                raise ValueError(
-                    f"{name}: action of shape {a.shape}, expected ({len(labels)},) ({what})"
-                )
-            if not np.isfinite(a).all():
-                bad = int(np.flatnonzero(~np.isfinite(a))[0])
-                raise ValueError(
-                    f"{name}: action value {bad} ({labels[bad]}) is {a[bad]}; "
-                    "actions must be finite"
-                )
-            checked[name] = np.clip(a, -1.0, 1.0)
+            checked[name] = checked_action(name, actions[name], labels, what)
         commands: dict[int, np.ndarray] = {}
         for name, a in checked.items():  # nothing is changed before every action is checked
             if self.skills is not None:

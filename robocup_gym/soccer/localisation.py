@@ -31,7 +31,9 @@ import numpy as np
 
 from robocup_gym.robot.nao import NaoModel
 from robocup_gym.sim.field import LANDMARKS
+from robocup_gym.sim.kinematics import resting_height_and_feet
 from robocup_gym.sim.physics import BALL_RADIUS, CYCLE_S, GRAVITY
+from robocup_gym.sim.rotations import matrix_to_quat
 from robocup_gym.types import GroundTruth, Perception
 
 __all__ = [
@@ -40,6 +42,7 @@ __all__ = [
     "Localiser",
     "head_frame_vector",
     "level_offsets",
+    "level_to_world",
     "locate",
     "untilt",
     "up_from_accel",
@@ -111,6 +114,14 @@ def level_offsets(
     return {name: to_level @ head_frame_vector(p) for name, p in objects.items()}
 
 
+def level_to_world(heading_deg: float, offset: np.ndarray) -> np.ndarray:
+    """A level-frame offset's (x right, y forward) ground part in the world frame (x, y) for a
+    torso facing ``heading_deg``."""
+    t = math.radians(heading_deg - 90.0)
+    c, s = math.cos(t), math.sin(t)
+    return np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
+
+
 @dataclass(frozen=True)
 class Fix:
     """Where the robot is: its torso's ground position and heading, world frame."""
@@ -158,18 +169,10 @@ def locate(
         heading = float(heading_deg)
     else:
         return None
-    t = math.radians(heading - 90.0)
-    c, s = math.cos(t), math.sin(t)
-    heads = [
-        (lx - (c * v[0] - s * v[1]), ly - (s * v[0] + c * v[1]), 1.0 / max(np.linalg.norm(v), 0.5))
-        for (lx, ly, _), v in seen
-    ]
-    w = sum(h[2] for h in heads)
-    hx = sum(h[0] * h[2] for h in heads) / w
-    hy = sum(h[1] * h[2] for h in heads) / w
-    dx, dy = head_above_torso[0], head_above_torso[1]
-    x = hx - (c * dx - s * dy)
-    y = hy - (s * dx + c * dy)
+    # the head where each landmark puts it, averaged with the same weights, then the torso
+    heads = np.array([np.asarray(lm[:2]) - level_to_world(heading, v) for lm, v in seen])
+    weights = np.array([1.0 / max(float(np.linalg.norm(v)), 0.5) for _, v in seen])
+    x, y = weights @ heads / weights.sum() - level_to_world(heading, head_above_torso)
     heading = (heading + 180.0) % 360.0 - 180.0
     return Fix(float(x), float(y), float(heading), len(seen))
 
@@ -193,10 +196,12 @@ class Localiser:
         """The ball's ground position when last seen, world frame, m."""
         self.cycles_since_fix = 0
         self.cycles_since_ball = 0
+        self._head_level: np.ndarray | None = None
+        """The head centre from the torso centre in the last ``See``'s level frame, m."""
 
     def reset(self) -> None:
         """Forget everything (a new game, or the robot was moved)."""
-        self.fix, self.ball_xy = None, None
+        self.fix, self.ball_xy, self._head_level = None, None, None
         self.cycles_since_fix = self.cycles_since_ball = 0
 
     def place(self, x: float, y: float, heading_deg: float) -> None:
@@ -230,15 +235,25 @@ class Localiser:
         fix = locate(offsets, head, None if self.fix is None else self.fix.heading_deg)
         if fix is not None:
             self.fix, self.cycles_since_fix = fix, 0
+        self._head_level = head
         ball = offsets.get("B")
         if ball is not None and self.fix is not None:
-            f = self.fix
-            t = math.radians(f.heading_deg - 90.0)
-            c, s = math.cos(t), math.sin(t)
-            rel = ball + head  # from the torso centre
-            self.ball_xy = np.array([f.x + c * rel[0] - s * rel[1], f.y + s * rel[0] + c * rel[1]])
+            self.ball_xy = self.seen_at(ball)
             self.cycles_since_ball = 0
         return self.fix
+
+    def seen_at(self, offset: np.ndarray) -> np.ndarray:
+        """Where something seen in the last ``See`` is on the ground, world (x, y), m, from the
+        current fix: its level-frame offset from the head (:func:`level_offsets`, with the tilt
+        :meth:`update` used).
+
+        Raises:
+            RuntimeError: before the first fix or the first ``See``.
+        """
+        if self.fix is None or self._head_level is None:
+            raise RuntimeError("nothing seen and placed yet: no fix to place it from")
+        f = self.fix
+        return np.array([f.x, f.y]) + level_to_world(f.heading_deg, offset + self._head_level)
 
 
 TILT_GAIN = 0.05
@@ -258,7 +273,7 @@ class Estimator:
       accelerometer (:data:`TILT_GAIN`), turned to the heading of the last fix;
     * torso position: the fix's ground position (:class:`Localiser`), and its height from the
       kinematics of the joint angles with the lowest point on the ground
-      (:func:`~robocup_gym.sim.kinematics.resting_torso_height`);
+      (:func:`~robocup_gym.sim.kinematics.resting_height_and_feet`);
     * the torso's velocity: leg odometry, the foot that carries the robot (its foot pressure
       perceptor feels more force) held still, so the torso moves opposite to that foot's change
       of place relative to it (the kinematics of two successive cycles' joint angles); between
@@ -305,9 +320,6 @@ class Estimator:
 
     def update(self, p: Perception) -> GroundTruth | None:
         """Take one cycle's perception; returns the estimate (``None`` before the first fix)."""
-        from robocup_gym.sim.kinematics import resting_height_and_feet
-        from robocup_gym.sim.rotations import matrix_to_quat
-
         up = self._track_up(p)
         loc = self.localiser
         fix = loc.update(p, up)
@@ -316,8 +328,8 @@ class Estimator:
         t = float(p.time)
         rot = _rot_z(fix.heading_deg - 90.0) @ untilt(up)  # torso → world
         quat = matrix_to_quat(rot)
+        # the feet in the torso frame: the joints alone move them (not the estimate's jitter)
         z, feet = resting_height_and_feet(self.model.robot_type.index, p.joint_angles_deg, quat)
-        feet = feet @ rot  # torso frame: the joints alone move them (not the estimate's jitter)
         omega = rot @ np.radians(np.asarray(p.gyro, dtype=float))  # world, rad/s
         if self._feet is not None and t > self._feet[0] + 1e-9:
             force = [_force(p, "lf"), _force(p, "rf")]
@@ -336,8 +348,8 @@ class Estimator:
         if loc.ball_xy is not None:
             ball = np.array([loc.ball_xy[0], loc.ball_xy[1], BALL_RADIUS])
             if loc.cycles_since_ball == 0:
-                _keep(self._balls, t, tuple(ball))
-        ball_vel = _slope(self._balls) if len(self._balls) else np.zeros(3)
+                _keep(self._balls, t, ball)
+        ball_vel = _slope(self._balls)
         return GroundTruth(
             ball_pos=ball,
             ball_vel=ball_vel,
@@ -354,28 +366,24 @@ def _force(p: Perception, foot: str) -> float:
     return 0.0 if frp is None else float(np.linalg.norm(frp.force))
 
 
-def _keep(
-    track: collections.deque, t: float, value: tuple, window: float = VELOCITY_WINDOW_S
-) -> None:
-    """Add ``(t, value)`` to ``track`` and drop what is older than ``window`` seconds (a clock
-    set back starts it afresh)."""
+def _keep(track: collections.deque, t: float, value: np.ndarray) -> None:
+    """Add ``(t, value)`` to ``track`` and drop what is older than :data:`VELOCITY_WINDOW_S` (a
+    clock set back starts it afresh)."""
     if track and t < track[-1][0] - 1e-9:
         track.clear()
     if track and abs(t - track[-1][0]) < 1e-9:
         track.pop()
-    track.append((t, np.asarray(value, dtype=float)))
-    while track and track[0][0] < t - window - 1e-9:
+    track.append((t, value))
+    while track[0][0] < t - VELOCITY_WINDOW_S - 1e-9:
         track.popleft()
 
 
 def _slope(track: collections.deque) -> np.ndarray:
-    """The least-squares rate of change of the values in ``track`` (zeros for fewer than two)."""
+    """The least-squares rate of change of the 3-vectors in ``track`` (zeros for fewer than
+    two)."""
     if len(track) < 2:
-        return np.zeros(len(track[0][1]) if track else 2)
+        return np.zeros(3)
     ts = np.array([t for t, _ in track])
     vs = np.array([v for _, v in track])
     dt = ts - ts.mean()
-    denom = float(dt @ dt)
-    if denom < 1e-12:
-        return np.zeros(vs.shape[1])
-    return dt @ (vs - vs.mean(axis=0)) / denom
+    return dt @ (vs - vs.mean(axis=0)) / float(dt @ dt)

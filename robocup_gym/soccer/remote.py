@@ -46,7 +46,12 @@ from robocup_gym.robot.nao import nao_model
 from robocup_gym.soccer.formation import kickoff_positions
 from robocup_gym.soccer.localisation import Estimator, level_offsets
 from robocup_gym.soccer.scripted import TeamView
-from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, SkillSet
+from robocup_gym.soccer.skills import (
+    SKILL_ACTION_LABELS,
+    SKILL_ACTION_WHAT,
+    SkillSet,
+    checked_action,
+)
 from robocup_gym.types import AgentCommand, Perception
 
 __all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
@@ -302,11 +307,8 @@ class ServerTeam:
     # ------------------------------------------------------------------ observations
     def _see_opponents(self, p: RemotePlayer) -> None:
         v = p.last.vision
-        gt = p.last.ground_truth
-        if v is None or gt is None:
-            return
-        fix = p.estimator.localiser.fix
-        if fix is None:
+        loc = p.estimator.localiser
+        if v is None or loc.fix is None:
             return
         offsets = level_offsets(
             {
@@ -318,10 +320,8 @@ class ServerTeam:
             p.last.joint("hj2"),
             p.estimator.up,
         )
-        c, s = heading_frame(gt.torso_quat)  # forward (c, s); right = (s, -c)
         for unum, rel in offsets.items():
-            right, forward = np.array([s, -c]), np.array([c, s])
-            self._opponents[int(unum)] = gt.torso_pos[:2] + rel[0] * right + rel[1] * forward
+            self._opponents[int(unum)] = loc.seen_at(rel)
 
     def _observations(self) -> dict[str, np.ndarray] | None:
         privileged = getattr(self.team, "privileged", None)
@@ -397,17 +397,15 @@ class ServerTeam:
                     result.end = "time"
                     break
                 commands: dict[int, AgentCommand] = {}
-                if g.play_mode in STOPPED_MODES:
-                    if beamed_in != g.play_mode:  # beam once per stop, then stand
-                        for k, p in enumerate(self.players):
-                            commands[k] = p.beam(*places[k])
-                        beamed_in = g.play_mode
-                        started = False
-                    elif not started:
-                        self.skills.reset(perceptions)
-                        started = True
+                stopped = g.play_mode in STOPPED_MODES
+                if stopped and beamed_in != g.play_mode:  # beam once per stop, then stand
+                    for k, p in enumerate(self.players):
+                        commands[k] = p.beam(*places[k])
+                    beamed_in = g.play_mode
+                    started = False
                 else:
-                    beamed_in = None
+                    if not stopped:
+                        beamed_in = None
                     if not started:
                         self.skills.reset(perceptions)
                         started = True
@@ -421,22 +419,17 @@ class ServerTeam:
                     if result.cycles % self.decision_cycles == 0:
                         for p in self.players:
                             self._see_opponents(p)
-                        if g.play_mode in STOPPED_MODES:
+                        if stopped:
                             decided = {a: np.zeros(len(SKILL_ACTION_LABELS)) for a in self.agents}
                         else:
                             decided = self.team(self, self.agents, self._observations())
                         for k, a in enumerate(self.agents):
-                            act = np.asarray(decided.get(a, actions[k]), dtype=float)
-                            if (
-                                act.shape != (len(SKILL_ACTION_LABELS),)
-                                or not np.isfinite(act).all()
-                            ):
-                                raise ValueError(
-                                    f"team gave {a} the action {act!r}: expected "
-                                    f"{len(SKILL_ACTION_LABELS)} finite values "
-                                    f"({', '.join(SKILL_ACTION_LABELS)})"
-                                )
-                            actions[k] = np.clip(act, -1.0, 1.0)
+                            actions[k] = checked_action(
+                                a,
+                                decided.get(a, actions[k]),
+                                SKILL_ACTION_LABELS,
+                                SKILL_ACTION_WHAT,
+                            )
                             self.skills.decide(k, actions[k])
                     for k, c in self.skills.commands().items():
                         commands.setdefault(k, c)

@@ -36,9 +36,11 @@ __all__ = [
     "MAX_SIDEWAYS_MPS",
     "MAX_TURN_DPS",
     "SKILL_ACTION_LABELS",
+    "SKILL_ACTION_WHAT",
     "PlayerBackend",
     "PlayerSkills",
     "SkillSet",
+    "checked_action",
 ]
 
 MAX_FORWARD_MPS = 0.8
@@ -50,6 +52,28 @@ MAX_TURN_DPS = 30.0
 SKILL_ACTION_LABELS = ("forward", "left", "turn", "kick")
 """A skill action: the walk's velocity command, each in [-1, 1] (scaled by the maxima above),
 and a kick when the last value is above 0.5."""
+
+SKILL_ACTION_WHAT = "a skill action: " + ", ".join(SKILL_ACTION_LABELS)
+"""How error messages describe a skill action."""
+
+
+def checked_action(agent: str, action: Any, labels: Sequence[str], what: str) -> np.ndarray:
+    """``action`` of ``agent`` as floats clipped to [-1, 1], one value per label.
+
+    Raises:
+        ValueError: the wrong shape (naming ``what`` was expected) or a value that is not
+            finite (naming its label).
+    """
+    a = np.asarray(action, dtype=float)
+    if a.shape != (len(labels),):
+        raise ValueError(f"{agent}: action of shape {a.shape}, expected ({len(labels)},) ({what})")
+    if not np.isfinite(a).all():
+        bad = int(np.flatnonzero(~np.isfinite(a))[0])
+        raise ValueError(
+            f"{agent}: action value {bad} ({labels[bad]}) is {a[bad]}; actions must be finite"
+        )
+    return np.clip(a, -1.0, 1.0)
+
 
 _FALLEN_UP_Z = 0.5
 """A robot whose torso's up axis points less than 60° from the vertical (z below this) is down."""
