@@ -78,6 +78,10 @@ log = logging.getLogger("robocup_gym.backends.rcssserver3d")
 
 FROZEN_CLOCK_MODES = frozenset({"BeforeKickOff", "GameOver"})
 """Play modes in which the game clock stands still (ground truth then cannot be matched by time)."""
+RESET_PLAY_MODE = "BeforeKickOff"
+"""The play mode while a reset drives the joints: the game is paused, so the referee's
+self-collision rule (reference §9.7) releases every frozen joint and freezes none, and the
+episode starts without what the last one left frozen or barred from freezing for 3 s."""
 
 
 # ------------------------------------------------------------------------------------------
@@ -651,7 +655,11 @@ class Rcssserver3dBackend(Backend):
         team = self._team
         assert self.unum is not None
         hover = tc.agent_move(self.unum, team, (pose.x, pose.y, hover_z), yaw)
-        first = tc.play_mode(play_mode) + hover
+        # the joints are driven with the game paused: the referee then starts no foul and frees
+        # every joint its self-collision rule froze (in the last episode, or as the joints pass
+        # through the body now), so that an episode starts as fresh as in-process; the episode's
+        # play mode comes with the placement
+        first = tc.play_mode(RESET_PLAY_MODE) + hover
         bpos = [float(v) for v in ball_pos]
         bvel = [float(v) for v in ball_vel]
         if len(bpos) != 3 or len(bvel) != 3:

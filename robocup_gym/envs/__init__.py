@@ -74,12 +74,15 @@ _ENTRY_POINTS = {
     "RobocupGym/VelocityKick-v0": "robocup_gym.envs.tasks.velocity_kick:VelocityKick",
     "RobocupGym/Walk-v0": "robocup_gym.envs.tasks.walk:Walk",
     "RobocupGym/GetUp-v0": "robocup_gym.envs.tasks.getup:GetUp",
+    "RobocupGym/GetUp-v1": "robocup_gym.envs.tasks.getup:GetUp",
     "RobocupGym/TargetKick-v0": "robocup_gym.envs.tasks.target_kick:TargetKick",
     "RobocupGym/LongKick-v0": "robocup_gym.envs.tasks.long_kick:LongKick",
     "RobocupGym/Dribble-v0": "robocup_gym.envs.tasks.dribble:Dribble",
 }
 REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 """Every Gymnasium id this package registers."""
+_ID_OPTIONS: dict[str, dict] = {"RobocupGym/GetUp-v1": {"self_collisions": True}}
+"""The options a version sets over its class's defaults (its docstring's version history)."""
 
 
 def register_envs() -> None:
@@ -88,7 +91,7 @@ def register_envs() -> None:
         if env_id not in _gym.registry:
             # No max_episode_steps: the environments truncate themselves, after which they run
             # their wait steps and pay the final reward (a TimeLimit wrapper would skip that).
-            _gym.register(id=env_id, entry_point=entry_point)
+            _gym.register(id=env_id, entry_point=entry_point, kwargs=_ID_OPTIONS.get(env_id, {}))
 
 
 register_envs()

@@ -286,6 +286,9 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
                 f"backend must be a name or a Backend, got {type(backend).__name__}"
             )
         self._owns_backend = not isinstance(backend, Backend)
+        world = getattr(self.backend, "world", None)
+        if hasattr(world, "self_collision_rule"):  # an in-process world (a server has its own)
+            world.self_collision_rule = bool(config.self_collisions)
         self.robot_model = self.backend.robot_model
         needs_gt = [c.name for c in comps if c.needs_ground_truth]
         if needs_gt and not self.backend.has_ground_truth:

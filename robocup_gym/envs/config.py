@@ -318,6 +318,12 @@ class EnvConfig:
     """…or when the torso centre is lower than this, m (standing: ≈0.38)."""
     play_mode: str = "PlayOn"
     """Play mode during the episode (wire name)."""
+    self_collisions: bool = False
+    """Run rcssserver3d's self-collision rule in the in-process world
+    (:mod:`robocup_gym.sim.self_collision`: while the game runs, a robot whose own boxes
+    collide has those parts' joints frozen for 1 s), as a real server always does and as
+    ``robocup-gym serve`` does. Off in the environments' current versions, whose behaviour it
+    would change."""
 
     # ---------------------------------------------------------------- backend
     backend_options: Mapping[str, Any] = field(default_factory=dict)
@@ -325,6 +331,10 @@ class EnvConfig:
     ``{"vision_config": VisionConfig(noise=False)}`` for ``"mujoco"``)."""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.self_collisions, bool):
+            raise EnvConfigError(
+                f"self_collisions must be true or false, got {self.self_collisions!r}"
+            )
         self.observations = tuple(self.observations)
         try:
             pos = tuple(float(v) for v in self.ball_start_pos)

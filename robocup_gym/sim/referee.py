@@ -9,8 +9,10 @@ halves), kick-off clearing and the first touch, goals and score, the goal pause 
 kick-off, ball out over a side line (kick-in) or goal line (goal kick / corner kick), set pieces
 (ball held at the spot after 1 s, opponents kept 2 m away, first touch → PlayOn, drop ball after
 15 s), pass mode, half time (300 s → BeforeKickOff of the second half) and the end of the game
-(600 s → GameOver). ``docs/serve.md`` lists the rules that are not implemented (fouls, the
-self-collision rule, double touch, the kick-off/indirect no-score rules, offside).
+(600 s → GameOver). The self-collision rule runs with the world
+(:mod:`robocup_gym.sim.self_collision`). ``docs/serve.md`` lists the rules that are not
+implemented (charging and touching-group fouls, double touch, the kick-off/indirect no-score
+rules, offside).
 
 The referee acts on the world through a :class:`~robocup_gym.sim.game_host.GameHost` (the
 server's host rebuilds its world as robots come and go; an environment's keeps one).

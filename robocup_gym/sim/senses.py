@@ -37,7 +37,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robocup_gym.sim.referee import BEAM_MODES, PAUSED_MODES
+from robocup_gym.sim.referee import BEAM_MODES, FOULS_PAUSED_MODES, PAUSED_MODES
+from robocup_gym.sim.self_collision import SelfCollisions
 from robocup_gym.sim.vision import CALIBRATION_ERROR_M, see
 from robocup_gym.types import GameState, HeardMessage, Perception
 
@@ -137,13 +138,47 @@ class Senses:
             r.calibration = self.rng.uniform(-CALIBRATION_ERROR_M, CALIBRATION_ERROR_M, 3)
 
     def _advance_clocks(self, dt: float) -> None:
-        """After one cycle of ``dt`` seconds: world time, game clock (unless paused) and every
-        robot's perception counter."""
+        """After one cycle of ``dt`` seconds: world time, game clock (unless paused), every
+        robot's perception counter, and the self-collision rule."""
         self.time = round(self.time + dt, 10)
         if self.game.play_mode not in PAUSED_MODES:
             self.game.game_time = round(self.game.game_time + dt, 10)
         for r in self.robots:
             r.perception_counter += 1
+        self._self_collision_rule()
+
+    # ------------------------------------------------------------------ self-collisions
+    self_collision_rule: bool = True
+    """Whether rcssserver3d's self-collision rule runs (:mod:`robocup_gym.sim.self_collision`):
+    while the game is not paused, a robot's own colliding boxes freeze their joints for 1 s.
+    The server always runs it; switch it off (``world.self_collision_rule = False``, or the
+    referee's ``self_collisions`` rule) to train without it."""
+
+    @property
+    def self_collisions(self) -> SelfCollisions:
+        """The rule's state: which joints are frozen, the last cycle's collisions."""
+        state = self.__dict__.get("_self_collisions")
+        if state is None:
+            state = self.__dict__["_self_collisions"] = SelfCollisions()
+        return state
+
+    def _self_collision_rule(self) -> None:
+        """After a step: the rule, while the game runs; every joint released while it pauses."""
+        state = self.self_collisions
+        if not self.self_collision_rule or self.game.play_mode in FOULS_PAUSED_MODES:
+            state.clear()
+            return
+        types = [r.model.robot_type.index for r in self.robots]
+        state.update(self, types, self.game.game_time)
+
+    def _frozen_to_zero(self, index: int, velocities: np.ndarray) -> np.ndarray:
+        """Robot ``index``'s due command with every frozen joint's command (not NaN) replaced
+        by 0 rad/s, as a disabled hinge effector takes it."""
+        state = self.__dict__.get("_self_collisions")
+        frozen = None if state is None else state.frozen(index)
+        if frozen is None:
+            return velocities
+        return np.where(frozen & (velocities == velocities), 0.0, velocities)
 
     # ------------------------------------------------------------------ beam
     BEAM_MODES = BEAM_MODES

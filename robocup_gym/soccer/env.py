@@ -30,6 +30,10 @@ option                default  meaning
 ``vision_noise``      True     ``See`` with rcssserver3d's noise
 ``rules``             True     the referee's rules: all, none (False) or single ones
                                switched (``{"ball_out": False}``; see ``sim.referee.Rules``)
+``self_collisions``   False    rcssserver3d's self-collision rule (a robot's own colliding
+                               boxes freeze their joints for 1 s; ``sim.self_collision``),
+                               as a real server and ``serve`` apply it; the get-up skill
+                               then plays ``GetUp-v1``'s scripts alone
 ``actions``           joints   ``"joints"`` or ``"skills"`` (:mod:`robocup_gym.soccer.skills`)
 ``skill_cycles``      10       cycles per step with skill actions
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
@@ -88,6 +92,7 @@ class SoccerConfig:
     privileged: bool = False
     vision_noise: bool = True
     rules: bool | Mapping[str, bool] = True
+    self_collisions: bool = False
     actions: str = "joints"
     skill_cycles: int = 10
     reward_goal: float = 1.0
@@ -114,6 +119,8 @@ class SoccerConfig:
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
         Rules.of(self.rules)  # an unknown rule or a value that is not a bool: a clear error
+        if not isinstance(self.self_collisions, bool):
+            raise ValueError(f"self_collisions must be true or false, got {self.self_collisions!r}")
         if self.actions not in ("joints", "skills"):
             raise ValueError(f"actions must be 'joints' or 'skills', got {self.actions!r}")
         for name in ("max_cycles", "cycles_per_step", "skill_cycles"):
@@ -180,6 +187,7 @@ class SoccerParallelEnv(ParallelEnv):
             engine=c.engine,
             rules=c.rules,
             vision_noise=c.vision_noise,
+            self_collisions=c.self_collisions,
         )
         self.possible_agents = list(self.game.names)
         self.agents: list[str] = []
@@ -205,7 +213,11 @@ class SoccerParallelEnv(ParallelEnv):
                 c.target_gain,
                 stop_margin_deg=0.5 if c.action_mode == "target_angle" else 0.0,
             )
-        self.skills = SkillSet(self.game.robot_types) if c.actions == "skills" else None
+        self.skills = (
+            SkillSet(self.game.robot_types, self_collisions=c.self_collisions)
+            if c.actions == "skills"
+            else None
+        )
         self._angles: dict[str, np.ndarray] = {}
         self._cycles = 0
         self._rng = np.random.default_rng()

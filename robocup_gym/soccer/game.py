@@ -93,6 +93,7 @@ class SoccerGame:
         team_names: tuple[str, str] = ("Left", "Right"),
         seed: int | None = None,
         dead_time_cycles: int = 1,
+        self_collisions: bool = False,
     ) -> None:
         types = [*map(int, left_types), *map(int, right_types)]
         if not types:
@@ -124,6 +125,7 @@ class SoccerGame:
             seed=seed,
             dead_time_cycles=dead_time_cycles,
         )
+        self.world.self_collision_rule = bool(self_collisions)
         self.host = GameHost(self.world)
         self.referee = self._new_referee(seed)
         self._diverged = False

@@ -247,7 +247,7 @@ class ServerTeam:
         except BaseException:
             self.close()
             raise
-        self.skills = SkillSet(types)
+        self.skills = SkillSet(types, self_collisions=True)  # as every server applies it
         self._observers: dict[str, Any] = {}
         self._opponents: dict[int, np.ndarray] = {}
         """Where the team's players last saw each opponent (by uniform number), world (x, y)."""

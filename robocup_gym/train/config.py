@@ -83,19 +83,22 @@ _KICK_RESIDUAL_PPO: dict[str, Any] = {
     "n_steps": 256,
 }
 
+_GETUP_PPO: dict[str, Any] = {
+    # a residual over the scripted get-up (5° of reach): σ = e^-2 of it is 0.7°, which the
+    # script (searched under 1.5° of noise) stands (docs/training.md, *Get-up*)
+    "learning_rate": 3e-4,
+    "batch_size": 256,
+    "use_sde": False,
+    "policy_kwargs": {"log_std_init": -2.0},
+}
+
 TASK_ALGO_DEFAULTS: dict[tuple[str, str], dict[str, Any]] = {
     ("RobocupGym/Walk-v0", "ppo"): _RESIDUAL_PPO,
     ("RobocupGym/Dribble-v0", "ppo"): _RESIDUAL_PPO,
     ("RobocupGym/TargetKick-v0", "ppo"): _KICK_RESIDUAL_PPO,
     ("RobocupGym/LongKick-v0", "ppo"): _KICK_RESIDUAL_PPO,
-    ("RobocupGym/GetUp-v0", "ppo"): {
-        # a residual over the scripted get-up (5° of reach): σ = e^-2 of it is 0.7°, which the
-        # script (searched under 1.5° of noise) stands (docs/training.md, *Get-up*)
-        "learning_rate": 3e-4,
-        "batch_size": 256,
-        "use_sde": False,
-        "policy_kwargs": {"log_std_init": -2.0},
-    },
+    ("RobocupGym/GetUp-v0", "ppo"): _GETUP_PPO,
+    ("RobocupGym/GetUp-v1", "ppo"): _GETUP_PPO,
 }
 """Hyperparameters a task's reference policy was trained with where they differ from the
 paper's, by (Gymnasium id, algorithm): :meth:`TrainConfig.resolved_algo_kwargs` puts them
@@ -267,8 +270,9 @@ class TrainConfig:
     """With ``vec_env="ray"``: the Ray cluster to join (``auto``, or ``HOST:PORT`` of its head);
     empty: an embedded Ray on this machine, ended with the run."""
     ray_start_timeout_s: float = 60.0
-    """With ``vec_env="ray"``: how long an actor may take to start, also one started again after
-    its node was lost; when none can start in time the run saves and stops."""
+    """With ``vec_env="ray"``: how long an actor started again after its node was lost may take
+    to start (the run's first actors: at least 60 s, ``ray_vecenv.FIRST_START_S``); when none
+    can start in time the run saves and stops."""
     n_workers: int = 0
     """Worker processes (or Ray actors) for the environments (0 = one per CPU core, with Ray one
     per CPU of the cluster; at most n_envs); each steps a block of n_envs / n_workers

@@ -62,7 +62,8 @@ def add_benchmark_options(parser, task: str, episodes: int) -> None:
     """The options every skill benchmark (``benchmarks/walk.py``, ``getup.py``, ``kick.py``,
     ``dribble.py``) takes, on an ``argparse`` parser: the policy (a ``task`` run folder,
     ``pretrained:NAME`` or ``zero``), ``--episodes`` (default ``episodes``), ``--seed``,
-    ``--backend`` (also ``--engine``: ode, mujoco or rcssserver3d) and ``--robot-type``."""
+    ``--backend`` (also ``--engine``: ode, mujoco or rcssserver3d), ``--robot-type`` and
+    ``--self-collisions``."""
     parser.add_argument(
         "policy",
         help=f"a {task} run folder, 'pretrained:NAME' (a shipped policy) or 'zero' (a "
@@ -85,6 +86,12 @@ def add_benchmark_options(parser, task: str, episodes: int) -> None:
         default=None,
         help="Nao type 0-4 (default: the run's own; a policy takes only types with its joints)",
     )
+    parser.add_argument(
+        "--self-collisions",
+        action="store_true",
+        help="run rcssserver3d's self-collision rule in-process (EnvConfig.self_collisions; a "
+        "real server always applies it)",
+    )
 
 
 def benchmark_policy_and_env(args, env_id: str, env_overrides: dict[str, Any] | None = None):
@@ -99,6 +106,8 @@ def benchmark_policy_and_env(args, env_id: str, env_overrides: dict[str, Any] | 
     extra = dict(env_overrides or {})
     if args.robot_type is not None:
         extra["robot_type"] = args.robot_type
+    if getattr(args, "self_collisions", False):
+        extra["self_collisions"] = True
     return policy_and_env(args.policy, env_id, args.backend, extra)
 
 

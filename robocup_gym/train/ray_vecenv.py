@@ -85,6 +85,11 @@ class _BlockActor:
         self.block.close()
 
 
+FIRST_START_S = 60.0
+"""Least time a run's first actors may take to start: their CPUs were counted before they were
+asked for, so only a slow start (a busy machine) keeps them, not a lack of resources."""
+
+
 class RayVecEnv(BlockVecEnv):
     """``n_envs`` environments in ``n_workers`` Ray actors (module docstring).
 
@@ -98,7 +103,8 @@ class RayVecEnv(BlockVecEnv):
         env_fns: One constructor per environment (picklable; shipped to the actors).
         n_workers: Actors (0 = one per CPU Ray reports, at most one per environment).
         address: ``None``: an embedded Ray on this machine; else the cluster to join.
-        start_timeout_s: How long a (new) actor may take to start before the run gives up.
+        start_timeout_s: How long an actor started in place of a lost one may take to start
+            before the run gives up (the first ones: at least :data:`FIRST_START_S`).
         block_class: What an actor hosts: :class:`EnvBlock` (one environment per constructor)
             or one that gives several environments per constructor (the players of a team
             game: :class:`~robocup_gym.train.selfplay.SeatBlock`).
@@ -159,7 +165,7 @@ class RayVecEnv(BlockVecEnv):
         self._ref_block: dict[Any, int] = {}
         self.actors: list[Any] = []
         try:
-            self.actors = [self._new_actor(w) for w in range(n_actors)]
+            self.actors = [self._new_actor(w, first=True) for w in range(n_actors)]
             for w in range(len(self.blocks)):
                 self._send(w, "get_spaces", None)
             spaces = self._from_every_worker(lambda w: _worker_failed(self._recv(w)))
@@ -170,19 +176,27 @@ class RayVecEnv(BlockVecEnv):
         super().__init__(n_envs, observation_space, action_space)
 
     # ------------------------------------------------------------------ actors
-    def _new_actor(self, worker: int):
-        """A new actor hosting block ``worker`` (``blocks[worker]``), once it has started."""
+    def _new_actor(self, worker: int, first: bool = False):
+        """A new actor hosting block ``worker`` (``blocks[worker]``), once it has started
+        (the run's first actors, whose CPUs were counted, get at least
+        :data:`FIRST_START_S`)."""
         block = self.blocks[worker]
         fns = self._env_fns[block.start // self._seats : block.stop // self._seats]
         handle = self._actor_class.remote(fns, block.start, self._block_class)
+        timeout = max(self.start_timeout_s, FIRST_START_S) if first else self.start_timeout_s
         try:
-            self._ray.get(handle.node.remote(), timeout=self.start_timeout_s)
+            self._ray.get(handle.node.remote(), timeout=timeout)
         except self._ray.exceptions.GetTimeoutError:
             self._ray.kill(handle)
+            free = self._ray.available_resources().get("CPU", 0)
+            why = (
+                "the cluster has no free CPU left"
+                if free < 1
+                else f"{free:g} CPU free, but the worker did not come up (a machine too busy?)"
+            )
             raise WorkersLostError(
                 f"no Ray worker for environments {block.start}–{block.stop - 1} could start "
-                f"within {self.start_timeout_s:g} s: the cluster has no free CPU left "
-                f"({self._ray.available_resources().get('CPU', 0):g} available)"
+                f"within {timeout:g} s: {why}"
             ) from None
         return handle
 

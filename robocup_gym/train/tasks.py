@@ -9,6 +9,7 @@ environments and lets its tests run on a tiny one.
 from __future__ import annotations
 
 import re
+import warnings
 from typing import Any
 
 import gymnasium as gym
@@ -141,7 +142,10 @@ def make_env(
         raise ValueError(f"--backend/--engine only apply to RobocupGym tasks, not {env_id!r}")
     if render_mode is not None:
         kwargs["render_mode"] = render_mode
-    return gym.make(env_id, **kwargs)
+    with warnings.catch_warnings():
+        # an older version named on purpose (the one a policy was trained on) is not a mistake
+        warnings.filterwarnings("ignore", ".*The environment .* is out of date", DeprecationWarning)
+        return gym.make(env_id, **kwargs)
 
 
 _NOT_CONFIG = ("backend", "render_mode", "render_size", "config")

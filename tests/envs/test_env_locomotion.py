@@ -34,8 +34,9 @@ def test_the_tasks_are_listed_by_the_cli():
     from robocup_gym.train.tasks import registered_tasks, resolve_task
 
     tasks = registered_tasks()
-    assert tasks["walk"] == "RobocupGym/Walk-v0" and tasks["get-up"] == "RobocupGym/GetUp-v0"
-    assert resolve_task("getup") == resolve_task("GetUp") == "RobocupGym/GetUp-v0"
+    assert tasks["walk"] == "RobocupGym/Walk-v0" and tasks["get-up"] == "RobocupGym/GetUp-v1"
+    assert resolve_task("getup") == resolve_task("GetUp") == "RobocupGym/GetUp-v1"
+    assert resolve_task("RobocupGym/GetUp-v0") == "RobocupGym/GetUp-v0"
 
 
 # ------------------------------------------------------------------ Walk
@@ -593,3 +594,34 @@ def test_the_walk_benchmark_measures_turning_counter_clockwise_positive():
     assert turned(10.0, 40.0) == pytest.approx(30.0, abs=1e-9)
     assert turned(40.0, 10.0) == pytest.approx(-30.0, abs=1e-9)
     assert turned(170.0, -170.0) == pytest.approx(20.0, abs=1e-9)
+
+
+def test_getup_v1_runs_the_self_collision_rule_and_its_own_front_script(monkeypatch):
+    """GetUp-v1 is v0 with rcssserver3d's self-collision rule on; from the front it plays a
+    script that keeps the forearms out of the legs. Lying poses 0, 9, 12 (type 0, zero actions):
+    v0's script under the rule gets up from none of them (the arms and legs freeze as it pushes
+    up), v1's from every one, as v0's does without the rule."""
+    from robocup_gym.envs.tasks import getup
+
+    assert getup.getup_keyframes(0, True)["back"] == getup.getup_keyframes(0)["back"]
+    assert getup.getup_keyframes(0, True)["front"] != getup.getup_keyframes(0)["front"]
+
+    def up(env_id: str) -> tuple[list[bool], bool]:
+        env = gym.make(env_id, start_side="front", backend="ode")
+        zero = np.zeros(env.action_space.shape, np.float32)
+        out = []
+        for pose in (0, 9, 12):
+            env.reset(seed=100_000 + pose, options={"lying_pose": pose})
+            done, info = False, {}
+            while not done:
+                _, _, terminated, truncated, info = env.step(zero)
+                done = terminated or truncated
+            out.append(bool(info.get("success")) and info["steps_to_up"] <= 80)
+        rule = env.unwrapped.backend.world.self_collision_rule
+        env.close()
+        return out, rule
+
+    assert up("RobocupGym/GetUp-v1") == ([True, True, True], True)
+    assert up("RobocupGym/GetUp-v0") == ([True, True, True], False)
+    monkeypatch.setattr(getup, "GETUP_FRONT_WITH_SELF_COLLISIONS", {})  # v0's script, the rule
+    assert up("RobocupGym/GetUp-v1") == ([False, False, False], True)

@@ -68,19 +68,33 @@ def test_a_player_kicks_a_ball_in_front_of_its_right_foot(solo):
     assert moved[0] > 1.0, moved  # forward, as the robot faces
 
 
-def test_a_fallen_player_gets_up_by_itself(solo):
+@pytest.mark.parametrize("self_collisions", [False, True], ids=["no rule", "self-collision rule"])
+def test_a_fallen_player_gets_up_by_itself(self_collisions):
+    """With the self-collision rule (a real server's, ``serve``'s) the get-up plays GetUp-v1's
+    scripts alone; without it, the shipped get-up policy."""
+    solo = game_v0.parallel_env(
+        actions="skills",
+        left_types=(0,),
+        right_types=(),
+        max_cycles=10**5,
+        self_collisions=self_collisions,
+    )
+    assert solo.game.world.self_collision_rule is self_collisions
+    assert (solo.skills.uses_policy["get-up"] == set()) is self_collisions
     solo.reset(seed=0)
     w = solo.game.world
     lying = quat_multiply(yaw_quat(np.radians(-90.0)), axis_angle_quat((1, 0, 0), np.radians(-90)))
     w.place_robot(0, -14.0, 0.0, z=0.1, quat=lying, joint_angles_deg=np.zeros(22))
     heights, modes = [], []
-    for _ in range(20):  # 4 s, told to stand
+    for _ in range(30):  # 6 s, told to stand (a second try from the other side included)
         solo.step({"left_1": np.zeros(4)})
         heights.append(float(w.torso_position(0)[2]))
         modes.append(solo.skills.modes()[0])
     assert "get-up" in modes
     assert min(heights) < 0.15 and heights[-1] > 0.3, heights
     assert modes[-1] == "walk"
+    assert solo.skills.players[0].getup.env.config.self_collisions is self_collisions
+    solo.close()
 
 
 def test_skill_games_repeat_from_their_seed():

@@ -588,7 +588,7 @@ def test_train_and_eval_a_league_robot(tmp_path):
 
 def test_tasks_lists_the_tasks_and_the_robots():
     out = invoke(["tasks"]).output
-    assert "velocity-kick" in out and "RobocupGym/GetUp-v0" in out
+    assert "velocity-kick" in out and "RobocupGym/GetUp-v1" in out
     assert "robots: the Nao, types 0-4" in out
     assert "team scenarios" in out and "game-1v1 … game-11v11" in out
     try:

@@ -190,19 +190,28 @@ def test_with_no_resources_left_the_run_saves_and_stops(cluster, tmp_path):
     c, nodes = cluster
     c.remove_node(nodes[2])  # two one-CPU nodes left, two actors: no spare
     c.remove_node(nodes[3])
+    # the actors are placed only once Ray counts the removed nodes out (else one may be given a
+    # dead node's CPU and never start)
+    deadline = time.monotonic() + 60
+    while ray.cluster_resources().get("CPU", 0) > 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert ray.cluster_resources().get("CPU", 0) == 2
     cfg = _small_run(10_000_000, vec_env="ray", ray_start_timeout_s=5)
     run_dir = tmp_path / "run"
+    trained = threading.Event()
 
     def remove_when_training() -> None:
-        deadline = time.monotonic() + 300
-        while not (run_dir / "progress.csv").exists() and time.monotonic() < deadline:
-            time.sleep(0.2)
+        while not (run_dir / "progress.csv").exists() and not trained.wait(0.2):
+            pass
         c.remove_node(nodes[0])
 
     remover = threading.Thread(target=remove_when_training, daemon=True)
     remover.start()
-    with pytest.raises(WorkersLostError) as err:
-        train(cfg, run_dir=run_dir, progress=False, curve_every=256)
+    try:
+        with pytest.raises(WorkersLostError) as err:
+            train(cfg, run_dir=run_dir, progress=False, curve_every=256)
+    finally:
+        trained.set()
     remover.join()
     message = str(err.value)
     assert "no Ray worker for environments" in message and "could start within 5 s" in message

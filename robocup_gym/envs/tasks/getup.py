@@ -29,6 +29,7 @@ from robocup_gym.sim.kinematics import resting_torso_height
 from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply
 
 __all__ = [
+    "GETUP_FRONT_WITH_SELF_COLLISIONS",
     "GETUP_KEYFRAMES",
     "GETUP_KEYFRAMES_BY_TYPE",
     "GETUP_OBSERVATIONS",
@@ -136,8 +137,53 @@ within 80 cycles; type 3's back again with the targets kept 0.5° off the stops
 its type up within 80 cycles from 58 to 64 poses a side (docs/results.md)."""
 
 
-def getup_keyframes(robot_type: int) -> dict[str, tuple[tuple[float, tuple[float, ...]], ...]]:
-    """The scripted get-up (keyframes per side) that Nao type ``robot_type`` (0–4) plays.
+GETUP_FRONT_WITH_SELF_COLLISIONS: dict[int, tuple[tuple[float, tuple[float, ...]], ...]] = {
+    0: (
+        (17, (-118.3, -0.5, 119.5, 0.5, -68.1, 28.4, 91.4, -109.6, 74.5, -44.5)),
+        (29, (-99.7, -0.5, 112.4, 0.5, -89.9, 29.0, 99.5, -20.5, -29.5, 24.5)),
+        (18, (115.1, -0.3, 71.6, -4.9, -8.0, 44.5, -24.5, -1.0, -41.7, -15.7)),
+        (23, (-119.5, 1.8, -54.7, 0.5, -11.1, 44.5, -24.5, -9.5, 3.2, 20.9)),
+    ),
+    1: (
+        (23, (-73.4, 7.1, 119.5, 0.5, -69.8, 31.9, 68.4, -116.5, 69.7, -33.9)),
+        (28, (-93.2, 33.3, 97.2, -16.6, -85.7, 11.4, 99.5, -40.7, -39.7, 24.5)),
+        (20, (119.5, -0.5, 83.8, -16.3, -16.8, 40.7, -8.4, -16.3, -29.8, -11.7)),
+        (21, (-108.7, 5.6, -70.1, -15.6, 0.5, 42.3, -10.6, -6.7, 7.0, -8.7)),
+    ),
+    2: (
+        (19, (-119.4, 20.9, 117.1, 0.5, -69.3, 37.5, 87.0, -129.5, 70.7, -21.4)),
+        (29, (-94.4, 9.5, 109.2, -8.4, -83.5, 21.7, 97.4, -22.1, -44.5, 15.1)),
+        (16, (116.5, -0.5, 65.3, -14.7, 0.5, 44.5, -24.5, 0.5, -31.8, -7.5)),
+        (25, (-107.7, 5.6, -53.5, 0.5, -11.8, 38.8, -12.5, -5.9, -2.2, 0.8)),
+    ),
+    3: (
+        (17, (-80.9, 40.7, 119.5, -50.4, -66.4, 7.7, 99.5, -113.2, 74.5, -31.2)),
+        (29, (-110.8, 37.0, 119.5, 0.5, -87.0, 32.9, 99.5, -40.2, -24.7, 24.5)),
+        (19, (119.5, 8.4, 65.6, -17.3, -26.4, 44.5, -22.0, -2.7, -44.5, -13.5)),
+        (18, (-114.5, 29.5, -61.9, 0.5, -1.7, 44.5, -23.1, -16.6, 11.0, 24.5)),
+    ),
+    4: (
+        (22, (-119.5, 7.4, 118.5, 0.5, -84.2, 39.1, 81.3, -129.5, 74.5, -32.0)),
+        (27, (-114.2, -0.5, 105.4, 0.5, -89.9, 31.5, 99.5, -30.2, -21.8, 8.6)),
+        (18, (116.7, 12.3, 70.9, -3.1, 0.5, 43.5, -24.5, -0.1, -40.6, -23.3)),
+        (23, (-109.3, 3.3, -63.2, -13.8, 0.5, 44.5, -24.5, -10.8, 5.8, 24.5)),
+    ),
+}
+"""The get-ups from the front where the self-collision rule runs (``self_collisions=True``,
+``GetUp-v1``; reference §9.7), per Nao type (the same layout as :data:`GETUP_KEYFRAMES`; a type
+not listed plays its own script). Pushing up, the scripts of :data:`GETUP_KEYFRAMES_BY_TYPE` put
+the lower arms into the shanks or thighs; a real server then freezes those arms and legs for a
+second and the robot falls back (type 0's script alone gets up from 30 of 64 lying poses). These
+keep the forearms out of the legs: found by the same CMA-ES over the first two keyframes, from
+the old script, on lying poses 0–15 with the rule (type 3: 40 generations in two runs); over
+poses 0–63 (docs/results.md)."""
+
+
+def getup_keyframes(
+    robot_type: int, self_collisions: bool = False
+) -> dict[str, tuple[tuple[float, tuple[float, ...]], ...]]:
+    """The scripted get-up (keyframes per side) that Nao type ``robot_type`` (0–4) plays, in a
+    world without or with the self-collision rule (``self_collisions``).
 
     Raises:
         ValueError: for another number.
@@ -145,6 +191,9 @@ def getup_keyframes(robot_type: int) -> dict[str, tuple[tuple[float, tuple[float
     frames = GETUP_KEYFRAMES_BY_TYPE.get(robot_type)
     if frames is None:
         raise ValueError(f"Nao types are 0-4, got {robot_type!r}")
+    front = GETUP_FRONT_WITH_SELF_COLLISIONS.get(robot_type)
+    if self_collisions and front is not None:
+        return {**frames, "front": front}
     return frames
 
 
@@ -298,6 +347,9 @@ class GetUp(BaseEnv):
 
     Version history:
 
+    * v1: rcssserver3d's self-collision rule runs (``self_collisions=True``), as on a real
+      server and in a game, with the get-ups from the front that keep clear of it
+      (:data:`GETUP_FRONT_WITH_SELF_COLLISIONS`).
     * v0: first release (robocup-gym 0.2.0).
     """
 
@@ -334,7 +386,8 @@ class GetUp(BaseEnv):
         if self.config.reference_motion and self._actions.mode is not ActionMode.VELOCITY:
             script_type = self.config.script_robot_type
             keyframes = getup_keyframes(
-                self.config.robot_type if script_type is None else script_type
+                self.config.robot_type if script_type is None else script_type,
+                self.config.self_collisions,
             )
             self._script = {
                 side: reference_targets(self.robot_model, self._actions.joints, side, keyframes)

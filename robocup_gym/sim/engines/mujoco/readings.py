@@ -123,6 +123,14 @@ class WorldReadings:
         d = self._posed()
         return d.xpos[r.robot_bodies].copy(), d.xmat[r.robot_bodies].reshape(-1, 3, 3).copy()
 
+    def every_body_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`body_frames` of every robot, one after the other in robot order."""
+        ids = self.__dict__.get("_robot_body_ids")
+        if ids is None:
+            ids = self._robot_body_ids = np.concatenate([r.robot_bodies for r in self.robots])
+        d = self._posed()
+        return d.xpos[ids], d.xmat[ids].reshape(-1, 3, 3)
+
     def ball_frame(self) -> tuple[np.ndarray, np.ndarray]:
         """Ball centre (world, m) and rotation matrix."""
         d = self._posed()

@@ -972,6 +972,7 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
         are clipped to each joint's maximum speed."""
         while r.pending and r.pending[0][0] <= self.cycle:
             _, vel, full = r.pending.pop(0)
+            vel = self._frozen_to_zero(r.index, vel)
             if inside is None and full:
                 _clip(vel, r.min_speeds, r.max_speeds, out=r.targets)  # every joint takes it
                 continue
@@ -1035,6 +1036,7 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
                 while pending and pending[0][0] <= due:  # later commands win where they command
                     vel = pending.pop(0)[1]
                     np.copyto(r.cmd, vel, where=vel == vel)
+                r.cmd[:] = self._frozen_to_zero(r.index, r.cmd)
         fast = self._compiled
         fast.pre()
         if self._sleepers:

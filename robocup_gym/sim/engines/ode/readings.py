@@ -183,6 +183,16 @@ class OdeReadings:
         rows = self._read_state()[[self._row[b] for b in r.bodies]]
         return rows[:, 0:3].copy(), rows[:, 3:12].reshape(-1, 3, 3).copy()
 
+    def every_body_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`body_frames` of every robot, one after the other in robot order."""
+        rows = self.__dict__.get("_robot_rows")
+        if rows is None or len(rows) != sum(len(r.bodies) for r in self.robots):
+            rows = self._robot_rows = np.array(
+                [self._row[b] for r in self.robots for b in r.bodies], dtype=np.intp
+            )
+        st = self._read_state()[rows]
+        return st[:, 0:3], st[:, 3:12].reshape(-1, 3, 3)
+
     def ball_frame(self) -> tuple[np.ndarray, np.ndarray]:
         """Ball centre (world, m) and rotation matrix."""
         row = self._body(self._ball)

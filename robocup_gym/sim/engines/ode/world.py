@@ -633,6 +633,8 @@ class OdeWorld(OdeReadings, Senses):
             r.pending.append(cmd)
             if len(r.pending) > self.dead_time_cycles:
                 due = r.pending.pop(0)
+                if due is not None:
+                    due = self._frozen_to_zero(i, due)
                 if due is not None and self._fast is not None:
                     self._fast.realise(i, due)
                 elif due is not None:
