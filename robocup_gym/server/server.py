@@ -54,7 +54,7 @@ from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES, SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator
 from robocup_gym.sim.physics import CYCLE_S
-from robocup_gym.sim.referee import BEAM_MODES, Player, Referee
+from robocup_gym.sim.referee import BEAM_MODES, Player, Referee, Rules
 from robocup_gym.sim.vision import VisionConfig
 
 log = logging.getLogger("robocup_gym.server")
@@ -169,7 +169,10 @@ class SimServer(AgentMessages, TrainerCommands):
             lines=bool(field_lines),
         )
         self.engine = engine
-        self.world_host = WorldHost(vision, physics, seed, engine=engine)
+        # the referee off (rules=False) is the self-collision rule off too
+        self.world_host = WorldHost(
+            vision, physics, seed, engine=engine, self_collisions=Rules.of(rules).any
+        )
         self.referee = Referee(
             self.world_host,
             rules=rules,

@@ -61,6 +61,8 @@ class WorldHost(GameHost):
         physics: MuJoCo settings (``None`` = the world's default; only with ``engine="mujoco"``).
         seed: Seeds the server's random generator (vision noise, beam noise, calibration).
         engine: ``"ode"`` (SimSpark's own step, the default) or ``"mujoco"``.
+        self_collisions: Every world runs the self-collision rule
+            (:mod:`robocup_gym.sim.self_collision`).
     """
 
     def __init__(
@@ -69,12 +71,14 @@ class WorldHost(GameHost):
         physics: object | None = None,
         seed: int | None = None,
         engine: str = "ode",
+        self_collisions: bool = True,
     ) -> None:
         if physics is not None and engine != "mujoco":
             raise ValueError("physics settings are MuJoCo's; they need engine='mujoco'")
         self.vision = vision or VisionConfig()
         self.physics = physics
         self.engine = engine
+        self.self_collisions = bool(self_collisions)
         self.rng = np.random.default_rng(seed)
         self.slots: list[Slot] = []
         self._index: dict[int, int] = {}
@@ -100,7 +104,9 @@ class WorldHost(GameHost):
         options: dict = {"dead_time_cycles": 0, "vision": self.vision, "seed": None}
         if self.engine == "mujoco":  # team colours of the rendered model, its physics settings
             options.update(teams=[s.team for s in slots], physics=self.physics)
-        return make_world([s.robot_type for s in slots], engine=self.engine, **options)
+        world = make_world([s.robot_type for s in slots], engine=self.engine, **options)
+        world.self_collision_rule = self.self_collisions
+        return world
 
     def change_robots(self, add: Sequence[tuple[int, int]], remove: Sequence[int]) -> list[int]:
         """Add robots ``(key, type)`` and remove those of the keys in ``remove`` in one rebuild.

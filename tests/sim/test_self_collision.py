@@ -223,3 +223,15 @@ def test_a_real_server_freezes_as_the_in_process_world(real_rcssserver3d):
     off = np.abs(traces["off"] - traces["real"]).max()
     assert on < 0.05, json.dumps({"on": float(on), "off": float(off)})
     assert off > 5.0
+
+
+@pytest.mark.parametrize("rules", [True, False])
+def test_serve_applies_the_rule_unless_its_referee_is_off(rules):
+    """``robocup-gym serve`` runs the rule in every world it builds as robots join, as a real
+    server does; ``--no-rules`` (``rules=False``) switches it off with the referee."""
+    from robocup_gym.server import SimServer
+
+    server = SimServer(0, 0, "127.0.0.1", sync=True, real_time=False, rules=rules)
+    server.world_host.change_robots([(1, 0), (2, 3)], [])
+    assert server.world.n_robots == 2
+    assert server.world.self_collision_rule is rules
