@@ -192,7 +192,7 @@ class SkillSet:
             server and ``serve`` always do). Then the get-up plays ``GetUp-v1``'s scripts
             alone, which keep clear of the rule: the shipped get-up's corrections were learnt
             over the scripts without it (from the front, with the rule, it gets up from 32 of
-            64 lying poses, ``GetUp-v1``'s script alone from 56; docs/results.md).
+            64 lying poses, ``GetUp-v1``'s script alone from 62; docs/results.md).
     """
 
     def __init__(

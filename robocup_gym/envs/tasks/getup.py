@@ -139,8 +139,8 @@ its type up within 80 cycles from 58 to 64 poses a side (docs/results.md)."""
 
 GETUP_FRONT_WITH_SELF_COLLISIONS: dict[int, tuple[tuple[float, tuple[float, ...]], ...]] = {
     0: (
-        (17, (-118.3, -0.5, 119.5, 0.5, -68.1, 28.4, 91.4, -109.6, 74.5, -44.5)),
-        (29, (-99.7, -0.5, 112.4, 0.5, -89.9, 29.0, 99.5, -20.5, -29.5, 24.5)),
+        (17, (-119.5, -0.5, 119.5, 0.5, -70.2, 29.9, 94.2, -105.6, 74.5, -43.2)),
+        (29, (-106.5, -0.5, 108.7, 0.5, -89.9, 38.7, 99.5, -15.4, -42.4, 24.5)),
         (18, (115.1, -0.3, 71.6, -4.9, -8.0, 44.5, -24.5, -1.0, -41.7, -15.7)),
         (23, (-119.5, 1.8, -54.7, 0.5, -11.1, 44.5, -24.5, -9.5, 3.2, 20.9)),
     ),
@@ -175,8 +175,9 @@ not listed plays its own script). Pushing up, the scripts of :data:`GETUP_KEYFRA
 the lower arms into the shanks or thighs; a real server then freezes those arms and legs for a
 second and the robot falls back (type 0's script alone gets up from 30 of 64 lying poses). These
 keep the forearms out of the legs: found by the same CMA-ES over the first two keyframes, from
-the old script, on lying poses 0–15 with the rule (type 3: 40 generations in two runs); over
-poses 0–63 (docs/results.md)."""
+the old script, on lying poses 0–15 with the rule (type 3: 40 generations in two runs; type 0
+again over poses 0–31, every other one with 1.5° of target noise); over poses 0–63
+(docs/results.md)."""
 
 
 def getup_keyframes(
