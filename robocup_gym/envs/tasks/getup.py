@@ -145,8 +145,8 @@ GETUP_FRONT_WITH_SELF_COLLISIONS: dict[int, tuple[tuple[float, tuple[float, ...]
         (23, (-119.5, 1.8, -54.7, 0.5, -11.1, 44.5, -24.5, -9.5, 3.2, 20.9)),
     ),
     1: (
-        (23, (-73.4, 7.1, 119.5, 0.5, -69.8, 31.9, 68.4, -116.5, 69.7, -33.9)),
-        (28, (-93.2, 33.3, 97.2, -16.6, -85.7, 11.4, 99.5, -40.7, -39.7, 24.5)),
+        (23, (-69.7, 10.5, 115.4, 0.5, -75.6, 21.3, 71.0, -116.1, 74.5, -33.7)),
+        (28, (-89.7, 30.1, 93.1, -19.5, -88.3, 10.0, 99.5, -43.8, -43.3, 24.5)),
         (20, (119.5, -0.5, 83.8, -16.3, -16.8, 40.7, -8.4, -16.3, -29.8, -11.7)),
         (21, (-108.7, 5.6, -70.1, -15.6, 0.5, 42.3, -10.6, -6.7, 7.0, -8.7)),
     ),
@@ -175,8 +175,8 @@ not listed plays its own script). Pushing up, the scripts of :data:`GETUP_KEYFRA
 the lower arms into the shanks or thighs; a real server then freezes those arms and legs for a
 second and the robot falls back (type 0's script alone gets up from 30 of 64 lying poses). These
 keep the forearms out of the legs: found by the same CMA-ES over the first two keyframes, from
-the old script, on lying poses 0–15 with the rule (type 3: 40 generations in two runs; type 0
-again over poses 0–31, every other one with 1.5° of target noise); over poses 0–63
+the old script, on lying poses 0–15 with the rule (type 3: 40 generations in two runs; types 0
+and 1 again over poses 0–31, every other one with 1.5° of target noise); over poses 0–63
 (docs/results.md)."""
 
 
