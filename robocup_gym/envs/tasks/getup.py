@@ -163,8 +163,8 @@ GETUP_FRONT_WITH_SELF_COLLISIONS: dict[int, tuple[tuple[float, tuple[float, ...]
         (18, (-114.5, 29.5, -61.9, 0.5, -1.7, 44.5, -23.1, -16.6, 11.0, 24.5)),
     ),
     4: (
-        (22, (-119.5, 7.4, 118.5, 0.5, -84.2, 39.1, 81.3, -129.5, 74.5, -32.0)),
-        (27, (-114.2, -0.5, 105.4, 0.5, -89.9, 31.5, 99.5, -30.2, -21.8, 8.6)),
+        (22, (-119.5, 3.1, 117.4, 0.5, -75.0, 43.9, 85.6, -129.5, 74.5, -44.5)),
+        (27, (-115.4, -0.5, 103.5, 0.5, -89.9, 35.7, 99.5, -36.1, -24.8, 10.3)),
         (18, (116.7, 12.3, 70.9, -3.1, 0.5, 43.5, -24.5, -0.1, -40.6, -23.3)),
         (23, (-109.3, 3.3, -63.2, -13.8, 0.5, 44.5, -24.5, -10.8, 5.8, 24.5)),
     ),
@@ -175,8 +175,8 @@ not listed plays its own script). Pushing up, the scripts of :data:`GETUP_KEYFRA
 the lower arms into the shanks or thighs; a real server then freezes those arms and legs for a
 second and the robot falls back (type 0's script alone gets up from 30 of 64 lying poses). These
 keep the forearms out of the legs: found by the same CMA-ES over the first two keyframes, from
-the old script, on lying poses 0–15 with the rule (type 3: 40 generations in two runs; types 0
-and 1 again over poses 0–31, every other one with 1.5° of target noise); over poses 0–63
+the old script, on lying poses 0–15 with the rule (type 3: 40 generations in two runs; types 0,
+1 and 4 again over poses 0–31, every other one with 1.5° of target noise); over poses 0–63
 (docs/results.md)."""
 
 
