@@ -219,11 +219,6 @@ class SelfCollisions:
         """The collisions of the last update: ``(robot index, body, body)``."""
         self._clock: np.float32 | None = None
 
-    def forget(self, index: int) -> None:
-        """Robot ``index`` left the world (or was replaced): no frozen joints."""
-        self._since.pop(index, None)
-        self._frozen.pop(index, None)
-
     def clear(self) -> None:
         """Every robot's joints released and free to be frozen (the game paused)."""
         self._since.clear()

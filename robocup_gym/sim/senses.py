@@ -151,8 +151,8 @@ class Senses:
     self_collision_rule: bool = True
     """Whether rcssserver3d's self-collision rule runs (:mod:`robocup_gym.sim.self_collision`):
     while the game is not paused, a robot's own colliding boxes freeze their joints for 1 s.
-    The server always runs it; switch it off (``world.self_collision_rule = False``, or the
-    referee's ``self_collisions`` rule) to train without it."""
+    The server always runs it; an environment's ``self_collisions`` option (``EnvConfig``,
+    ``SoccerConfig``) and ``serve --no-rules`` set it."""
 
     @property
     def self_collisions(self) -> SelfCollisions:

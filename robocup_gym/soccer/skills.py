@@ -230,7 +230,7 @@ class SkillSet:
                     env = pretrained_env(policy, backend, overrides)
                     self.uses_policy[skill].add(index)
                 except ValueError:  # another observation size (type 4)
-                    env = None
+                    pass
             if env is None:  # the reference motion alone
                 from robocup_gym.train.pretrained import recorded_env_options
                 from robocup_gym.train.tasks import make_env

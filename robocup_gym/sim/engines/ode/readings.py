@@ -185,8 +185,8 @@ class OdeReadings:
 
     def every_body_frame(self) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`body_frames` of every robot, one after the other in robot order."""
-        rows = self.__dict__.get("_robot_rows")
-        if rows is None or len(rows) != sum(len(r.bodies) for r in self.robots):
+        rows = self.__dict__.get("_robot_rows")  # a world keeps its robots
+        if rows is None:
             rows = self._robot_rows = np.array(
                 [self._row[b] for r in self.robots for b in r.bodies], dtype=np.intp
             )
