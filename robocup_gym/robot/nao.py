@@ -479,3 +479,59 @@ def wire_perceptor_order(type_index: int = 0) -> tuple[str, ...]:
     order += [f"rlj{i}" for i in range(1, 8 if toes else 7)]
     order += [f"llj{i}" for i in range(1, 8 if toes else 7)]
     return tuple(order)
+
+
+MESH_BOUNDS: dict[str, tuple[Vec3, Vec3]] = {
+    "naobody": ((-0.759925, -1.186159, -0.552179), (0.773802, 1.127901, 0.582243)),
+    "naohead": ((-0.660242, -0.512208, -0.575502), (0.660242, 0.487792, 0.544406)),
+    "upperarm": ((-0.540651, -1.024425, -0.591468), (0.667725, 0.962256, 0.591468)),
+    "lowerarm": ((-0.615816, -1.32, -0.592188), (0.615816, 1.43392, 0.728086)),
+    "thigh": ((-0.699674, -0.73527, -1.17803), (0.815795, 0.744477, 1.392327)),
+    "shank": ((-0.607233, -0.656782, -1.076334), (0.759024, 0.687822, 1.022094)),
+    "foot": ((-0.550013, -1.100003, -0.250012), (0.550022, 1.1, 0.539233)),
+}
+"""The bounds of the vertices of rcssserver3d's visual models of the Nao (``models/*.obj``, file
+units, the right side's; the left side's are mirrored in x). The server's bounding box of a
+robot, which its referee tests a safe spot against, is the union of these models' boxes as
+the rsg scales and turns them on each part (:meth:`NaoModel.mesh_boxes`)."""
+
+
+def _mesh_box(name: str, scale: Vec3, left: bool, turned: bool) -> tuple[np.ndarray, np.ndarray]:
+    lo, hi = (np.asarray(v, dtype=float) * scale for v in MESH_BOUNDS[name])
+    if turned:  # the rsg's (setLocalRotation -90 0 180): model (x, y, z) -> part (-x, z, y)
+        lo, hi = np.array([-hi[0], lo[2], lo[1]]), np.array([-lo[0], hi[2], hi[1]])
+    if left:
+        lo, hi = np.array([-hi[0], lo[1], lo[2]]), np.array([-lo[0], hi[1], hi[2]])
+    return lo, hi
+
+
+@cache
+def mesh_boxes(type_index: int) -> tuple[tuple[int, np.ndarray, np.ndarray], ...]:
+    """Each visual model of a Nao of type ``type_index`` as ``(body index, low corner, high
+    corner)`` of its box in that body's frame (m): the torso and the head (scale 0.1, turned),
+    upper and lower arms (0.07, 0.05), thighs (0.07), shanks and feet (0.08); a type-4 foot and
+    toe show the foot model scaled to their lengths (naolegtoe.rsg)."""
+    model = nao_model(type_index)
+    index = {b.name: k for k, b in enumerate(model.bodies)}
+    out: list[tuple[int, np.ndarray, np.ndarray]] = []
+    out.append((index["torso"], *_mesh_box("naobody", (0.1,) * 3, False, True)))
+    out.append((index["head"], *_mesh_box("naohead", (0.1,) * 3, False, True)))
+    toe = model.robot_type.toe_length
+    for p in ("r", "l"):
+        left = p == "l"
+        for part, scale in (
+            ("upperarm", 0.07),
+            ("lowerarm", 0.05),
+            ("thigh", 0.07),
+            ("shank", 0.08),
+        ):
+            out.append((index[p + part], *_mesh_box(part, (scale,) * 3, left, False)))
+        if toe is None:
+            out.append((index[p + "foot"], *_mesh_box("foot", (0.08,) * 3, left, False)))
+        else:
+            foot_len = 0.16 - toe
+            foot_scale = (0.08, 0.08 * foot_len / 0.16, 0.08)
+            toe_scale = (0.08, 0.08 * toe / foot_len, 0.08 * 0.01 / 0.02)
+            out.append((index[p + "foot"], *_mesh_box("foot", foot_scale, left, False)))
+            out.append((index[p + "toe"], *_mesh_box("foot", toe_scale, left, False)))
+    return tuple(out)

@@ -9,10 +9,11 @@ halves), kick-off clearing and the first touch, goals and score, the goal pause 
 kick-off, ball out over a side line (kick-in) or goal line (goal kick / corner kick), set pieces
 (ball held at the spot after 1 s, opponents kept 2 m away, first touch → PlayOn, drop ball after
 15 s), pass mode, half time (300 s → BeforeKickOff of the second half) and the end of the game
-(600 s → GameOver). The self-collision rule runs with the world
-(:mod:`robocup_gym.sim.self_collision`). ``docs/serve.md`` lists the rules that are not
-implemented (charging and touching-group fouls, double touch, the kick-off/indirect no-score
-rules, offside).
+(600 s → GameOver), fallen robots, illegal defence, and the fouls between robots of
+:mod:`robocup_gym.sim.fouls` (touching groups, charging, the safe spots of the referee's moves).
+The self-collision rule runs with the world (:mod:`robocup_gym.sim.self_collision`).
+``docs/serve.md`` lists the rules that are not implemented (double touch, the
+kick-off/indirect no-score rules, offside).
 
 The referee acts on the world through a :class:`~robocup_gym.sim.game_host.GameHost` (the
 server's host rebuilds its world as robots come and go; an environment's keeps one).
@@ -37,6 +38,13 @@ from robocup_gym.sim.field import (
     PENALTY_HALF_WIDTH,
     PENALTY_X,
 )
+from robocup_gym.sim.fouls import (
+    AGENT_RADIUS,
+    MAX_PLAYERS_IN_OWN_AREA,
+    ContactFouls,
+    SafeSpot,
+    robot_box,
+)
 from robocup_gym.sim.game_host import GameHost
 from robocup_gym.sim.physics import BALL_RADIUS, CYCLE_S
 from robocup_gym.types import PLAY_MODES
@@ -45,7 +53,6 @@ log = logging.getLogger("robocup_gym.referee")
 
 FREE_KICK_DISTANCE = 2.0
 FREE_KICK_MOVE = 2.5
-AGENT_RADIUS = 0.4
 HALF_TIME = 300.0
 GOAL_PAUSE = 3.0
 KICK_IN_PAUSE = 1.0
@@ -79,8 +86,6 @@ INCAPABLE_S = {"ground": (15.0, 30.0), "not_standing": (30.0, 60.0)}
 is taken off the field."""
 FOUL_HOLD_S = 0.5
 """A penalised robot is held in the air this long, then put beside the field."""
-MAX_PLAYERS_IN_OWN_AREA = 3
-"""More of a team's robots than this in its own penalty area is illegal defence."""
 _SET_PIECES = {
     "KickIn_Left": "left",
     "KickIn_Right": "right",
@@ -246,6 +251,12 @@ class Rules:
     area has the one that entered last moved out, 0.4 m beyond the area's nearest edge; when the
     goalkeeper (number 1) entered last, the field player farthest from the goal of those already
     inside (reference §9.5)."""
+    touching: bool = True
+    """While the game runs, a group of more than 2 robots linked by contacts has the one that
+    just joined moved 0.4 m away from the group's centre (:mod:`robocup_gym.sim.fouls`)."""
+    charging: bool = True
+    """While the game runs, a robot that keeps running into an opponent (not toward the ball)
+    is lifted for 0.5 s and put beside the field (:mod:`robocup_gym.sim.fouls`)."""
 
     @property
     def any(self) -> bool:
@@ -329,6 +340,16 @@ class Referee:
         """Each player's standing counters (by :attr:`Player.key`)."""
         self.in_own_area: dict[int, bool] = {}
         """Whether each player's torso was in its own penalty area last cycle (by key)."""
+        self.contact_fouls = ContactFouls()
+        """Touching groups and the charging clocks (:mod:`robocup_gym.sim.fouls`)."""
+        self._area: dict[str, list] = {}
+        """This cycle, per side: [robots in the own penalty area, robots moved into it]."""
+        self._before: dict[int, bool] = {}
+        """This cycle, whether each player (by key) was in its own penalty area the cycle before."""
+        self._inside: dict[int, bool] = {}
+        """This cycle, whether each player (by key) is in its own penalty area."""
+        self._fouled: set[int] = set()
+        """This cycle, the players (by key) with a foul to serve."""
 
     # ------------------------------------------------------------------ state
     @property
@@ -444,17 +465,51 @@ class Referee:
         rules = self.rules
         if not rules.any:
             return
-        pm = self.play_mode
-        t = self.game_time
-        if pm in FOULS_PAUSED_MODES:
+        self._fouls(players, touching)
+        self._game_flow(players)
+        if rules.charging:
+            w = self.host.world
+            for p in players:
+                self.contact_fouls.record_velocity(p.key, w.torso_velocity(p.index))
+
+    def _fouls(self, players: list[Player], touching: set[int]) -> None:
+        """The fouls of robots, in rcssserver3d's order: while the game is paused their
+        clocks start again (touching groups only grow); while it runs, the standing clocks,
+        charging, illegal defence, touching groups, then the penalised robots are lifted and
+        put beside the field."""
+        rules = self.rules
+        fouls = self.contact_fouls
+        keys = [p.key for p in players]
+        if rules.touching and len(players) > 2:
+            keys_of = {p.index: p.key for p in players}
+            fouls.link(keys_of, self.host.world.robot_contacts())
+        if self.play_mode in FOULS_PAUSED_MODES:
             self.posture.clear()
             self.in_own_area.clear()
-        else:
-            if rules.illegal_defence:
-                for side in ("left", "right"):
-                    self._illegal_defence([p for p in players if p.side == side])
-            if rules.fallen_robots:
-                self._take_off_fallen(players)
+            fouls.pause()
+            return
+        w = self.host.world
+        positions = {p.key: w.torso_position(p.index) for p in players}
+        self._count_posture(players, positions)
+        self._fouled = {p.key for p in players if self.posture[p.key].held}
+        self._area_census(players, positions)
+        by_index = {p.index: p.key for p in players}
+        fouls.tick(keys, {by_index[i] for i in touching if i in by_index})
+        if rules.charging:
+            self._charging(players, positions)
+        if rules.illegal_defence:
+            for side in ("left", "right"):
+                self._illegal_defence([p for p in players if p.side == side], positions)
+        if rules.touching and len(players) > 2:
+            self._touching(players, positions)
+        self._take_off_fallen(players, positions)
+        fouls.restart_groups(keys)
+
+    def _game_flow(self, players: list[Player]) -> None:
+        """The play modes: half time, goals, ball out, kick-offs, set pieces, pass mode."""
+        rules = self.rules
+        pm = self.play_mode
+        t = self.game_time
         if rules.half_time and pm != "GameOver" and pm != "BeforeKickOff":
             if self.half == 1 and t >= HALF_TIME:
                 self.half = 2
@@ -612,26 +667,13 @@ class Referee:
                     if not inside:
                         self._move_x(p.index, own * FREE_KICK_MOVE)
 
-    def _take_off_fallen(self, players: list[Player]) -> None:
-        """Count how long each player has not stood; lift one that stayed down too long for
-        :data:`FOUL_HOLD_S`, then put it beside the field, on the far side from the ball."""
-        w = self.host.world
-        cycles = {k: (a / CYCLE_S, b / CYCLE_S) for k, (a, b) in INCAPABLE_S.items()}
+    def _count_posture(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
+        """Count how long each player (not being penalised) has not stood."""
         for p in players:
             s = self.posture.setdefault(p.key, _Posture())
-            pos = w.torso_position(p.index)
             if s.held:
-                s.held += 1
-                if s.held > FOUL_HOLD_S / CYCLE_S:
-                    ball_y = float(self.host.ball_position()[1])
-                    x = (-0.6 if p.side == "left" else 0.6) * (7 - p.unum)
-                    y = (FIELD_HALF_WIDTH + 0.5) * (1.0 if ball_y < 0 else -1.0)
-                    self.host.teleport(p.index, (x, y, AGENT_RADIUS))
-                    log.info("%s #%d taken off the field (%s)", p.side, p.unum, s.why)
-                    self.posture[p.key] = _Posture()
-                else:
-                    self.host.teleport(p.index, (pos[0], pos[1], 1.0 + s.held * 0.01))
                 continue
+            pos = positions[p.key]
             z, in_field = float(pos[2]), abs(float(pos[1])) < FIELD_HALF_WIDTH + 0.1
             if z < NOT_STANDING_Z and in_field:
                 s.not_standing += 1
@@ -643,31 +685,133 @@ class Referee:
                 s.ground = 0
             if s.standing > STANDING_AGAIN_S / CYCLE_S:
                 s.not_standing = 0
+
+    def _take_off_fallen(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
+        """Lift a penalised player (charging, or down too long when the rule runs) for
+        :data:`FOUL_HOLD_S`, then put it beside the field, on the far side from the ball."""
+        cycles = {k: (a / CYCLE_S, b / CYCLE_S) for k, (a, b) in INCAPABLE_S.items()}
+        for p in players:
+            s = self.posture[p.key]
+            pos = positions[p.key]
+            if s.held:
+                s.held += 1
+                if s.held > FOUL_HOLD_S / CYCLE_S:
+                    ball_y = float(self.host.ball_position()[1])
+                    x = (-0.6 if p.side == "left" else 0.6) * (7 - p.unum)
+                    y = (FIELD_HALF_WIDTH + 0.5) * (1.0 if ball_y < 0 else -1.0)
+                    self._safe_move(p, np.array([x, y, AGENT_RADIUS]), pos)
+                    log.info("%s #%d taken off the field (%s)", p.side, p.unum, s.why)
+                    self.posture[p.key] = _Posture()
+                    self.contact_fouls.forget(p.key)
+                else:
+                    self._teleport(p, (pos[0], pos[1], 1.0 + s.held * 0.01))
+                continue
+            if not self.rules.fallen_robots:
+                continue
             keeper = int(p.unum == 1)
             if s.ground > cycles["ground"][keeper]:
                 s.held, s.why = 1, "on the ground too long"
             elif s.not_standing > cycles["not_standing"][keeper]:
                 s.held, s.why = 1, "not standing too long"
 
-    def _illegal_defence(self, team: list[Player]) -> None:
+    def _charging(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
+        """Opponents in contact: one that charged is penalised (lifted, then put beside the
+        field, as one that stayed down too long)."""
+        key_of = {p.index: p for p in players}
+        opponents: dict[int, list] = {}
+        for (i, j), (point, _n) in self.host.world.robot_contacts().items():
+            a, b = key_of.get(i), key_of.get(j)
+            if a is None or b is None or a.side == b.side:
+                continue
+            left, right = (a, b) if a.side == "left" else (b, a)
+            opponents.setdefault(left.key, []).append((right.key, point))
+        if not opponents:
+            return
+        exempt = {
+            p.key
+            for p in players
+            if self.posture[p.key].not_standing
+            or self.contact_fouls.since_moved.get(p.key, 1_000) < 50
+            or p.key in self._fouled
+        }
+        keeper = {}
+        for p in players:
+            if p.unum == 1:
+                x, y = (float(v) for v in positions[p.key][:2])
+                beyond = x <= -PENALTY_X if p.side == "left" else x >= PENALTY_X
+                keeper[p.key] = beyond and abs(y) <= PENALTY_HALF_WIDTH
+        fouls = self.contact_fouls.charging(
+            [p.key for p in players if p.side == "left"],
+            opponents,
+            positions,
+            self.host.ball_position(),
+            exempt,
+            keeper,
+        )
+        for p in players:
+            if p.key in fouls:
+                s = self.posture[p.key]
+                s.held, s.why = 1, "charging"
+                self._fouled.add(p.key)
+                log.info("%s #%d charged", p.side, p.unum)
+
+    def _touching(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
+        """Touching groups too large: the robot that joined last is moved 0.4 m away from the
+        group's centre (to the nearest free spot)."""
+        by_key = {p.key: p for p in players}
+        side_of = {p.key: p.side for p in players}
+        unum_of = {p.key: p.unum for p in players}
+        sides = ("left", "right") if self.rng.random() < 0.5 else ("right", "left")
+        for side in sides:
+            team = [p.key for p in players if p.side == side]
+            moves = self.contact_fouls.touching(
+                side, team, side_of, unum_of, positions, self._fouled, self.rng
+            )
+            for key, centre in moves:
+                p = by_key[key]
+                at = positions[key]
+                away = at[:2] - centre
+                n = float(np.hypot(*away))
+                if n == 0.0:
+                    continue
+                target = np.array([*(at[:2] + away / n * AGENT_RADIUS), float(at[2])])
+                self._safe_move(p, target, at)
+                log.info("%s #%d moved out of a touching group", p.side, p.unum)
+
+    def _area_census(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
+        """Which players (not being penalised) are in their own penalty area this cycle, and
+        how many per team; last cycle's answer kept in :attr:`in_own_area` until the rule
+        reads it."""
+        self._before = {p.key: self.in_own_area.get(p.key, False) for p in players}
+        self._area = {"left": [0, 0], "right": [0, 0]}
+        self._inside = {}
+        for p in players:
+            if p.key in self._fouled:
+                self._inside[p.key] = False
+                continue
+            v = positions[p.key]
+            sign = -1.0 if p.side == "left" else 1.0
+            inside = (
+                sign * float(v[0]) >= PENALTY_X
+                and abs(float(v[0])) <= FIELD_HALF_LENGTH
+                and abs(float(v[1])) <= PENALTY_HALF_WIDTH
+            )
+            self._inside[p.key] = inside
+            self._area[p.side][0] += inside
+        self.in_own_area.update(self._inside)
+
+    def _illegal_defence(self, team: list[Player], positions: dict[int, np.ndarray]) -> None:
         """More than :data:`MAX_PLAYERS_IN_OWN_AREA` of ``team`` (one side's players) in their
         own penalty area: move out the one that just entered (in random order, until few enough
         are left), or, when the goalkeeper just entered, the one ranked
         ``MAX_PLAYERS_IN_OWN_AREA + 1`` by distance to the own goal of those already inside."""
         if not team:
             return
-        w = self.host.world
         sign = -1.0 if team[0].side == "left" else 1.0
-        present = [p for p in team if not self.posture.get(p.key, _Posture()).held]
-        pos = {p.key: w.torso_position(p.index) for p in present}
-        inside = {
-            k: sign * float(v[0]) >= PENALTY_X
-            and abs(float(v[0])) <= FIELD_HALF_LENGTH
-            and abs(float(v[1])) <= PENALTY_HALF_WIDTH
-            for k, v in pos.items()
-        }
-        before = {p.key: self.in_own_area.get(p.key, False) for p in present}
-        self.in_own_area.update(inside)
+        present = [p for p in team if p.key not in self._fouled]
+        pos = {p.key: positions[p.key] for p in present}
+        inside = {p.key: self._inside[p.key] for p in present}
+        before = {p.key: self._before[p.key] for p in present}
         count = sum(inside.values())
         if count <= MAX_PLAYERS_IN_OWN_AREA:
             return
@@ -697,8 +841,10 @@ class Referee:
             if not before[p.key] or (
                 keeper_entered and rank[p.unum] == MAX_PLAYERS_IN_OWN_AREA + 1
             ):
-                self._out_of_area(p, pos[p.key], sign)
                 count -= 1
+                self._area[p.side][0] -= 1
+                self._fouled.add(p.key)
+                self._out_of_area(p, pos[p.key], sign)
                 log.info("%s #%d moved out of its penalty area (illegal defence)", p.side, p.unum)
 
     def _out_of_area(self, p: Player, pos: np.ndarray, sign: float) -> None:
@@ -715,11 +861,44 @@ class Referee:
             x = to_x
         if abs(x) > FIELD_HALF_LENGTH and abs(y) < GOAL_HALF_WIDTH + AGENT_RADIUS:
             y = (GOAL_HALF_WIDTH + AGENT_RADIUS + 0.001) * (-1.0 if y < 0 else 1.0)
-        self.host.teleport(p.index, (x, y, float(pos[2])))
+        self._safe_move(p, np.array([x, y, float(pos[2])]), pos)
+
+    def _safe_move(self, p: Player, target: np.ndarray, at: np.ndarray) -> None:
+        """Move ``p`` (torso at ``at``) to ``target`` or the nearest free spot
+        (:class:`~robocup_gym.sim.fouls.SafeSpot`), as the server's safe moves do."""
+        w = self.host.world
+        sign = -1.0 if p.side == "left" else 1.0
+        xs = (sign * FIELD_HALF_LENGTH, sign * PENALTY_X)
+        spot = SafeSpot(
+            side=p.side,
+            area=(min(xs), max(xs), -PENALTY_HALF_WIDTH, PENALTY_HALF_WIDTH),
+            crowded=sum(self._area.get(p.side, (0, 0))) >= MAX_PLAYERS_IN_OWN_AREA,
+            inside=self._inside.get(p.key, False),
+            boxes=[robot_box(w, q.index) for q in self.players if q.key != p.key],
+            ball=self.host.ball_position()[:2],
+        )
+        new = spot.find(target, at[:2])
+        x, y = float(new[0]), float(new[1])
+        in_area = sign * x >= PENALTY_X and abs(x) <= FIELD_HALF_LENGTH
+        in_area = in_area and abs(y) <= PENALTY_HALF_WIDTH
+        if p.side in self._area:
+            if not spot.inside and in_area:
+                self._area[p.side][1] += 1
+            elif spot.inside and not in_area:
+                self._area[p.side][1] -= 1
+        self._teleport(p, (x, y, float(new[2])))
+
+    def _teleport(self, p: Player, pos) -> None:
+        """A referee's move of ``p`` (it counts for the charging rule's grace)."""
+        self.host.teleport(p.index, pos)
+        self.contact_fouls.moved(p.key)
 
     def _move_x(self, index: int, x: float) -> None:
         p = self.host.world.torso_position(index)
         self.host.teleport(index, (x, p[1], p[2]))
+        key = next((q.key for q in self.players if q.index == index), None)
+        if key is not None:
+            self.contact_fouls.moved(key)
 
     def _clear_circle(
         self, centre: np.ndarray, radius: float, side: str | None, push: float | None = None
@@ -742,4 +921,4 @@ class Referee:
             new = centre[:2] + d / dist * target
             new[0] = max(-FIELD_HALF_LENGTH, min(FIELD_HALF_LENGTH, new[0]))
             new[1] = max(-FIELD_HALF_WIDTH, min(FIELD_HALF_WIDTH, new[1]))
-            self.host.teleport(p.index, (new[0], new[1], t[2]))
+            self._teleport(p, (new[0], new[1], t[2]))

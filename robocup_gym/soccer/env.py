@@ -34,6 +34,9 @@ option                default  meaning
                                boxes freeze their joints for 1 s; ``sim.self_collision``),
                                as a real server and ``serve`` apply it; the get-up skill
                                then plays ``GetUp-v1``'s scripts alone
+``contact_fouls``     False    rcssserver3d's touching-group and charging fouls
+                               (``sim.fouls``), as a real server and ``serve`` apply them;
+                               off, the rules ``touching`` and ``charging`` are off
 ``actions``           joints   ``"joints"`` or ``"skills"`` (:mod:`robocup_gym.soccer.skills`)
 ``skill_cycles``      10       cycles per step with skill actions
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
@@ -93,6 +96,7 @@ class SoccerConfig:
     vision_noise: bool = True
     rules: bool | Mapping[str, bool] = True
     self_collisions: bool = False
+    contact_fouls: bool = False
     actions: str = "joints"
     skill_cycles: int = 10
     reward_goal: float = 1.0
@@ -119,8 +123,9 @@ class SoccerConfig:
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
         Rules.of(self.rules)  # an unknown rule or a value that is not a bool: a clear error
-        if not isinstance(self.self_collisions, bool):
-            raise ValueError(f"self_collisions must be true or false, got {self.self_collisions!r}")
+        for name in ("self_collisions", "contact_fouls"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.actions not in ("joints", "skills"):
             raise ValueError(f"actions must be 'joints' or 'skills', got {self.actions!r}")
         for name in ("max_cycles", "cycles_per_step", "skill_cycles"):
@@ -131,6 +136,15 @@ class SoccerConfig:
             value = getattr(self, name)
             if not np.isfinite(float(value)):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
+
+    @property
+    def game_rules(self) -> Rules:
+        """The referee's rules of this configuration (:attr:`rules`, the contact fouls off
+        unless :attr:`contact_fouls`)."""
+        rules = Rules.of(self.rules)
+        if not self.contact_fouls:
+            rules = replace(rules, touching=False, charging=False)
+        return rules
 
     @classmethod
     def with_options(cls, defaults: SoccerConfig, options: Mapping[str, Any]) -> SoccerConfig:
@@ -185,7 +199,7 @@ class SoccerParallelEnv(ParallelEnv):
             c.left_types,
             c.right_types,
             engine=c.engine,
-            rules=c.rules,
+            rules=c.game_rules,
             vision_noise=c.vision_noise,
             self_collisions=c.self_collisions,
         )

@@ -31,6 +31,11 @@ class WorldReadings:
             torso_ang_vel=rot @ d.qvel[b + 3 : b + 6],
         )
 
+    def torso_velocity(self, index: int = 0) -> np.ndarray:
+        """Torso centre velocity of robot ``index``, world, m/s."""
+        b = self.robot(index).qvel_root
+        return self._data.qvel[b : b + 3].copy()
+
     def ball_position(self) -> np.ndarray:
         """Ball centre, world, m."""
         return self._data.qpos[self._ball_qpos : self._ball_qpos + 3].copy()
@@ -141,6 +146,44 @@ class WorldReadings:
         """Centres of every body of the world (robots' parts, the ball; world, m), for a sanity
         check of the whole state."""
         return self._posed().xpos
+
+    def robot_contacts(self) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
+        """The robots in contact with each other in the last step, as rcssserver3d's
+        agent-collision handlers count them (a contact of two parts counts once for each that is
+        not a foot or a toe; two feet do not count): ``{(i, j): (mean contact point (world, m),
+        count)}`` for robot indices ``i < j``."""
+        d = self._data
+        ncon = d.ncon
+        if ncon == 0 or len(self.robots) < 2:
+            return {}
+        handler = self.__dict__.get("_geom_handler")
+        if handler is None:
+            robot = np.full(self.model.ngeom, -1, dtype=np.int64)
+            weight = np.zeros(self.model.ngeom, dtype=np.int64)
+            for r in self.robots:
+                names = ["rfoot", "lfoot"] + (
+                    ["rtoe", "ltoe"] if r.model.robot_type.has_toes else []
+                )
+                feet = {int(self.model.geom(r.prefix + n).id) for n in names}
+                for g in r.robot_geoms:
+                    robot[g] = r.index
+                    weight[g] = 0 if g in feet else 1
+            handler = self.__dict__["_geom_handler"] = (robot, weight)
+        robot, weight = handler
+        geoms = d.contact.geom[:ncon]
+        i, j = robot[geoms[:, 0]], robot[geoms[:, 1]]
+        w = weight[geoms[:, 0]] + weight[geoms[:, 1]]
+        keep = np.flatnonzero((i >= 0) & (j >= 0) & (i != j) & (w > 0))
+        out: dict[tuple[int, int], tuple[np.ndarray, int]] = {}
+        sums: dict[tuple[int, int], list] = {}
+        for k in keep.tolist():
+            a, b = int(i[k]), int(j[k])
+            acc = sums.setdefault((min(a, b), max(a, b)), [np.zeros(3), 0])
+            acc[0] += int(w[k]) * d.contact.pos[k]
+            acc[1] += int(w[k])
+        for ij, (total, n) in sums.items():
+            out[ij] = (total / n, n)
+        return out
 
     def ball_touchers(self) -> set[int]:
         """Indices of the robots with a part in contact with the ball in the last step."""

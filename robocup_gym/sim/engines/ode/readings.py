@@ -203,6 +203,15 @@ class OdeReadings:
         check of the whole state."""
         return self._read_state()[:, 0:3]
 
+    def robot_contacts(self) -> dict[tuple[int, int], tuple[np.ndarray, int]]:
+        """The robots in contact with each other in the last step, as rcssserver3d's
+        agent-collision handlers count them (a contact of two parts counts once for each that is
+        not a foot or a toe; two feet do not count): ``{(i, j): (mean contact point (world, m),
+        count)}`` for robot indices ``i < j``."""
+        if self._robot_contacts_stamp != self._stamp:
+            return {}
+        return self._robot_contacts
+
     def ball_touchers(self) -> set[int]:
         """Indices of the robots with a part in contact with the ball in the last step."""
         if not len(self._ball_pairs):

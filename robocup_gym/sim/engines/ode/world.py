@@ -250,6 +250,21 @@ class OdeWorld(OdeReadings, Senses):
         ]
         self._ball_pairs = np.array([p for p, _ in ball_pairs], dtype=np.int64)
         self._ball_pair_robot = np.array([i for _, i in ball_pairs], dtype=np.int64)
+        # pairs of two robots' geoms whose contacts rcssserver3d's agent-collision handler sees
+        # (every part but the feet and toes carries one; a contact fires each handler it has)
+        robot_pairs = [
+            (p, robot_of[pair[0]], robot_of[pair[1]], (pair[5] is None) + (pair[6] is None))
+            for p, pair in enumerate(self._pairs)
+            if pair[0] in robot_of and pair[1] in robot_of
+        ]
+        robot_pairs = [rp for rp in robot_pairs if rp[3]]
+        self._robot_pairs = np.array([rp[0] for rp in robot_pairs], dtype=np.int64)
+        self._robot_pair_info = [rp[1:] for rp in robot_pairs]
+        self._robot_pair_of = np.full(len(self._pairs), -1, dtype=np.int64)
+        """Each pair's index in ``_robot_pairs`` (-1: not two robots' parts)."""
+        self._robot_pair_of[self._robot_pairs] = np.arange(len(self._robot_pairs))
+        self._robot_contacts: dict[tuple[int, int], tuple[np.ndarray, int]] = {}
+        self._robot_contacts_stamp = -1
         self._queued: dict[int, np.ndarray] = {}
         """Commands given with :meth:`command` for the next :meth:`step`."""
         self._pushes: dict[int, tuple[float, float, float]] = {}
@@ -733,14 +748,42 @@ class OdeWorld(OdeReadings, Senses):
         stamp = self._stamp
         if self.engine_seconds is None:
             sensed = self._fast.collide(stamp) if self._fast is not None else self._collide(stamp)
+            if len(self._robot_pairs):
+                self._note_robot_contacts(stamp)
             lib.dWorldStep(self._world, phys.CYCLE_S)
         else:  # measuring: the engine's own share (collision and dWorldStep)
             t0 = time.perf_counter()
             sensed = self._fast.collide(stamp) if self._fast is not None else self._collide(stamp)
+            if len(self._robot_pairs):
+                self._note_robot_contacts(stamp)
             lib.dWorldStep(self._world, phys.CYCLE_S)
             self.engine_seconds += time.perf_counter() - t0
         self._read_feedback(sensed)  # the number of sensed contacts
         lib.dJointGroupEmpty(self._contacts)
+
+    def _note_robot_contacts(self, stamp: int) -> None:
+        """The contacts between robots made by this collision pass, by robot pair, as
+        rcssserver3d's agent-collision handlers see them (:meth:`robot_contacts`). The contact
+        points of the pairs that touched are computed again (``dCollide`` of the same poses
+        gives the same points), before the step moves the bodies."""
+        hit = self._robot_pair_of[np.flatnonzero(self._hit == stamp)]
+        hit = hit[hit >= 0]
+        self._robot_contacts_stamp = stamp
+        if not hit.size:
+            self._robot_contacts = {}
+            return
+        lib, buf = self._lib, self._contact_buf
+        size = ctypes.sizeof(ode.ContactGeom)
+        sums: dict[tuple[int, int], list] = {}
+        for k in hit.tolist():
+            g1, g2 = self._pairs[int(self._robot_pairs[k])][:2]
+            i, j, weight = self._robot_pair_info[k]
+            n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
+            acc = sums.setdefault((i, j), [np.zeros(3), 0])
+            for c in range(n):
+                acc[0] += weight * np.array(buf[c].pos[:3])
+                acc[1] += weight
+        self._robot_contacts = {ij: (total / n, n) for ij, (total, n) in sums.items() if n}
 
     def _collide(self, stamp: int) -> int:
         """Contact joints for the current poses (the Python loop; ``ode_step.c``'s
