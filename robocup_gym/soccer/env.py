@@ -514,6 +514,19 @@ class SoccerParallelEnv(ParallelEnv):
         return np.concatenate(parts).astype(np.float32)
 
 
+def scenario_env(cls: type, scenario: str, options: dict[str, Any]):
+    """The parallel environment of ``scenario``: ``cls`` for the Nao (``robot`` absent or
+    ``"nao"``), RCSSServerMJ's game (:class:`robocup_gym.soccer.league.LeagueSoccerEnv`) for
+    a league robot (``robot="T1"``, ``"K1"``)."""
+    options = dict(options)
+    robot = options.pop("robot", "nao")
+    if str(robot).lower() == "nao":
+        return cls(**options)
+    from robocup_gym.soccer.league import LeagueSoccerEnv
+
+    return LeagueSoccerEnv(scenario, robot=robot, **options)
+
+
 def aec_from_parallel(parallel: SoccerParallelEnv):
     """The AEC form of a soccer environment (PettingZoo's own conversion and checks)."""
     env = parallel_to_aec(parallel)

@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel
+from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel, scenario_env
 from robocup_gym.soccer.formation import kickoff_positions
 from robocup_gym.soccer.game import Start
 
@@ -39,12 +39,14 @@ class GameEnv(SoccerParallelEnv):
         return Start(players=players, ball=(0.0, 0.0), play_mode="KickOff_Left")
 
 
-def parallel_env(**options: Any) -> GameEnv:
-    return GameEnv(**options)
+def parallel_env(**options: Any):
+    """The scenario's Parallel environment; ``robot="T1"`` or ``"K1"`` plays it on the league's
+    simulator (:mod:`robocup_gym.soccer.league`)."""
+    return scenario_env(GameEnv, "game", options)
 
 
 def raw_env(**options: Any):
-    return aec_from_parallel(GameEnv(**options))
+    return aec_from_parallel(parallel_env(**options))
 
 
 env = raw_env

@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel
+from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel, scenario_env
 from robocup_gym.soccer.game import CycleReport, Start
 
 __all__ = ["BALL_SPOT", "SPREAD_M", "PenaltyEnv", "env", "parallel_env", "raw_env"]
@@ -60,12 +60,14 @@ class PenaltyEnv(SoccerParallelEnv):
         return None
 
 
-def parallel_env(**options: Any) -> PenaltyEnv:
-    return PenaltyEnv(**options)
+def parallel_env(**options: Any):
+    """The scenario's Parallel environment; ``robot="T1"`` or ``"K1"`` plays it on the league's
+    simulator (:mod:`robocup_gym.soccer.league`)."""
+    return scenario_env(PenaltyEnv, "penalty", options)
 
 
 def raw_env(**options: Any):
-    return aec_from_parallel(PenaltyEnv(**options))
+    return aec_from_parallel(parallel_env(**options))
 
 
 env = raw_env
