@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -36,6 +36,7 @@ __all__ = [
     "Perception",
     "SeenPlayer",
     "Vision",
+    "reject_unknown_fields",
 ]
 
 
@@ -256,3 +257,14 @@ class AgentCommand:
     """``(x m, y m, rot deg)`` in the team frame; only honoured before kick-off and after goals."""
     say: str | None = None
     """At most 20 printable characters, no spaces or parentheses."""
+
+
+def reject_unknown_fields(
+    cls: type, names, what: str, plural: str, error: type[Exception] = ValueError
+) -> None:
+    """Raise ``error`` naming the ``names`` that are not fields of the dataclass ``cls`` and
+    listing the ones that are: ``unknown {what}(s) a, b; {plural}: x, y, z``."""
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(names) - known)
+    if unknown:
+        raise error(f"unknown {what}(s) {', '.join(unknown)}; {plural}: {', '.join(sorted(known))}")

@@ -47,7 +47,7 @@ from robocup_gym.sim.fouls import (
 )
 from robocup_gym.sim.game_host import GameHost
 from robocup_gym.sim.physics import BALL_RADIUS, CYCLE_S
-from robocup_gym.types import PLAY_MODES
+from robocup_gym.types import PLAY_MODES, reject_unknown_fields
 
 log = logging.getLogger("robocup_gym.referee")
 
@@ -274,12 +274,7 @@ class Rules:
         if isinstance(value, bool | np.bool_):
             return cls(**{f.name: bool(value) for f in fields(cls)})
         if isinstance(value, Mapping):
-            known = {f.name for f in fields(cls)}
-            unknown = sorted(set(value) - known)
-            if unknown:
-                raise ValueError(
-                    f"unknown rule(s) {', '.join(unknown)}; rules: {', '.join(sorted(known))}"
-                )
+            reject_unknown_fields(cls, value, "rule", "rules")
             for k, v in value.items():
                 if not isinstance(v, bool | np.bool_):
                     raise ValueError(f"rule {k!r} must be true or false, got {v!r}")

@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -75,6 +75,7 @@ from robocup_gym.soccer.skills import (
     SkillSet,
     checked_action,
 )
+from robocup_gym.types import reject_unknown_fields
 
 __all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel"]
 
@@ -153,13 +154,7 @@ class SoccerConfig:
         Raises:
             TypeError: an unknown option (the message lists the known ones).
         """
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(options) - known)
-        if unknown:
-            raise TypeError(
-                f"unknown soccer option(s) {', '.join(unknown)}; "
-                f"options: {', '.join(sorted(known))}"
-            )
+        reject_unknown_fields(cls, options, "soccer option", "options", TypeError)
         return replace(defaults, **options)
 
 

@@ -28,16 +28,16 @@ velocity (m/s), and the ball's position and velocity relative to the torso in it
 Every team sees the field as the left team does (the right team's x and y mirrored), so one
 policy plays either side. The game's rules are ``rcsssmj``'s: ``game`` starts from the left
 team's kick-off with the teams in their halves (the Nao's kick-off formation stretched to the
-league's 55 × 36 m field, the right team out of the centre circle); ``penalty`` drops the ball on the right penalty spot (7.32 m in front
-of the goal) with the striker behind it and the goalkeeper on the goal line, and ends at a goal
-or when play stops. A step of a simulation that fails ends the episode, truncated, for everyone
-(``info[agent]["diverged"]`` says why).
+league's 55 × 36 m field, the right team out of the centre circle); ``penalty`` drops the ball
+on the right penalty spot (7.32 m in front of the goal) with the striker behind it and the
+goalkeeper on the goal line, and ends at a goal or when play stops. A step of a simulation
+that fails ends the episode, truncated, for everyone (``info[agent]["diverged"]`` says why).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -45,6 +45,7 @@ import numpy as np
 from pettingzoo import ParallelEnv
 
 from robocup_gym.envs.actions import ActionMode, PDActionMapper
+from robocup_gym.types import reject_unknown_fields
 
 __all__ = ["LEAGUE_SCENARIOS", "LeagueSoccerConfig", "LeagueSoccerEnv"]
 
@@ -122,13 +123,9 @@ class LeagueSoccerEnv(ParallelEnv):
                 f"the league's robots play {', '.join(LEAGUE_SCENARIOS)}, not {scenario!r} "
                 "(keepaway needs the Nao's referee: robot='nao')"
             )
-        known = {f.name for f in fields(LeagueSoccerConfig)}
-        unknown = sorted(set(options) - known)
-        if unknown:
-            raise TypeError(
-                f"unknown option(s) {', '.join(unknown)} for the league's soccer; "
-                f"options: {', '.join(sorted(known))}"
-            )
+        reject_unknown_fields(
+            LeagueSoccerConfig, options, "league soccer option", "options", TypeError
+        )
         self.scenario = scenario
         self.config = c = LeagueSoccerConfig(**{**_SCENARIO_DEFAULTS[scenario], **options})
         if scenario == "penalty" and (c.left_size, c.right_size) != (1, 1):

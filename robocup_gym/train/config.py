@@ -25,7 +25,7 @@ import copy
 import functools
 import os
 import re
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +37,7 @@ from robocup_gym.backends import (
 )
 from robocup_gym.train.algos import ALGOS
 from robocup_gym.train.tasks import is_team_task, resolve_task
+from robocup_gym.types import reject_unknown_fields
 
 PPO_PAPER_DEFAULTS: dict[str, Any] = {
     "learning_rate": 1e-4,
@@ -389,13 +390,7 @@ class TrainConfig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ValueError(
-                f"unknown config key(s) {', '.join(unknown)}; "
-                f"valid keys: {', '.join(sorted(known))}"
-            )
+        reject_unknown_fields(cls, data, "config key", "valid keys")
         return cls(**copy.deepcopy(data))
 
     @classmethod

@@ -35,13 +35,14 @@ import json
 import os
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from robocup_gym.train.vecenv import EnvBlock
+from robocup_gym.types import reject_unknown_fields
 
 __all__ = [
     "SELFPLAY_FIELDS",
@@ -84,13 +85,7 @@ class SelfPlaySettings:
         Raises:
             ValueError: an unknown setting (naming the known ones) or a bad value.
         """
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(data or {}) - known)
-        if unknown:
-            raise ValueError(
-                f"unknown selfplay setting(s) {', '.join(unknown)}; settings: "
-                f"{', '.join(sorted(known))}"
-            )
+        reject_unknown_fields(cls, data or {}, "selfplay setting", "settings")
         return cls(**dict(data or {}))
 
     def to_dict(self) -> dict[str, Any]:

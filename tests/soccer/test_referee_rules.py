@@ -144,6 +144,19 @@ def test_illegal_defence_waits_while_the_game_is_paused_and_can_be_off():
         game.close()
 
 
+def _on_a_real_server(binary: str, situation) -> tuple[float, float]:
+    """``situation`` (a replay of :mod:`robocup_gym.soccer.referee_replays`) on a real
+    rcssserver3d in sync mode."""
+    from robocup_gym.backends.process import ServerProcess
+
+    real = ServerProcess(binary, sync=True, real_time=False)
+    real.start()
+    try:
+        return situation(real.agent_port, real.monitor_port)
+    finally:
+        real.stop()
+
+
 def test_illegal_defence_on_serve():
     """The situation replayed on ``robocup-gym serve``: the fourth player in the area is moved
     0.4 m beyond its front edge (where the monitor stream shows it 0.1 s after it came in)."""
@@ -159,14 +172,7 @@ def test_illegal_defence_on_serve():
 
 def test_illegal_defence_on_a_real_server_as_on_serve(real_rcssserver3d):
     """The same situation on a real rcssserver3d, where one is installed: the same decision."""
-    from robocup_gym.backends.process import ServerProcess
-
-    real = ServerProcess(real_rcssserver3d, sync=True, real_time=False)
-    real.start()
-    try:
-        x, y = illegal_defence_replay(real.agent_port, real.monitor_port)
-    finally:
-        real.stop()
+    x, y = _on_a_real_server(real_rcssserver3d, illegal_defence_replay)
     assert x == pytest.approx(-12.8, abs=0.05) and y == pytest.approx(0.5, abs=0.05)
 
 
@@ -189,13 +195,6 @@ def test_touching_group_on_a_real_server(real_rcssserver3d):
     mostly finds the spot 0.4 m away taken and takes the next one its search offers (0.4 m
     further in x or y), as its bounding boxes of the robots reach a few centimetres further
     than the ones computed here (docs/results.md, *Referee*)."""
-    from robocup_gym.backends.process import ServerProcess
-
-    real = ServerProcess(real_rcssserver3d, sync=True, real_time=False)
-    real.start()
-    try:
-        x, y = touching_replay(real.agent_port, real.monitor_port)
-    finally:
-        real.stop()
+    x, y = _on_a_real_server(real_rcssserver3d, touching_replay)
     moved = float(np.hypot(x + 5.0, y + 0.24))  # from where the trainer put it
     assert 0.35 < moved < 1.0 and y < -0.55
