@@ -3,10 +3,10 @@ world alone on the same robots, measured in the same run.
 
 * ``penalty_env_steps_per_s``: ``penalty_v0`` (2 players), random joint actions, resets
   included (one step = one cycle, both agents act);
-* ``game_2v2_steps_per_s``: ``game_v0`` 2 against 2, random joint actions;
+* ``game_2v2_steps_per_s``: ``game_v1`` 2 against 2, random joint actions;
 * ``game_2v2_skill_steps_per_s``: agent decisions per second, 2 against 2 with skill actions
   (random walk commands, a decision every 10 cycles; the skills' policies run every cycle);
-* ``game_11v11_cycles_per_s``: ``game_v0`` 11 against 11, robot types 0–4 mixed, every player's
+* ``game_11v11_cycles_per_s``: ``game_v1`` 11 against 11, robot types 0–4 mixed, every player's
   skills running (random walk commands) and every player observing (vision every third cycle);
 * ``game_11v11_joint_cycles_per_s``: the same with joint-level actions every cycle;
 * ``physics_22_robots_cycles_per_s``: the same world stepped alone (no perception, no rules);
@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from robocup_gym.soccer import game_v0, penalty_v0
+from robocup_gym.soccer import game_v1, penalty_v0
 
 MIXED = (0, 1, 2, 3, 4, 0, 1, 2, 3, 4, 0)
 
@@ -72,16 +72,16 @@ def main(argv: list[str] | None = None) -> dict:
     out: dict = {"engine": args.engine, "quick": args.quick}
     with penalty_v0.parallel_env(engine=args.engine) as env:
         out["penalty_env_steps_per_s"] = round(_steps_per_s(env, n), 1)
-    with game_v0.parallel_env(engine=args.engine, left_types=(0, 1), right_types=(0, 1)) as env:
+    with game_v1.parallel_env(engine=args.engine, left_types=(0, 1), right_types=(0, 1)) as env:
         out["game_2v2_steps_per_s"] = round(_steps_per_s(env, n), 1)
     two = {"left_types": (0, 1), "right_types": (0, 1)}
-    with game_v0.parallel_env(engine=args.engine, actions="skills", **two) as env:
+    with game_v1.parallel_env(engine=args.engine, actions="skills", **two) as env:
         decisions = _steps_per_s(env, n // 10) * 4  # four agents decide each step
         out["game_2v2_skill_steps_per_s"] = round(decisions, 1)
     eleven = {"left_types": MIXED, "right_types": MIXED, "max_cycles": 100_000}
-    with game_v0.parallel_env(engine=args.engine, actions="skills", **eleven) as env:
+    with game_v1.parallel_env(engine=args.engine, actions="skills", **eleven) as env:
         out["game_11v11_cycles_per_s"] = round(_steps_per_s(env, n // 20) * 10, 1)
-    with game_v0.parallel_env(engine=args.engine, **eleven) as env:
+    with game_v1.parallel_env(engine=args.engine, **eleven) as env:
         out["game_11v11_joint_cycles_per_s"] = round(_steps_per_s(env, n // 2), 1)
         out["physics_22_robots_cycles_per_s"] = round(physics_per_s(env, n // 2), 1)
     out["game_vs_physics"] = round(

@@ -305,6 +305,9 @@ class Referee:
             only by trainer command.
         rng: for the coin toss of ``(kickOff None)``.
         robot_types, type_limits: see :class:`TeamRegistry`.
+        first_touch_plays_on: A kick-off, set piece or pass mode ends at the first touch of
+            the ball, as on rcssserver3d. ``False`` keeps ``game_v0``'s behaviour, in which
+            only the drop ball after 15 s (or the toucher leaving the game) ended them.
     """
 
     def __init__(
@@ -315,8 +318,10 @@ class Referee:
         rng=None,
         robot_types=(0, 1, 2, 3, 4),
         type_limits: bool = True,
+        first_touch_plays_on: bool = True,
     ) -> None:
         self.host = host
+        self.first_touch_plays_on = bool(first_touch_plays_on)
         self.rules = Rules.of(rules)
         self.rng = rng if rng is not None else np.random.default_rng()
         self.teams = TeamRegistry(robot_types, type_limits)
@@ -454,6 +459,8 @@ class Referee:
             toucher = next((by_index[i] for i in sorted(touching) if i in by_index), None)
         if toucher is not None:
             self.last_touch = toucher
+            if self.first_touch_plays_on:
+                self.touched_in_mode = True
         elif self.last_touch is not None and all(p.key != self.last_touch.key for p in players):
             self.last_touch = None
             self.touched_in_mode = True

@@ -3,7 +3,8 @@ with ``env()`` (AEC) and ``parallel_env()`` (Parallel).
 
 * :mod:`~robocup_gym.soccer.penalty_v0`: one striker against one goalkeeper;
 * :mod:`~robocup_gym.soccer.keepaway_v0`: two attackers keep the ball from one defender;
-* :mod:`~robocup_gym.soccer.game_v0`: N against N (1–11), the full field and rules.
+* :mod:`~robocup_gym.soccer.game_v1`: N against N (1–11), the full field and rules
+  (``game_v0``: its first version, whose kick-offs and set pieces waited for the drop ball).
 
 They run in-process on the world of the single-agent environments with the referee of
 ``robocup-gym serve`` (:mod:`robocup_gym.sim.referee`), with joint-level actions or skills as
@@ -12,5 +13,5 @@ kick). :mod:`~robocup_gym.soccer.scripted` has the scripted teams, :mod:`~robocu
 plays matches (``robocup-gym match``). Needs ``pettingzoo`` (the ``soccer`` extra).
 """
 
-SCENARIOS = ("penalty_v0", "keepaway_v0", "game_v0")
+SCENARIOS = ("penalty_v0", "keepaway_v0", "game_v1", "game_v0")
 """The scenario modules of this package."""

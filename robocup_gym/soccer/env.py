@@ -1,5 +1,5 @@
 """RoboCup 3D soccer as a PettingZoo Parallel environment; the scenarios (:mod:`.penalty_v0`,
-:mod:`.keepaway_v0`, :mod:`.game_v0`) say only where an episode starts, when it ends and what
+:mod:`.keepaway_v0`, :mod:`.game_v1`) say only where an episode starts, when it ends and what
 they reward beyond goals.
 
 Agents are named by team and uniform number (``left_1`` … ``right_11``). Every agent acts every
@@ -37,6 +37,9 @@ option                default  meaning
 ``contact_fouls``     False    rcssserver3d's touching-group and charging fouls
                                (``sim.fouls``), as a real server and ``serve`` apply them;
                                off, the rules ``touching`` and ``charging`` are off
+``first_touch_plays_on`` True  a kick-off or set piece ends at the first touch of the ball, as
+                               on rcssserver3d (``game_v0``: False, its referee waited for the
+                               drop ball after 15 s)
 ``actions``           joints   ``"joints"`` or ``"skills"`` (:mod:`robocup_gym.soccer.skills`)
 ``skill_cycles``      10       cycles per step with skill actions
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
@@ -98,6 +101,7 @@ class SoccerConfig:
     rules: bool | Mapping[str, bool] = True
     self_collisions: bool = False
     contact_fouls: bool = False
+    first_touch_plays_on: bool = True
     actions: str = "joints"
     skill_cycles: int = 10
     reward_goal: float = 1.0
@@ -124,7 +128,7 @@ class SoccerConfig:
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
         Rules.of(self.rules)  # an unknown rule or a value that is not a bool: a clear error
-        for name in ("self_collisions", "contact_fouls"):
+        for name in ("self_collisions", "contact_fouls", "first_touch_plays_on"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.actions not in ("joints", "skills"):
@@ -197,6 +201,7 @@ class SoccerParallelEnv(ParallelEnv):
             rules=c.game_rules,
             vision_noise=c.vision_noise,
             self_collisions=c.self_collisions,
+            first_touch_plays_on=c.first_touch_plays_on,
         )
         self.possible_agents = list(self.game.names)
         self.agents: list[str] = []

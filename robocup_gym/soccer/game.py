@@ -94,6 +94,7 @@ class SoccerGame:
         seed: int | None = None,
         dead_time_cycles: int = 1,
         self_collisions: bool = False,
+        first_touch_plays_on: bool = True,
     ) -> None:
         types = [*map(int, left_types), *map(int, right_types)]
         if not types:
@@ -107,6 +108,7 @@ class SoccerGame:
             raise ValueError(f"the teams need two different names, got {team_names!r}")
         self.engine = engine
         self.rules = Rules.of(rules)
+        self.first_touch_plays_on = bool(first_touch_plays_on)
         self.team_names = tuple(team_names)
         self.players: list[Player] = []
         """Every player, left team first (``index`` = the robot's index in the world)."""
@@ -133,7 +135,11 @@ class SoccerGame:
     # ------------------------------------------------------------------ set-up
     def _new_referee(self, seed: int | None) -> Referee:
         ref = Referee(
-            self.host, rules=self.rules, rng=np.random.default_rng(seed), type_limits=False
+            self.host,
+            rules=self.rules,
+            rng=np.random.default_rng(seed),
+            type_limits=False,
+            first_touch_plays_on=self.first_touch_plays_on,
         )
         for p, t in zip(self.players, self.robot_types, strict=True):
             side, unum = ref.teams.register(self.team_names[SIDES.index(p.side)], p.unum, t)

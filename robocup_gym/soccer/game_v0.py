@@ -1,15 +1,6 @@
-"""The game: N against N (1–11 a side, mixed robot types) on the full field with the automatic
-referee (kick-off, goals, ball out with kick-in, corner and goal kick, half time).
-
-Both teams stand in their kick-off formation (:mod:`robocup_gym.soccer.formation`) and the left
-team kicks off. The episode ends at game over (600 s of game time) or, truncated, after
-``max_cycles`` (3,000 = 60 s by default; 30,000 for a whole game). Goals pay ``reward_goal``
-(team-shared, zero-sum); ``ball_progress`` and ``possession`` are the optional shaping terms of
-:mod:`robocup_gym.soccer.env`. 11 against 11 with types mixed as the league allows is the real
-game.
-
-``env(**options)`` is the AEC form, ``parallel_env(**options)`` the Parallel one; options are
-those of :class:`robocup_gym.soccer.env.SoccerConfig`.
+"""The game, version 0: :mod:`robocup_gym.soccer.game_v1` with the referee of that version, which
+ended a kick-off, kick-in, corner, goal or free kick only with the drop ball after 15 s, not at
+the first touch of the ball (``first_touch_plays_on=False``). Use ``game_v1``.
 """
 
 from __future__ import annotations
@@ -17,26 +8,15 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, ClassVar
 
-import numpy as np
-
-from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel, scenario_env
-from robocup_gym.soccer.formation import kickoff_positions
-from robocup_gym.soccer.game import Start
+from robocup_gym.soccer import game_v1
+from robocup_gym.soccer.env import SoccerParallelEnv, aec_from_parallel, scenario_env
 
 __all__ = ["GameEnv", "env", "parallel_env", "raw_env"]
 
 
-class GameEnv(SoccerParallelEnv):
+class GameEnv(game_v1.GameEnv):
     metadata: ClassVar[dict] = {**SoccerParallelEnv.metadata, "name": "robocup_game_v0"}
-    default_config = replace(SoccerConfig(), left_types=(0, 1), right_types=(0, 1), max_cycles=3000)
-
-    def _start(self, rng: np.random.Generator) -> Start:
-        c = self.config
-        players = {}
-        for side, types in (("left", c.left_types), ("right", c.right_types)):
-            for k, pos in enumerate(kickoff_positions(side, len(types))):
-                players[f"{side}_{k + 1}"] = pos
-        return Start(players=players, ball=(0.0, 0.0), play_mode="KickOff_Left")
+    default_config = replace(game_v1.GameEnv.default_config, first_touch_plays_on=False)
 
 
 def parallel_env(**options: Any):

@@ -1,6 +1,6 @@
 """Matches between two teams, in-process: ``robocup-gym match A B --games G``.
 
-Each game is :mod:`robocup_gym.soccer.game_v0` with skill actions, ``players`` a side, for
+Each game is :mod:`robocup_gym.soccer.game_v1` with skill actions, ``players`` a side, for
 ``seconds`` of game time; the teams change sides every game (team A plays left in the first).
 With ``scenario="penalty"`` each game is a penalty (:mod:`robocup_gym.soccer.penalty_v0`):
 team A's striker against team B's goalkeeper.
@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.soccer import game_v0, penalty_v0
+from robocup_gym.soccer import game_v1, penalty_v0
 from robocup_gym.soccer.scripted import TEAMS
 
 __all__ = ["GameResult", "MatchResult", "make_team", "play_match"]
@@ -119,7 +119,7 @@ def play_match(
     Args:
         players: Players a side (1–11; default 2; a penalty has 1).
         seconds: Game time of each game, s (default 120; a penalty's: 10).
-        scenario: ``"game"`` (:mod:`.game_v0`; the teams change sides every game) or
+        scenario: ``"game"`` (:mod:`.game_v1`; the teams change sides every game) or
             ``"penalty"`` (:mod:`.penalty_v0`: team A's striker against team B's goalkeeper
             in every game, which ends at a goal, when the ball leaves the field or after
             ``seconds``; the ball's spot varies by up to 0.3 m sideways).
@@ -174,7 +174,7 @@ def play_match(
     if penalty:
         env = penalty_v0.parallel_env(start_noise=penalty_v0.SPREAD_M, **options)
     else:
-        env = game_v0.parallel_env(**options)
+        env = game_v1.parallel_env(**options)
     try:
         for k in range(games):
             a_side = "left" if k % 2 == 0 or penalty else "right"

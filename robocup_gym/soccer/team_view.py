@@ -10,7 +10,7 @@ name             scenario                     the learning team       the oppone
 ===============  ===========================  ======================  =======================
 ``penalty``      :mod:`.penalty_v0`           the striker (left)      the goalkeeper
 ``keepaway``     :mod:`.keepaway_v0`          the two attackers       the defender
-``game-NvN``     :mod:`.game_v0`, N a side    left or right, drawn    the other side
+``game-NvN``     :mod:`.game_v1`, N a side    left or right, drawn    the other side
                  (N = 1–11)                   at every reset
 ===============  ===========================  ======================  =======================
 
@@ -61,7 +61,7 @@ def team_scenario(name: str) -> tuple[type, str, dict[str, Any]]:
     Raises:
         ValueError: an unknown name (the message lists the known ones).
     """
-    from robocup_gym.soccer import game_v0, keepaway_v0, penalty_v0
+    from robocup_gym.soccer import game_v1, keepaway_v0, penalty_v0
 
     key = str(name).strip().lower().replace("_", "-")
     if key == "penalty":
@@ -75,7 +75,7 @@ def team_scenario(name: str) -> tuple[type, str, dict[str, Any]]:
             raise ValueError(f"{name!r}: a game is N against N with N = 1-11 (game-2v2)")
         # types 0-3 in turn (type 4 observes two more joints: another policy input size)
         types = tuple(k % 4 for k in range(left))
-        return game_v0.GameEnv, "either", {"left_types": types, "right_types": types}
+        return game_v1.GameEnv, "either", {"left_types": types, "right_types": types}
     raise ValueError(
         f"unknown team scenario {name!r}; scenarios: penalty, keepaway, game-NvN "
         "(game-1v1 … game-11v11)"

@@ -11,7 +11,7 @@ pytest.importorskip("rcsssmj", reason="the optional rcsssmj package is not insta
 
 from pettingzoo.test import parallel_api_test
 
-from robocup_gym.soccer import game_v0, keepaway_v0, penalty_v0
+from robocup_gym.soccer import game_v1, keepaway_v0, penalty_v0
 from robocup_gym.soccer.league import LeagueSoccerEnv
 
 
@@ -20,7 +20,7 @@ def _zero(env) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.parametrize(
-    ("module", "robot"), [(penalty_v0, "T1"), (game_v0, "K1")], ids=["penalty-T1", "game-K1"]
+    ("module", "robot"), [(penalty_v0, "T1"), (game_v1, "K1")], ids=["penalty-T1", "game-K1"]
 )
 def test_pettingzoo_api(module, robot):
     env = module.parallel_env(robot=robot, max_cycles=20, privileged=True)
@@ -29,7 +29,7 @@ def test_pettingzoo_api(module, robot):
 
 
 def test_the_game_starts_from_the_left_kick_off_with_both_teams_in_their_halves():
-    env = game_v0.parallel_env(robot="T1", left_size=3, right_size=3, privileged=True)
+    env = game_v1.parallel_env(robot="T1", left_size=3, right_size=3, privileged=True)
     obs, infos = env.reset(seed=0)
     assert env.agents == ["left_1", "left_2", "left_3", "right_1", "right_2", "right_3"]
     assert {i["play_mode"] for i in infos.values()} == {"KickOff_Left"}
@@ -58,7 +58,7 @@ def test_a_goal_pays_the_scorers_and_ends_the_penalty():
 
 def test_ball_progress_is_zero_sum_and_seeded_episodes_repeat():
     def run():
-        env = game_v0.parallel_env(robot="T1", left_size=1, right_size=1, ball_progress=1.0)
+        env = game_v1.parallel_env(robot="T1", left_size=1, right_size=1, ball_progress=1.0)
         obs, _ = env.reset(seed=3)
         env.world.place_ball((0.0, 0.0, env.robot.ball_radius), (1.0, 0.0, 0.0))
         rng = np.random.default_rng(0)
@@ -93,8 +93,8 @@ def test_bad_actions_and_options_name_the_problem():
     with pytest.raises(ValueError, match="keepaway needs the Nao"):
         keepaway_v0.parallel_env(robot="T1")
     with pytest.raises(TypeError, match="left_types"):
-        game_v0.parallel_env(robot="T1", left_types=(0,))
+        game_v1.parallel_env(robot="T1", left_types=(0,))
     with pytest.raises(ValueError, match="0-7"):
-        game_v0.parallel_env(robot="T1", left_size=8)
+        game_v1.parallel_env(robot="T1", left_size=8)
     with pytest.raises(ValueError, match=r"R2D2"):
-        game_v0.parallel_env(robot="R2D2")
+        game_v1.parallel_env(robot="R2D2")

@@ -198,3 +198,32 @@ def test_touching_group_on_a_real_server(real_rcssserver3d):
     x, y = _on_a_real_server(real_rcssserver3d, touching_replay)
     moved = float(np.hypot(x + 5.0, y + 0.24))  # from where the trainer put it
     assert 0.35 < moved < 1.0 and y < -0.55
+
+
+def _touch_in(mode: str, first_touch_plays_on: bool = True) -> list[str]:
+    """The play modes of a game in ``mode``, cycle by cycle over 2 s, in which a player is put
+    against the ball after 1.1 s."""
+    game = SoccerGame((0,), (0,), engine="ode", seed=0, first_touch_plays_on=first_touch_plays_on)
+    game.reset(
+        Start(
+            players={"left_1": (-0.3, 0.0, 0.0), "right_1": (8.0, 0.0, 180.0)},
+            ball=(0.0, 0.0),
+            play_mode=mode,
+        )
+    )
+    modes = []
+    for k in range(100):
+        if k == 55:  # after a set piece's 1 s pause: the player steps onto the ball
+            game.world.place_robot(0, -0.1, 0.0)
+        game.step({})
+        modes.append(game.referee.play_mode)
+    game.close()
+    return modes
+
+
+@pytest.mark.parametrize("mode", ["KickOff_Left", "KickIn_Left", "free_kick_left"])
+def test_the_first_touch_ends_a_kick_off_or_a_set_piece(mode):
+    modes = _touch_in(mode)
+    assert modes[50] == mode and modes[-1] == "PlayOn"
+    # game_v0's referee: only the drop ball after 15 s ended them
+    assert _touch_in(mode, first_touch_plays_on=False)[-1] == mode

@@ -172,11 +172,11 @@ def test_a_learnt_team_plays_on_its_players_observations(server):
     """A policy team with the privileged part (as ``robocup-gym train game-1v1`` learns one)
     gets, every decision, an observation of the size the in-process game gives, filled from the
     player's estimate."""
-    from robocup_gym.soccer import game_v0
+    from robocup_gym.soccer import game_v1
     from robocup_gym.soccer.learnt import PolicyTeam
 
     _, agent_port, monitor_port = server
-    env = game_v0.parallel_env(left_types=(0,), right_types=(0,), actions="skills", privileged=True)
+    env = game_v1.parallel_env(left_types=(0,), right_types=(0,), actions="skills", privileged=True)
     size = env.observation_space("left_1").shape[0]
     env.close()
     seen = []

@@ -11,10 +11,15 @@ pytest.importorskip("pettingzoo")
 from pettingzoo.test import api_test, parallel_api_test
 
 from robocup_gym.sim import SimulationDivergedError
-from robocup_gym.soccer import SCENARIOS, game_v0, keepaway_v0, penalty_v0
+from robocup_gym.soccer import SCENARIOS, game_v0, game_v1, keepaway_v0, penalty_v0
 from robocup_gym.soccer.observations import observation_labels
 
-MODULES = {"penalty_v0": penalty_v0, "keepaway_v0": keepaway_v0, "game_v0": game_v0}
+MODULES = {
+    "penalty_v0": penalty_v0,
+    "keepaway_v0": keepaway_v0,
+    "game_v1": game_v1,
+    "game_v0": game_v0,
+}
 
 
 @pytest.fixture
@@ -47,7 +52,7 @@ def test_pettingzoos_parallel_and_aec_api_tests_pass(name):
 
 
 def test_agents_are_named_by_team_and_number_with_spaces_per_robot(make):
-    env = make(game_v0, left_types=(0, 4, 2), right_types=(1,), max_cycles=5)
+    env = make(game_v1, left_types=(0, 4, 2), right_types=(1,), max_cycles=5)
     assert env.possible_agents == ["left_1", "left_2", "left_3", "right_1"]
     assert env.action_space("left_2").shape == (24,)  # type 4 has toes
     assert env.action_space("left_1").shape == (22,)
@@ -104,7 +109,7 @@ def test_unknown_options_and_bad_values_are_refused():
     with pytest.raises(TypeError, match=r"unknown soccer option.*nosuch"):
         penalty_v0.parallel_env(nosuch=1)
     with pytest.raises(ValueError, match="9 is not a Nao type"):
-        game_v0.parallel_env(left_types=(0, 9))
+        game_v1.parallel_env(left_types=(0, 9))
     with pytest.raises(ValueError, match="one player a side"):
         penalty_v0.parallel_env(left_types=(0, 0))
     with pytest.raises(ValueError, match="action_mode"):
@@ -160,7 +165,7 @@ def test_keepaway_pays_every_cycle_held_and_ends_when_the_defender_wins_the_ball
 
 
 def test_the_game_rewards_goals_zero_sum_and_runs_the_kickoff(make):
-    env = make(game_v0, left_types=(0,), right_types=(0,), ball_progress=0.5, max_cycles=200)
+    env = make(game_v1, left_types=(0,), right_types=(0,), ball_progress=0.5, max_cycles=200)
     env.reset(seed=0)
     assert env.game.world.game.play_mode == "KickOff_Left"
     env.game.referee.set_play_mode("PlayOn")  # (kicked off)
@@ -198,7 +203,7 @@ def test_a_diverged_simulation_ends_the_episode_truncated_for_everyone(make, mon
 
 
 def test_privileged_observations_are_in_the_team_frame(make):
-    env = make(game_v0, left_types=(0,), right_types=(0,), privileged=True, max_cycles=5)
+    env = make(game_v1, left_types=(0,), right_types=(0,), privileged=True, max_cycles=5)
     obs, _ = env.reset(seed=0)
     labels = observation_labels(env.game.world.robots[0].model, True, mates=0, opponents=1)
     x = labels.index("privileged/x")
@@ -215,7 +220,7 @@ def test_privileged_observations_are_in_the_team_frame(make):
 
 
 def test_privileged_observations_place_teammates_then_opponents(make):
-    env = make(game_v0, left_types=(0, 1), right_types=(0, 1), privileged=True, max_cycles=5)
+    env = make(game_v1, left_types=(0, 1), right_types=(0, 1), privileged=True, max_cycles=5)
     obs, _ = env.reset(seed=0)
     w = env.game.world
     labels = observation_labels(w.robots[0].model, True, mates=1, opponents=2)
@@ -241,7 +246,7 @@ def test_privileged_observations_place_teammates_then_opponents(make):
 
 def test_a_one_minute_eleven_against_eleven_game_runs_to_its_end(make):
     types = (0, 1, 2, 3, 4, 0, 1, 2, 3, 4, 0)  # mixed, as a league team
-    env = make(game_v0, left_types=types, right_types=types, max_cycles=3000)
+    env = make(game_v1, left_types=types, right_types=types, max_cycles=3000)
     assert len(env.possible_agents) == 22
     env.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -279,7 +284,7 @@ def test_the_soccer_benchmark_reports_every_measure(run_benchmark):
 
 def test_single_rules_can_be_switched_off(make):
     # without the ball-out rule a ball over the side line is not a kick-in: play goes on
-    env = make(game_v0, left_types=(0,), right_types=(0,), rules={"ball_out": False})
+    env = make(game_v1, left_types=(0,), right_types=(0,), rules={"ball_out": False})
     env.reset(seed=0)
     env.game.referee.set_play_mode("PlayOn")
     env.game.referee.last_touch = env.game.players[0]
@@ -289,7 +294,7 @@ def test_single_rules_can_be_switched_off(make):
     assert info["left_1"]["play_mode"] == "PlayOn"
     assert env.game.ball_position()[1] > 10.1  # out, and nobody said so
     # with every rule it is
-    env = make(game_v0, left_types=(0,), right_types=(0,))
+    env = make(game_v1, left_types=(0,), right_types=(0,))
     env.reset(seed=0)
     env.game.referee.set_play_mode("PlayOn")
     env.game.referee.last_touch = env.game.players[0]
@@ -307,4 +312,4 @@ def test_single_rules_can_be_switched_off(make):
         rewards.append(rew["left_1"])
     assert env.game.world.game.score_left == 0 and sum(rewards) == 0.0
     with pytest.raises(ValueError, match=r"unknown rule.*offside.*rules: ball_out"):
-        game_v0.parallel_env(rules={"offside": False})
+        game_v1.parallel_env(rules={"offside": False})

@@ -12,7 +12,7 @@ import pytest
 pytest.importorskip("pettingzoo")
 
 from robocup_gym.sim.engines.ode import available
-from robocup_gym.soccer import game_v0
+from robocup_gym.soccer import game_v1
 from robocup_gym.soccer.match import GameResult, MatchResult, make_team, play_match
 from robocup_gym.soccer.scripted import ScriptedTeam
 
@@ -49,7 +49,7 @@ def test_unknown_teams_and_set_ups_are_refused():
 @pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")
 def test_the_scripted_striker_takes_the_ball_toward_the_goal_and_kicks():
     """The scripted team's chaser walks round to the ball, lines up with the goal and kicks."""
-    env = game_v0.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=3000)
+    env = game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=3000)
     env.reset(seed=0)
     env.game.referee.set_play_mode("PlayOn")
     env.game.host.set_ball((5.0, 1.0, 0.041), (0.0, 0.0, 0.0))

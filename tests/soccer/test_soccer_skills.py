@@ -13,7 +13,7 @@ from pettingzoo.test import parallel_api_test
 
 from robocup_gym.sim.engines.ode import available
 from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply, yaw_quat
-from robocup_gym.soccer import game_v0, penalty_v0
+from robocup_gym.soccer import game_v1, penalty_v0
 from robocup_gym.soccer.skills import SKILL_ACTION_LABELS
 
 pytestmark = pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")
@@ -22,7 +22,7 @@ pytestmark = pytest.mark.skipif(not available(), reason="the shipped skills run 
 @pytest.fixture
 def solo():
     """One left player of type 0 with skill actions, nobody else."""
-    env = game_v0.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=10**5)
+    env = game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=10**5)
     yield env
     env.close()
 
@@ -72,7 +72,7 @@ def test_a_player_kicks_a_ball_in_front_of_its_right_foot(solo):
 def test_a_fallen_player_gets_up_by_itself(self_collisions):
     """With the self-collision rule (a real server's, ``serve``'s) the get-up plays GetUp-v1's
     scripts alone; without it, the shipped get-up policy."""
-    solo = game_v0.parallel_env(
+    solo = game_v1.parallel_env(
         actions="skills",
         left_types=(0,),
         right_types=(),
@@ -99,7 +99,7 @@ def test_a_fallen_player_gets_up_by_itself(self_collisions):
 
 def test_skill_games_repeat_from_their_seed():
     def run():
-        env = game_v0.parallel_env(
+        env = game_v1.parallel_env(
             actions="skills", left_types=(0, 4), right_types=(1,), max_cycles=200
         )
         rng = np.random.default_rng(1)
