@@ -46,6 +46,7 @@ from robocup_gym.sim.fouls import (
     robot_box,
 )
 from robocup_gym.sim.game_host import GameHost
+from robocup_gym.sim.kick_rules import KickRules
 from robocup_gym.sim.physics import BALL_RADIUS, CYCLE_S
 from robocup_gym.types import PLAY_MODES, reject_unknown_fields
 
@@ -332,8 +333,15 @@ class Referee:
         """The player who touched the ball last (forgotten when that player leaves the game,
         as rcssserver3d no longer finds the agent then)."""
         self.touched_in_mode = False
+        self.touch_time = 0.0
+        """Game time of the last touch of the ball (s)."""
+        self.kicks = KickRules()
+        """The rules on the restarting kick and on scoring (:mod:`robocup_gym.sim.kick_rules`)."""
+        self._touchers: list[Player] = []
         self.spot: np.ndarray | None = None
         self.last_inside_x = 0.0
+        self.last_inside = np.array([0.0, 0.0, BALL_RADIUS])
+        """Where the ball last was on the field."""
         self.pass_started: dict[str, float] = {}
         self.players: list[Player] = []
         self.posture: dict[int, _Posture] = {}
@@ -457,8 +465,10 @@ class Referee:
         if touching:
             by_index = {p.index: p for p in players}
             toucher = next((by_index[i] for i in sorted(touching) if i in by_index), None)
+        self._touchers = [p for p in players if p.index in touching] if touching else []
         if toucher is not None:
             self.last_touch = toucher
+            self.touch_time = self.game_time
             if self.first_touch_plays_on:
                 self.touched_in_mode = True
         elif self.last_touch is not None and all(p.key != self.last_touch.key for p in players):
@@ -526,6 +536,8 @@ class Referee:
         x, y = pos[0].item(), pos[1].item()
         if abs(x) < FIELD_HALF_LENGTH and abs(y) < FIELD_HALF_WIDTH:
             self.last_inside_x = x
+            self.last_inside = pos.copy()
+        self.kicks.ball_touched_by({p.side for p in self._touchers}, pos)
         if pm == "BeforeKickOff":
             if players and rules.before_kickoff:
                 self._hold_ball((0.0, 0.0))
@@ -534,13 +546,16 @@ class Referee:
             if not rules.kickoff:
                 return
             kicker = "left" if pm == "KickOff_Left" else "right"
+            self.kicks.kick_off()
             self._kickoff_clear(kicker)
             if self.touched_in_mode:
+                if len(players) > 2 and self.last_touch is not None:
+                    self.kicks.taken(self.last_touch, self.touch_time, True, kick_off=True)
                 self.set_play_mode("PlayOn")
             elif self.mode_time >= DROP_BALL_TIME:
                 self.drop_ball()
         elif pm == "PlayOn":
-            self._check_goal_and_out(pos)
+            self._play_on(pos)
         elif pm in ("Goal_Left", "Goal_Right"):
             if not rules.goals:
                 return
@@ -554,13 +569,40 @@ class Referee:
             if not rules.pass_mode:
                 return
             side = "left" if pm == "pass_left" else "right"
+            self.kicks.in_pass_mode(side, self.game_time, pos)
             if self.touched_in_mode or self.mode_time >= PASS_MODE_DURATION:
                 self.set_play_mode("PlayOn")
+                self._play_on(pos)
             else:
-                self._clear_circle(pos[:2], PASS_MODE_MIN_OPP_DIST, other(side), push=0.1)
-                self._check_goal_and_out(pos)
+                self._play_on(pos)
+                if self.play_mode == pm:
+                    self._clear_circle(pos[:2], PASS_MODE_MIN_OPP_DIST, other(side), push=0.1)
         elif pm in _SET_PIECES and rules.set_pieces:
             self._set_piece(pm, _SET_PIECES[pm], pos)
+
+    def _play_on(self, pos: np.ndarray) -> None:
+        """Play on's checks: the window after pass mode, the taker's second touch, goal, out."""
+        kicks = self.kicks
+        kicks.after_pass_mode(self._touchers, self.game_time, pos)
+        if self.rules.set_pieces and kicks.second_touch(self.last_touch, self.touch_time):
+            side = other(self.last_touch.side)
+            log.info(
+                "%s #%d touched the ball twice: free kick",
+                self.last_touch.side,
+                self.last_touch.unum,
+            )
+            self.set_play_mode(f"free_kick_{side}", spot=self._free_kick_spot(self.last_inside))
+            return
+        self._check_goal_and_out(pos)
+
+    def _free_kick_spot(self, pos: np.ndarray) -> np.ndarray:
+        """A free kick's spot: where the ball was, out of a penalty area (to its front
+        corner on the ball's side)."""
+        x, y = float(pos[0]), float(pos[1])
+        if abs(x) >= PENALTY_X and abs(y) <= PENALTY_HALF_WIDTH:
+            x = math.copysign(PENALTY_X, x)
+            y = -PENALTY_HALF_WIDTH if y < 0 else PENALTY_HALF_WIDTH
+        return np.array([x, y, BALL_RADIUS])
 
     def _check_goal_and_out(self, pos: np.ndarray) -> None:
         x, y, z = (float(v) for v in pos)
@@ -570,6 +612,23 @@ class Referee:
             and abs(y) < GOAL_HALF_WIDTH
             and z < GOAL_HEIGHT
         ):
+            scored_on = "right" if x > 0 else "left"
+            verdict, team = self.kicks.goal(
+                scored_on, self.last_touch, self.touch_time, self.game_time, len(self.players) > 2
+            )
+            if verdict == "goal_kick":
+                log.info("no goal: goal kick for the %s team", team)
+                spot = np.array([(-1.0 if team == "left" else 1.0) * 14.0, 0.0, BALL_RADIUS])
+                self.set_play_mode(f"goal_kick_{team}", spot=spot)
+                return
+            if verdict == "corner_kick":
+                log.info("no goal: corner kick for the %s team", team)
+                sx = 1.0 if team == "left" else -1.0
+                spot = np.array(
+                    [sx * (FIELD_HALF_LENGTH - BALL_RADIUS), math.copysign(5.483, y), BALL_RADIUS]
+                )
+                self.set_play_mode(f"corner_kick_{team}", spot=spot)
+                return
             scorer = "left" if x > 0 else "right"
             g = self.host.world.game
             if scorer == "left":
@@ -606,8 +665,10 @@ class Referee:
         if self.mode_time < KICK_IN_PAUSE:
             self.touched_in_mode = False
             return
+        self.kicks.restart()
         spot = self.spot if self.spot is not None else pos
         goal_kick = pm.startswith("goal_kick")
+        indirect = pm.startswith(("KickIn", "free_kick", "offside"))
         if not self.touched_in_mode:
             if self.mode_time >= KICK_IN_PAUSE + DROP_BALL_TIME:
                 self.host.set_ball((spot[0], spot[1], BALL_RADIUS), (0.0, 0.0, 0.0))
@@ -619,10 +680,16 @@ class Referee:
         if goal_kick:
             in_area = abs(pos[0]) > PENALTY_X and abs(pos[1]) < PENALTY_HALF_WIDTH
             if not in_area:
+                self._taken(indirect=False)
                 self.set_play_mode("PlayOn")
             return
         if self.mode_time >= KICK_IN_PAUSE + 0.03:
+            self._taken(indirect)
             self.set_play_mode("PlayOn")
+
+    def _taken(self, indirect: bool) -> None:
+        if self.last_touch is not None:
+            self.kicks.taken(self.last_touch, self.touch_time, indirect)
 
     # ------------------------------------------------------------------ moving things
     def _hold_ball(self, xy: np.ndarray | tuple[float, float]) -> None:

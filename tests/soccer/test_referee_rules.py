@@ -224,6 +224,6 @@ def _touch_in(mode: str, first_touch_plays_on: bool = True) -> list[str]:
 @pytest.mark.parametrize("mode", ["KickOff_Left", "KickIn_Left", "free_kick_left"])
 def test_the_first_touch_ends_a_kick_off_or_a_set_piece(mode):
     modes = _touch_in(mode)
-    assert modes[50] == mode and modes[-1] == "PlayOn"
+    assert modes[50] == mode and "PlayOn" in modes[55:60]
     # game_v0's referee: only the drop ball after 15 s ended them
     assert _touch_in(mode, first_touch_plays_on=False)[-1] == mode
