@@ -16,6 +16,7 @@ of exactly the same shape repeats a transform only if one of its 16 numbers move
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -188,6 +189,9 @@ class MonitorStream:
         self._structure: tuple | None = None
         self._env_sent: dict[str, object] = {}
         self._team_names_sent: set[str] = set()
+        self.fouls: Sequence[tuple[int, int, str, int]] = ()
+        """The referee's fouls (``Referee.fouls``); each goes out once, in the next frame."""
+        self._last_foul = 0
 
     # ------------------------------------------------------------------ environment
     def _game_values(self, world, half: int, teams: dict[str, str]) -> dict[str, object]:
@@ -210,7 +214,16 @@ class MonitorStream:
         for key in ("half", "score_left", "score_right", "play_mode"):
             parts.append(f"({key} {vals[key]})")
         self._env_sent = dict(vals)
+        parts.append(self._new_fouls())
         return "(" + "".join(parts) + ")"
+
+    def _new_fouls(self) -> str:
+        """``(foul index type team unum)`` of every foul not sent yet (team 1: left, 2: right)."""
+        new = [f for f in self.fouls[self._last_foul :] if f[0] > self._last_foul]
+        if not new:
+            return ""
+        self._last_foul = new[-1][0]
+        return "".join(f"(foul {i} {t} {1 if s == 'left' else 2} {u})" for i, t, s, u in new)
 
     def _env_delta(self, world, half: int, teams: dict[str, str]) -> str:
         vals = self._game_values(world, half, teams)
@@ -220,6 +233,7 @@ class MonitorStream:
             if v is not None and v != self._env_sent.get(key):
                 parts.append(f"({key} {v})")
         self._env_sent = dict(vals)
+        parts.append(self._new_fouls())
         return "(" + "".join(parts) + ")"
 
     # ------------------------------------------------------------------ scene

@@ -181,6 +181,7 @@ class SimServer(AgentMessages, TrainerCommands):
             type_limits=type_limits,
         )
         self.stream = MonitorStream()
+        self.stream.fouls = self.referee.fouls
         self.agents: list[AgentState] = []
         self.monitors: list[MonitorState] = []
         self.cycle = 0

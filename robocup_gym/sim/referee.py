@@ -64,6 +64,14 @@ PASS_MODE_MAX_BALL_SPEED = 0.05
 PASS_MODE_MAX_BALL_DIST = 0.5
 PASS_MODE_MIN_OPP_DIST = 1.0
 MAX_PLAYERS = 11
+FOUL_TOUCHING, FOUL_ILLEGAL_DEFENCE, FOUL_INCAPABLE, FOUL_CHARGING, FOUL_SELF_COLLISION = (
+    1,
+    2,
+    4,
+    6,
+    7,
+)
+"""Foul types as monitors number them (reference §7.3 of the wire reference)."""
 MAX_ROBOT_TYPE_COUNT = 7
 MIN_ROBOT_TYPES = 3
 MAX_SUM_TWO_TYPES = 9
@@ -356,6 +364,10 @@ class Referee:
         """This cycle, whether each player (by key) was in its own penalty area the cycle before."""
         self._inside: dict[int, bool] = {}
         """This cycle, whether each player (by key) is in its own penalty area."""
+        self._penalised: dict[int, int] = {}
+        """This cycle, the players (by key) moved for touching or illegal defence, and why."""
+        self.fouls: list[tuple[int, int, str, int]] = []
+        """Every foul so far: ``(number from 1, type, side, uniform number)``."""
         self._fouled: set[int] = set()
         """This cycle, the players (by key) with a foul to serve."""
 
@@ -504,11 +516,13 @@ class Referee:
         positions = {p.key: w.torso_position(p.index) for p in players}
         self._count_posture(players, positions)
         self._fouled = {p.key for p in players if self.posture[p.key].held}
+        self._penalised = {}
         self._area_census(players, positions)
         by_index = {p.index: p.key for p in players}
         fouls.tick(keys, {by_index[i] for i in touching if i in by_index})
         if rules.charging:
             self._charging(players, positions)
+        self._self_collision_fouls(players)
         if rules.illegal_defence:
             for side in ("left", "right"):
                 self._illegal_defence([p for p in players if p.side == side], positions)
@@ -761,27 +775,61 @@ class Referee:
         cycles = {k: (a / CYCLE_S, b / CYCLE_S) for k, (a, b) in INCAPABLE_S.items()}
         for p in players:
             s = self.posture[p.key]
+            if not s.held and self.rules.fallen_robots:
+                keeper = int(p.unum == 1)
+                if s.ground > cycles["ground"][keeper]:
+                    s.held, s.why = 1, "on the ground too long"
+                elif s.not_standing > cycles["not_standing"][keeper]:
+                    s.held, s.why = 1, "not standing too long"
+        for p in self._clearing_order(players):
+            kind = self._penalised.get(p.key)
+            if kind is not None:  # moved already: recorded only
+                self._foul(kind, p)
+                continue
+            s = self.posture[p.key]
+            if not s.held:
+                continue
+            self._foul(FOUL_CHARGING if s.why == "charging" else FOUL_INCAPABLE, p)
             pos = positions[p.key]
-            if s.held:
+            if s.held <= FOUL_HOLD_S / CYCLE_S:  # held, 1 cm higher every cycle
                 s.held += 1
-                if s.held > FOUL_HOLD_S / CYCLE_S:
-                    ball_y = float(self.host.ball_position()[1])
-                    x = (-0.6 if p.side == "left" else 0.6) * (7 - p.unum)
-                    y = (FIELD_HALF_WIDTH + 0.5) * (1.0 if ball_y < 0 else -1.0)
-                    self._safe_move(p, np.array([x, y, AGENT_RADIUS]), pos)
-                    log.info("%s #%d taken off the field (%s)", p.side, p.unum, s.why)
-                    self.posture[p.key] = _Posture()
-                    self.contact_fouls.forget(p.key)
-                else:
-                    self._teleport(p, (pos[0], pos[1], 1.0 + s.held * 0.01))
+                self._teleport(p, (pos[0], pos[1], 1.0 + s.held * 0.01))
                 continue
-            if not self.rules.fallen_robots:
-                continue
-            keeper = int(p.unum == 1)
-            if s.ground > cycles["ground"][keeper]:
-                s.held, s.why = 1, "on the ground too long"
-            elif s.not_standing > cycles["not_standing"][keeper]:
-                s.held, s.why = 1, "not standing too long"
+            ball_y = float(self.host.ball_position()[1])
+            x = (-0.6 if p.side == "left" else 0.6) * (7 - p.unum)
+            y = (FIELD_HALF_WIDTH + 0.5) * (1.0 if ball_y < 0 else -1.0)
+            self._safe_move(p, np.array([x, y, AGENT_RADIUS]), pos)
+            log.info("%s #%d taken off the field (%s)", p.side, p.unum, s.why)
+            self.posture[p.key] = _Posture()
+            self.contact_fouls.forget(p.key)
+
+    def _self_collision_fouls(self, players: list[Player]) -> None:
+        """Record the world's self-collisions of this cycle that froze a joint anew (the rule
+        itself runs with the world), the left team's first."""
+        w = self.host.world
+        if not getattr(w, "self_collision_rule", False):
+            return
+        state = w.self_collisions
+        if not state.fouls:
+            return
+        by_index = {p.index: p for p in players}
+        found = [by_index[i] for i in state.fouls if i in by_index]
+        for p in sorted(found, key=lambda q: q.side != "left"):  # stable: each side in order
+            self._foul(FOUL_SELF_COLLISION, p)
+
+    def _clearing_order(self, players: list[Player]) -> list[Player]:
+        """The order in which rcssserver3d's referee penalises: the teams in random order, each
+        team's players shuffled."""
+        sides = ("left", "right") if self.rng.random() < 0.5 else ("right", "left")
+        out = []
+        for side in sides:
+            team = [p for p in players if p.side == side]
+            out += [team[int(k)] for k in self.rng.permutation(len(team))]
+        return out
+
+    def _foul(self, kind: int, p: Player) -> None:
+        """Record a foul (reported to monitors as ``(foul index type team unum)``)."""
+        self.fouls.append((len(self.fouls) + 1, kind, p.side, p.unum))
 
     def _charging(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
         """Opponents in contact: one that charged is penalised (lifted, then put beside the
@@ -845,6 +893,7 @@ class Referee:
                     continue
                 target = np.array([*(at[:2] + away / n * AGENT_RADIUS), float(at[2])])
                 self._safe_move(p, target, at)
+                self._penalised[key] = FOUL_TOUCHING
                 log.info("%s #%d moved out of a touching group", p.side, p.unum)
 
     def _area_census(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
@@ -914,6 +963,7 @@ class Referee:
                 self._area[p.side][0] -= 1
                 self._fouled.add(p.key)
                 self._out_of_area(p, pos[p.key], sign)
+                self._penalised[p.key] = FOUL_ILLEGAL_DEFENCE
                 log.info("%s #%d moved out of its penalty area (illegal defence)", p.side, p.unum)
 
     def _out_of_area(self, p: Player, pos: np.ndarray, sign: float) -> None:

@@ -217,6 +217,9 @@ class SelfCollisions:
         self._frozen: dict[int, np.ndarray] = {}
         self.collisions: list[tuple[int, str, str]] = []
         """The collisions of the last update: ``(robot index, body, body)``."""
+        self.fouls: list[int] = []
+        """The last update's fouls, as the server counts them: the robot index of each
+        colliding pair that froze a joint anew."""
         self._clock: np.float32 | None = None
 
     def clear(self) -> None:
@@ -224,6 +227,7 @@ class SelfCollisions:
         self._since.clear()
         self._frozen.clear()
         self.collisions = []
+        self.fouls = []
         self._clock = None
 
     def frozen(self, index: int) -> np.ndarray | None:
@@ -235,6 +239,7 @@ class SelfCollisions:
         world), freeze the joints of the colliding pairs, release those frozen for
         :data:`FROZEN_S`."""
         self.collisions = []
+        self.fouls = []
         t = np.float32(game_time)
         if self._clock is not None and t < self._clock:  # the clock was set back: start again
             self.clear()
@@ -254,7 +259,10 @@ class SelfCollisions:
                 self.collisions.append((index, *boxes.names[p]))
                 # a joint never frozen, or frozen more than FROZEN_S + THAW_S ago
                 free = np.isnan(since) | ((t - since) > np.float32(FROZEN_S + THAW_S))
-                since[boxes.freeze[p] & free] = t
+                anew = boxes.freeze[p] & free
+                if anew.any():
+                    self.fouls.append(index)
+                since[anew] = t
             if since is None:
                 continue
             age = t - since  # NaN where never frozen

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import select
 from collections.abc import Callable
 
@@ -24,6 +25,8 @@ from robocup_gym.soccer.scripted import StandingTeam
 
 __all__ = ["illegal_defence_replay", "replay", "touching_replay"]
 
+_FOUL = re.compile(r"\(foul (\d+) (\d+) (\d+) (\d+)\)")
+
 
 def replay(
     agent_port: int,
@@ -33,11 +36,13 @@ def replay(
     track: int,
     script: list,
     read_after: float,
+    fouls: list | None = None,
 ) -> tuple[float, float]:
     """On a server: ``players`` standing players of one team (left) and a trainer that sends
     each message of ``script`` (``(condition(game_time, cycle), message)``, in order, checked
     from the team's own loop). Returns where the server's monitor stream shows the torso of
-    player ``track`` at game time ``read_after``, world (x, y)."""
+    player ``track`` at game time ``read_after``, world (x, y); ``fouls`` (a list) gets the
+    ``(number, type, team, unum)`` of every ``foul`` the stream reports (team 1: left)."""
     trainer = connect("127.0.0.1", monitor_port, retry_s=10.0)
     decoder, tracker = FrameDecoder(), MonitorTracker()
     tracker.set_agent("left", track)
@@ -54,7 +59,13 @@ def replay(
                 p = perceive()
                 cycles[0] += 1
                 while select.select([trainer], [], [], 0.0)[0] or decoder.pending:
-                    tracker.feed(recv_frame(trainer, decoder, 5.0))
+                    frame = recv_frame(trainer, decoder, 5.0)
+                    tracker.feed(frame)
+                    if fouls is not None:
+                        text = (
+                            frame.decode("ascii", "replace") if isinstance(frame, bytes) else frame
+                        )
+                        fouls.extend(tuple(map(int, m)) for m in _FOUL.findall(text))
                     if tracker.need_full:
                         send_frame(trainer, trainer_cmds.reqfullstate())
                     snap = tracker.newest()
@@ -79,7 +90,9 @@ def replay(
     return float(after[0][0]), float(after[0][1])
 
 
-def illegal_defence_replay(agent_port: int, monitor_port: int) -> tuple[float, float]:
+def illegal_defence_replay(
+    agent_port: int, monitor_port: int, fouls: list | None = None
+) -> tuple[float, float]:
     """Five standing players of one team; a trainer puts the goalkeeper and two field players
     in their penalty area, then a third field player at (−13.5, 0.5). Where that player is
     0.1 s later."""
@@ -93,10 +106,14 @@ def illegal_defence_replay(agent_port: int, monitor_port: int) -> tuple[float, f
         ),
         (lambda t, n: t >= 1.0, trainer_cmds.agent_move(4, "Left", (-13.5, 0.5, 0.4), -90.0)),
     ]
-    return replay(agent_port, monitor_port, players=5, track=4, script=script, read_after=1.1)
+    return replay(
+        agent_port, monitor_port, players=5, track=4, script=script, read_after=1.1, fouls=fouls
+    )
 
 
-def touching_replay(agent_port: int, monitor_port: int) -> tuple[float, float]:
+def touching_replay(
+    agent_port: int, monitor_port: int, fouls: list | None = None
+) -> tuple[float, float]:
     """Four standing players of one team; a trainer puts the goalkeeper out of the way and
     players 2 and 3 shoulder to shoulder (0.24 m apart), and one cycle later player 4 against
     player 2 from the other side. Where player 4 is 0.2 s later."""
@@ -110,7 +127,9 @@ def touching_replay(agent_port: int, monitor_port: int) -> tuple[float, float]:
         ),
         (lambda t, n: n == 86, trainer_cmds.agent_move(4, "Left", (-5.0, -0.24, 0.4), -90.0)),
     ]
-    return replay(agent_port, monitor_port, players=4, track=4, script=script, read_after=0.8)
+    return replay(
+        agent_port, monitor_port, players=4, track=4, script=script, read_after=0.8, fouls=fouls
+    )
 
 
 SITUATIONS: dict[str, Callable[[int, int], tuple[float, float]]] = {

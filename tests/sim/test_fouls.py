@@ -80,6 +80,7 @@ def test_the_robot_that_joins_a_group_of_two_is_moved_away_from_its_centre(engin
     _touching_setup(game, (1, 2), 3)
     # the group's centre is y = 0: the joiner at y = -0.24 goes 0.4 m further, to -0.64
     assert _xy(game, 3) == pytest.approx([-5.0, -0.64], abs=0.02)
+    assert game.referee.fouls == [(1, 1, "left", 4)]  # a touching foul (type 1) of left #4
     assert _xy(game, 1)[1] == pytest.approx(0.0, abs=0.05)  # the two stay (pushed apart a bit)
     assert _xy(game, 2)[1] == pytest.approx(0.24, abs=0.05)
     game.close()
@@ -153,9 +154,12 @@ def _charge(engine: str, rules=True, opponent=True):
 def test_a_robot_running_into_an_opponent_is_lifted_and_put_beside_the_field(engine):
     game, heights = _charge(engine)
     assert max(heights) > 1.0  # lifted
+    # a charging foul (type 6) of left #2, recorded every cycle it is held, as the server does
+    assert {f[1:] for f in game.referee.fouls} == {(6, "left", 2)}
     game.world.set_torso_force(1, (0.0, 0.0, 0.0))
     _step(game, 30)
     x, y, _ = game.world.torso_position(1)
+    assert len(game.referee.fouls) == 26  # the foul's cycle, 25 cycles held, the last move
     # beside the field on the side away from the ball (at y = 3)
     assert y == pytest.approx(-10.5, abs=0.05) and x == pytest.approx(-0.6 * 5, abs=0.3)
     assert game.world.torso_position(3)[2] < 1.0  # the robot it ran into is no foul
@@ -271,3 +275,17 @@ def test_the_environments_keep_the_contact_fouls_off_unless_asked():
     assert Rules.of(True).touching and Rules.of(True).charging  # serve: every rule
     with pytest.raises(ValueError, match="contact_fouls"):
         SoccerConfig(contact_fouls="yes")
+
+
+def test_monitors_get_each_foul_once():
+    from robocup_gym.server.monitor import MonitorStream
+
+    stream = MonitorStream()
+    fouls = [(1, 1, "left", 4)]
+    stream.fouls = fouls
+    game = _game("ode", 1, 0)
+    assert "(foul 1 1 1 4)" in stream._env_full(game.world, 1, {})
+    assert "foul" not in stream._env_delta(game.world, 1, {})
+    fouls.append((2, 6, "right", 3))
+    assert "(foul 2 6 2 3)" in stream._env_delta(game.world, 1, {})
+    game.close()

@@ -235,3 +235,17 @@ def test_serve_applies_the_rule_unless_its_referee_is_off(rules):
     server.world_host.change_robots([(1, 0), (2, 3)], [])
     assert server.world.n_robots == 2
     assert server.world.self_collision_rule is rules
+
+
+def test_a_collision_that_freezes_joints_anew_is_a_foul_once():
+    """The server records a self-collision foul for each colliding pair that freezes a joint
+    not frozen in the last 3 s: the forearm's first collision is one; the same collision in the
+    cycles after it (its joints frozen already) is none."""
+    world, command = forearm_world()
+    fouls = []
+    for _ in range(120):
+        world.step({0: command})
+        fouls.append(list(world.self_collisions.fouls))
+    first = next(k for k, f in enumerate(fouls) if f)
+    assert fouls[first] == [0]
+    assert not any(fouls[first + 1 : first + 50])

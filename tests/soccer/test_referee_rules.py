@@ -144,7 +144,7 @@ def test_illegal_defence_waits_while_the_game_is_paused_and_can_be_off():
         game.close()
 
 
-def _on_a_real_server(binary: str, situation) -> tuple[float, float]:
+def _on_a_real_server(binary: str, situation, fouls: list | None = None) -> tuple[float, float]:
     """``situation`` (a replay of :mod:`robocup_gym.soccer.referee_replays`) on a real
     rcssserver3d in sync mode."""
     from robocup_gym.backends.process import ServerProcess
@@ -152,7 +152,7 @@ def _on_a_real_server(binary: str, situation) -> tuple[float, float]:
     real = ServerProcess(binary, sync=True, real_time=False)
     real.start()
     try:
-        return situation(real.agent_port, real.monitor_port)
+        return situation(real.agent_port, real.monitor_port, fouls)
     finally:
         real.stop()
 
@@ -163,17 +163,21 @@ def test_illegal_defence_on_serve():
     from robocup_gym.server.bench import start_server_process, stop_server_process
 
     proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time")
+    fouls: list = []
     try:
-        x, y = illegal_defence_replay(agent_port, monitor_port)
+        x, y = illegal_defence_replay(agent_port, monitor_port, fouls)
     finally:
         stop_server_process(proc)
     assert x == pytest.approx(-12.8, abs=0.05) and y == pytest.approx(0.5, abs=0.05)
+    assert (2, 1, 4) in {f[1:] for f in fouls}  # the monitors see an illegal defence of left #4
 
 
 def test_illegal_defence_on_a_real_server_as_on_serve(real_rcssserver3d):
     """The same situation on a real rcssserver3d, where one is installed: the same decision."""
-    x, y = _on_a_real_server(real_rcssserver3d, illegal_defence_replay)
+    fouls: list = []
+    x, y = _on_a_real_server(real_rcssserver3d, illegal_defence_replay, fouls)
     assert x == pytest.approx(-12.8, abs=0.05) and y == pytest.approx(0.5, abs=0.05)
+    assert (2, 1, 4) in {f[1:] for f in fouls}
 
 
 def test_touching_group_on_serve():
@@ -182,11 +186,13 @@ def test_touching_group_on_serve():
     from robocup_gym.server.bench import start_server_process, stop_server_process
 
     proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time")
+    fouls: list = []
     try:
-        x, y = touching_replay(agent_port, monitor_port)
+        x, y = touching_replay(agent_port, monitor_port, fouls)
     finally:
         stop_server_process(proc)
     assert x == pytest.approx(-5.0, abs=0.1) and y == pytest.approx(-0.64, abs=0.05)
+    assert (1, 1, 4) in {f[1:] for f in fouls}  # the monitors see a touching foul of left #4
 
 
 def test_touching_group_on_a_real_server(real_rcssserver3d):
@@ -195,7 +201,9 @@ def test_touching_group_on_a_real_server(real_rcssserver3d):
     mostly finds the spot 0.4 m away taken and takes the next one its search offers (0.4 m
     further in x or y), as its bounding boxes of the robots reach a few centimetres further
     than the ones computed here (docs/results.md, *Referee*)."""
-    x, y = _on_a_real_server(real_rcssserver3d, touching_replay)
+    fouls: list = []
+    x, y = _on_a_real_server(real_rcssserver3d, touching_replay, fouls)
+    assert (1, 1, 4) in {f[1:] for f in fouls}
     moved = float(np.hypot(x + 5.0, y + 0.24))  # from where the trainer put it
     assert 0.35 < moved < 1.0 and y < -0.55
 
