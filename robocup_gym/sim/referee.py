@@ -518,9 +518,9 @@ class Referee:
         self._fouled = {p.key for p in players if self.posture[p.key].held}
         self._penalised = {}
         self._area_census(players, positions)
-        by_index = {p.index: p.key for p in players}
-        fouls.tick(keys, {by_index[i] for i in touching if i in by_index})
         if rules.charging:
+            by_index = {p.index: p.key for p in players}
+            fouls.tick(keys, {by_index[i] for i in touching if i in by_index})
             self._charging(players, positions)
         self._self_collision_fouls(players)
         if rules.illegal_defence:
@@ -529,7 +529,8 @@ class Referee:
         if rules.touching and len(players) > 2:
             self._touching(players, positions)
         self._take_off_fallen(players, positions)
-        fouls.restart_groups(keys)
+        if rules.touching and len(players) > 2:
+            fouls.restart_groups(keys)
 
     def _game_flow(self, players: list[Player]) -> None:
         """The play modes: half time, goals, ball out, kick-offs, set pieces, pass mode."""
@@ -781,7 +782,9 @@ class Referee:
                     s.held, s.why = 1, "on the ground too long"
                 elif s.not_standing > cycles["not_standing"][keeper]:
                     s.held, s.why = 1, "not standing too long"
-        for p in self._clearing_order(players):
+        due = [p for p in players if p.key in self._penalised or self.posture[p.key].held]
+        # the server goes through every player in random order: the due ones' order is the same
+        for p in self._clearing_order(due) if due else ():
             kind = self._penalised.get(p.key)
             if kind is not None:  # moved already: recorded only
                 self._foul(kind, p)
