@@ -219,7 +219,7 @@ class MonitorStream:
 
     def _new_fouls(self) -> str:
         """``(foul index type team unum)`` of every foul not sent yet (team 1: left, 2: right)."""
-        new = [f for f in self.fouls[self._last_foul :] if f[0] > self._last_foul]
+        new = self.fouls[self._last_foul :]  # numbered from 1 in order
         if not new:
             return ""
         self._last_foul = new[-1][0]

@@ -35,11 +35,14 @@ import numpy as np
 
 from robocup_gym.robot.nao import mesh_boxes
 from robocup_gym.sim.field import FIELD_HALF_LENGTH, GOAL_HALF_WIDTH
+from robocup_gym.sim.kick_rules import PASS_MODE_MIN_OPP_DIST
+from robocup_gym.sim.physics import CYCLE_S
 
 __all__ = [
     "AGENT_RADIUS",
     "CHARGING_MIN_SPEED",
     "MAX_TOUCH_GROUP",
+    "MOVED_GRACE_CYCLES",
     "ContactFouls",
     "SafeSpot",
     "robot_box",
@@ -51,8 +54,6 @@ MAX_TOUCH_GROUP = 2
 """``MaxTouchGroupSize``: the most robots a touching group may hold."""
 MAX_SAFE_ATTEMPTS = 100
 """``MaxNumSafeRepositionAttempts``."""
-MIN_BALL_DIST = 1.0
-"""A safe spot is at least max(2 × agent radius, ``PassModeMinOppBallDist``) from the ball, m."""
 MAX_PLAYERS_IN_OWN_AREA = 3
 VELOCITY_SAMPLES = 3
 """``AVERAGE_VELOCITY_MEASUREMENTS``: cycles over which a torso's velocity is averaged."""
@@ -77,7 +78,6 @@ CHARGING_MIN_COLLISION_SPEED = 0.2
 """``ChargingMinCollisionSpeed``: the speed toward the contact a charge needs, m/s."""
 MOVED_GRACE_CYCLES = 50
 """A robot the referee moved is exempt from charging for this many cycles (1 s)."""
-_CYCLE_S = 0.02
 
 
 def robot_box(world, index: int) -> tuple[np.ndarray, np.ndarray]:
@@ -188,7 +188,7 @@ class SafeSpot:
     def _unsafe(self, pos: np.ndarray) -> bool:
         if abs(pos[0]) > FIELD_HALF_LENGTH and abs(pos[1]) < GOAL_HALF_WIDTH + AGENT_RADIUS:
             return True  # in or behind a goal
-        near = max(2 * AGENT_RADIUS, MIN_BALL_DIST)
+        near = max(2 * AGENT_RADIUS, PASS_MODE_MIN_OPP_DIST)  # the server's safe distance
         if self.avoid_ball and float(np.hypot(*(self.ball[:2] - pos[:2]))) < near:
             return True
         return any(_sphere_hits_box(pos, AGENT_RADIUS, lo, hi) for lo, hi in self.boxes)
@@ -221,8 +221,8 @@ class SafeSpot:
 class _Counters:
     """A robot's charging clocks (cycles), as rcssserver3d keeps them."""
 
-    since_ball_touch: int = int(CHARGING_IMMUNITY_S / _CYCLE_S)
-    charging: int = int(CHARGING_COLLISION_MIN_S / _CYCLE_S)
+    since_ball_touch: int = int(CHARGING_IMMUNITY_S / CYCLE_S)
+    charging: int = int(CHARGING_COLLISION_MIN_S / CYCLE_S)
 
 
 @dataclass
@@ -392,8 +392,8 @@ class ContactFouls:
             c = clocks(k)
             return new.setdefault(k, _Counters(c.since_ball_touch, c.charging))
 
-        immunity = int(CHARGING_IMMUNITY_S / _CYCLE_S)
-        min_time = int(CHARGING_COLLISION_MIN_S / _CYCLE_S)
+        immunity = int(CHARGING_IMMUNITY_S / CYCLE_S)
+        min_time = int(CHARGING_COLLISION_MIN_S / CYCLE_S)
         for a in left:
             for b, contact in opponents_of.get(a, ()):
                 pair = (a, b)

@@ -27,16 +27,25 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["KICK_DURATION_S", "PASS_MODE_SCORE_WAIT_S", "KickRules", "TakenKick"]
+__all__ = [
+    "FREE_KICK_DISTANCE",
+    "KICK_DURATION_S",
+    "PASS_MODE_MIN_OPP_DIST",
+    "PASS_MODE_SCORE_WAIT_S",
+    "KickRules",
+    "TakenKick",
+]
 
 KICK_DURATION_S = 0.1
 """A touch within this time of the taking touch is still the same kick."""
 PASS_MODE_SCORE_WAIT_S = 10.0
 """``PassModeScoreWaitTime``: how long after pass mode a team needs two touches to score."""
-PASS_MODE_CIRCLE_M = 1.0
-"""``PassModeMinOppBallDist``: the circle the ball must leave after pass mode."""
-KICK_OFF_CIRCLE_M = 2.0
-"""``FreeKickDistance``: outside this (the centre circle) the kick-off team may score."""
+PASS_MODE_MIN_OPP_DIST = 1.0
+"""``PassModeMinOppBallDist``, m: opponents kept this far from the ball in pass mode, and the
+circle the ball must leave after it."""
+FREE_KICK_DISTANCE = 2.0
+"""``FreeKickDistance``, m: opponents kept this far at set pieces; outside it (the centre
+circle) the kick-off team may score."""
 
 
 def _other(side: str) -> str:
@@ -105,7 +114,7 @@ class KickRules:
         if self.kick_off_taker is None:
             return
         team = self.kick_off_taker.side
-        outside = float(np.hypot(*ball_xy[:2])) > KICK_OFF_CIRCLE_M
+        outside = float(np.hypot(*ball_xy[:2])) > FREE_KICK_DISTANCE
         if _other(team) in sides or (team in sides and outside):
             self.kick_off_taker = None
 
@@ -186,7 +195,7 @@ class KickRules:
             return
         if not self.pass_left_circle[team]:
             start = self.pass_ball.get(team, np.zeros(2))
-            if float(np.hypot(*(ball_xy[:2] - start))) >= PASS_MODE_CIRCLE_M:
+            if float(np.hypot(*(ball_xy[:2] - start))) >= PASS_MODE_MIN_OPP_DIST:
                 self.pass_left_circle[team] = True
         for p in touchers:
             if p.side != team:

@@ -10,10 +10,10 @@ kick-off, ball out over a side line (kick-in) or goal line (goal kick / corner k
 (ball held at the spot after 1 s, opponents kept 2 m away, first touch → PlayOn, drop ball after
 15 s), pass mode, half time (300 s → BeforeKickOff of the second half) and the end of the game
 (600 s → GameOver), fallen robots, illegal defence, and the fouls between robots of
-:mod:`robocup_gym.sim.fouls` (touching groups, charging, the safe spots of the referee's moves).
-The self-collision rule runs with the world (:mod:`robocup_gym.sim.self_collision`).
-``docs/serve.md`` lists the rules that are not implemented (double touch, the
-kick-off/indirect no-score rules, offside).
+:mod:`robocup_gym.sim.fouls` (touching groups, charging, the safe spots of the referee's moves),
+and the rules on the restarting kick and on scoring of :mod:`robocup_gym.sim.kick_rules`. The
+self-collision rule runs with the world (:mod:`robocup_gym.sim.self_collision`).
+``docs/serve.md`` lists what is not implemented (offside, some monitor predicates).
 
 The referee acts on the world through a :class:`~robocup_gym.sim.game_host.GameHost` (the
 server's host rebuilds its world as robots come and go; an environment's keeps one).
@@ -41,18 +41,18 @@ from robocup_gym.sim.field import (
 from robocup_gym.sim.fouls import (
     AGENT_RADIUS,
     MAX_PLAYERS_IN_OWN_AREA,
+    MOVED_GRACE_CYCLES,
     ContactFouls,
     SafeSpot,
     robot_box,
 )
 from robocup_gym.sim.game_host import GameHost
-from robocup_gym.sim.kick_rules import KickRules
+from robocup_gym.sim.kick_rules import FREE_KICK_DISTANCE, PASS_MODE_MIN_OPP_DIST, KickRules
 from robocup_gym.sim.physics import BALL_RADIUS, CYCLE_S
 from robocup_gym.types import PLAY_MODES, reject_unknown_fields
 
 log = logging.getLogger("robocup_gym.referee")
 
-FREE_KICK_DISTANCE = 2.0
 FREE_KICK_MOVE = 2.5
 HALF_TIME = 300.0
 GOAL_PAUSE = 3.0
@@ -62,7 +62,6 @@ PASS_MODE_DURATION = 4.0
 PASS_MODE_RETRY = 3.0
 PASS_MODE_MAX_BALL_SPEED = 0.05
 PASS_MODE_MAX_BALL_DIST = 0.5
-PASS_MODE_MIN_OPP_DIST = 1.0
 MAX_PLAYERS = 11
 FOUL_TOUCHING, FOUL_ILLEGAL_DEFENCE, FOUL_INCAPABLE, FOUL_CHARGING, FOUL_SELF_COLLISION = (
     1,
@@ -109,6 +108,12 @@ _SET_PIECES = {
     "offside_left": "left",
     "offside_right": "right",
 }
+
+
+def _in_own_area(side: str, x: float, y: float) -> bool:
+    """Whether (x, y) is in ``side``'s own penalty area (edges included)."""
+    sign = -1.0 if side == "left" else 1.0
+    return sign * x >= PENALTY_X and abs(x) <= FIELD_HALF_LENGTH and abs(y) <= PENALTY_HALF_WIDTH
 
 
 def other(side: str) -> str:
@@ -473,11 +478,8 @@ class Referee:
         self.players = players
         self.mode_cycles += 1
         touching = self.host.ball_touchers()
-        toucher = None
-        if touching:
-            by_index = {p.index: p for p in players}
-            toucher = next((by_index[i] for i in sorted(touching) if i in by_index), None)
         self._touchers = [p for p in players if p.index in touching] if touching else []
+        toucher = min(self._touchers, key=lambda p: p.index, default=None)
         if toucher is not None:
             self.last_touch = toucher
             self.touch_time = self.game_time
@@ -633,16 +635,11 @@ class Referee:
             )
             if verdict == "goal_kick":
                 log.info("no goal: goal kick for the %s team", team)
-                spot = np.array([(-1.0 if team == "left" else 1.0) * 14.0, 0.0, BALL_RADIUS])
-                self.set_play_mode(f"goal_kick_{team}", spot=spot)
+                self._goal_kick(team)
                 return
             if verdict == "corner_kick":
                 log.info("no goal: corner kick for the %s team", team)
-                sx = 1.0 if team == "left" else -1.0
-                spot = np.array(
-                    [sx * (FIELD_HALF_LENGTH - BALL_RADIUS), math.copysign(5.483, y), BALL_RADIUS]
-                )
-                self.set_play_mode(f"corner_kick_{team}", spot=spot)
+                self._corner_kick(team, y)
                 return
             scorer = "left" if x > 0 else "right"
             g = self.host.world.game
@@ -665,16 +662,23 @@ class Referee:
             self.set_play_mode("KickIn_Left" if side == "left" else "KickIn_Right", spot=spot)
         elif abs(x) >= FIELD_HALF_LENGTH + BALL_RADIUS + 0.001:
             defending = "right" if x > 0 else "left"
-            attackers = other(defending)
-            sx = math.copysign(1.0, x)
             if last == defending:
-                spot = np.array(
-                    [sx * (FIELD_HALF_LENGTH - BALL_RADIUS), math.copysign(5.483, y), BALL_RADIUS]
-                )
-                self.set_play_mode(f"corner_kick_{attackers}", spot=spot)
+                self._corner_kick(other(defending), y)
             else:
-                spot = np.array([sx * 14.0, 0.0, BALL_RADIUS])
-                self.set_play_mode(f"goal_kick_{defending}", spot=spot)
+                self._goal_kick(defending)
+
+    def _goal_kick(self, team: str) -> None:
+        """A goal kick for ``team``, the ball at (∓14, 0) in front of its goal."""
+        sx = -1.0 if team == "left" else 1.0
+        self.set_play_mode(f"goal_kick_{team}", spot=np.array([sx * 14.0, 0.0, BALL_RADIUS]))
+
+    def _corner_kick(self, team: str, y: float) -> None:
+        """A corner kick for ``team`` at the other goal line, on the side of ``y``."""
+        sx = 1.0 if team == "left" else -1.0
+        spot = np.array(
+            [sx * (FIELD_HALF_LENGTH - BALL_RADIUS), math.copysign(5.483, y), BALL_RADIUS]
+        )
+        self.set_play_mode(f"corner_kick_{team}", spot=spot)
 
     def _set_piece(self, pm: str, side: str, pos: np.ndarray) -> None:
         if self.mode_time < KICK_IN_PAUSE:
@@ -728,9 +732,9 @@ class Referee:
         for p in self.players:
             lo, hi = self._body_x_extent(p.index)
             if p.side == "left" and hi > 0:
-                self._move_x(p.index, -FREE_KICK_MOVE)
+                self._move_x(p, -FREE_KICK_MOVE)
             elif p.side == "right" and lo < 0:
-                self._move_x(p.index, FREE_KICK_MOVE)
+                self._move_x(p, FREE_KICK_MOVE)
 
     def _kickoff_clear(self, kicker: str) -> None:
         w = self.host.world
@@ -742,14 +746,14 @@ class Referee:
                 xy = w.body_frames(p.index)[0][:, :2]
                 in_circle = bool(np.any(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
                 if into_other or in_circle:
-                    self._move_x(p.index, own * FREE_KICK_MOVE)
+                    self._move_x(p, own * FREE_KICK_MOVE)
             else:
                 into_other = hi > 0 if p.side == "left" else lo < 0
                 if into_other:
                     xy = w.body_frames(p.index)[0][:, :2]
                     inside = bool(np.all(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
                     if not inside:
-                        self._move_x(p.index, own * FREE_KICK_MOVE)
+                        self._move_x(p, own * FREE_KICK_MOVE)
 
     def _count_posture(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
         """Count how long each player (not being penalised) has not stood."""
@@ -851,7 +855,7 @@ class Referee:
             p.key
             for p in players
             if self.posture[p.key].not_standing
-            or self.contact_fouls.since_moved.get(p.key, 1_000) < 50
+            or self.contact_fouls.since_moved.get(p.key, MOVED_GRACE_CYCLES) < MOVED_GRACE_CYCLES
             or p.key in self._fouled
         }
         keeper = {}
@@ -911,12 +915,7 @@ class Referee:
                 self._inside[p.key] = False
                 continue
             v = positions[p.key]
-            sign = -1.0 if p.side == "left" else 1.0
-            inside = (
-                sign * float(v[0]) >= PENALTY_X
-                and abs(float(v[0])) <= FIELD_HALF_LENGTH
-                and abs(float(v[1])) <= PENALTY_HALF_WIDTH
-            )
+            inside = _in_own_area(p.side, float(v[0]), float(v[1]))
             self._inside[p.key] = inside
             self._area[p.side][0] += inside
         self.in_own_area.update(self._inside)
@@ -1001,8 +1000,7 @@ class Referee:
         )
         new = spot.find(target, at[:2])
         x, y = float(new[0]), float(new[1])
-        in_area = sign * x >= PENALTY_X and abs(x) <= FIELD_HALF_LENGTH
-        in_area = in_area and abs(y) <= PENALTY_HALF_WIDTH
+        in_area = _in_own_area(p.side, x, y)
         if p.side in self._area:
             if not spot.inside and in_area:
                 self._area[p.side][1] += 1
@@ -1015,12 +1013,9 @@ class Referee:
         self.host.teleport(p.index, pos)
         self.contact_fouls.moved(p.key)
 
-    def _move_x(self, index: int, x: float) -> None:
-        p = self.host.world.torso_position(index)
-        self.host.teleport(index, (x, p[1], p[2]))
-        key = next((q.key for q in self.players if q.index == index), None)
-        if key is not None:
-            self.contact_fouls.moved(key)
+    def _move_x(self, p: Player, x: float) -> None:
+        t = self.host.world.torso_position(p.index)
+        self._teleport(p, (x, t[1], t[2]))
 
     def _clear_circle(
         self, centre: np.ndarray, radius: float, side: str | None, push: float | None = None

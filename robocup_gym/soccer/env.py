@@ -527,6 +527,23 @@ def scenario_env(cls: type, scenario: str, options: dict[str, Any]):
     return LeagueSoccerEnv(scenario, robot=robot, **options)
 
 
+def scenario_functions(cls: type, scenario: str):
+    """A scenario module's ``parallel_env``, ``raw_env`` and ``env`` (PettingZoo's names) for
+    the Nao's environment class ``cls`` (:func:`scenario_env` picks the league's for a league
+    robot)."""
+
+    def parallel_env(**options: Any):
+        """The scenario's Parallel environment; ``robot="T1"`` or ``"K1"`` plays it on the
+        league's simulator (:mod:`robocup_gym.soccer.league`)."""
+        return scenario_env(cls, scenario, options)
+
+    def raw_env(**options: Any):
+        """The scenario's AEC environment (PettingZoo's conversion of :func:`parallel_env`)."""
+        return aec_from_parallel(parallel_env(**options))
+
+    return parallel_env, raw_env, raw_env
+
+
 def aec_from_parallel(parallel: SoccerParallelEnv):
     """The AEC form of a soccer environment (PettingZoo's own conversion and checks)."""
     env = parallel_to_aec(parallel)

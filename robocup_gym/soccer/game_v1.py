@@ -21,11 +21,11 @@ Version history:
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
-from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel, scenario_env
+from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, scenario_functions
 from robocup_gym.soccer.formation import kickoff_positions
 from robocup_gym.soccer.game import Start
 
@@ -45,14 +45,4 @@ class GameEnv(SoccerParallelEnv):
         return Start(players=players, ball=(0.0, 0.0), play_mode="KickOff_Left")
 
 
-def parallel_env(**options: Any):
-    """The scenario's Parallel environment; ``robot="T1"`` or ``"K1"`` plays it on the league's
-    simulator (:mod:`robocup_gym.soccer.league`)."""
-    return scenario_env(GameEnv, "game", options)
-
-
-def raw_env(**options: Any):
-    return aec_from_parallel(parallel_env(**options))
-
-
-env = raw_env
+parallel_env, raw_env, env = scenario_functions(GameEnv, "game")

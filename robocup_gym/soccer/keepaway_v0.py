@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel, scenario_env
+from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, scenario_functions
 from robocup_gym.soccer.game import CycleReport, Start
 
 __all__ = ["KeepawayEnv", "env", "parallel_env", "raw_env"]
@@ -77,14 +77,4 @@ class KeepawayEnv(SoccerParallelEnv):
         return {"hold": self.reward_hold}
 
 
-def parallel_env(**options: Any):
-    """The scenario's Parallel environment; ``robot="T1"`` or ``"K1"`` plays it on the league's
-    simulator (:mod:`robocup_gym.soccer.league`)."""
-    return scenario_env(KeepawayEnv, "keepaway", options)
-
-
-def raw_env(**options: Any):
-    return aec_from_parallel(parallel_env(**options))
-
-
-env = raw_env
+parallel_env, raw_env, env = scenario_functions(KeepawayEnv, "keepaway")

@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, aec_from_parallel, scenario_env
+from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, scenario_functions
 from robocup_gym.soccer.game import CycleReport, Start
 
 __all__ = ["BALL_SPOT", "SPREAD_M", "PenaltyEnv", "env", "parallel_env", "raw_env"]
@@ -60,14 +60,4 @@ class PenaltyEnv(SoccerParallelEnv):
         return None
 
 
-def parallel_env(**options: Any):
-    """The scenario's Parallel environment; ``robot="T1"`` or ``"K1"`` plays it on the league's
-    simulator (:mod:`robocup_gym.soccer.league`)."""
-    return scenario_env(PenaltyEnv, "penalty", options)
-
-
-def raw_env(**options: Any):
-    return aec_from_parallel(parallel_env(**options))
-
-
-env = raw_env
+parallel_env, raw_env, env = scenario_functions(PenaltyEnv, "penalty")
