@@ -117,7 +117,6 @@ class SafeSpot:
     inside: bool
     boxes: list[tuple[np.ndarray, np.ndarray]]
     ball: np.ndarray
-    avoid_ball: bool = True
 
     def _adjust(self, agent: np.ndarray, cur: np.ndarray) -> bool:
         """Move ``cur`` out of a full own penalty area (in place); whether it was in it."""
@@ -189,7 +188,7 @@ class SafeSpot:
         if abs(pos[0]) > FIELD_HALF_LENGTH and abs(pos[1]) < GOAL_HALF_WIDTH + AGENT_RADIUS:
             return True  # in or behind a goal
         near = max(2 * AGENT_RADIUS, PASS_MODE_MIN_OPP_DIST)  # the server's safe distance
-        if self.avoid_ball and float(np.hypot(*(self.ball[:2] - pos[:2]))) < near:
+        if float(np.hypot(*(self.ball[:2] - pos[:2]))) < near:
             return True
         return any(_sphere_hits_box(pos, AGENT_RADIUS, lo, hi) for lo, hi in self.boxes)
 
@@ -236,14 +235,6 @@ class ContactFouls:
     velocities: dict[int, deque] = field(default_factory=dict)
     counters: dict[int, _Counters] = field(default_factory=dict)
     since_moved: dict[int, int] = field(default_factory=dict)
-
-    def clear(self) -> None:
-        """Forget everything (a new game)."""
-        self.group.clear()
-        self.old_group.clear()
-        self.velocities.clear()
-        self.counters.clear()
-        self.since_moved.clear()
 
     # ------------------------------------------------------------------ every cycle
     def link(self, keys_of: dict[int, int], contacts: dict) -> None:
