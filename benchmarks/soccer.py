@@ -1,7 +1,7 @@
 """How fast do the soccer environments run? Agent steps and game cycles per second, against the
 world alone on the same robots, measured in the same run.
 
-* ``penalty_env_steps_per_s``: ``penalty_v0`` (2 players), random joint actions, resets
+* ``penalty_env_steps_per_s``: ``penalty_v1`` (2 players), random joint actions, resets
   included (one step = one cycle, both agents act);
 * ``game_2v2_steps_per_s``: ``game_v1`` 2 against 2, random joint actions;
 * ``game_2v2_skill_steps_per_s``: agent decisions per second, 2 against 2 with skill actions
@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from robocup_gym.soccer import game_v1, penalty_v0
+from robocup_gym.soccer import game_v1, penalty_v1
 
 MIXED = (0, 1, 2, 3, 4, 0, 1, 2, 3, 4, 0)
 
@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
     n = 200 if args.quick else 1000
     out: dict = {"engine": args.engine, "quick": args.quick}
-    with penalty_v0.parallel_env(engine=args.engine) as env:
+    with penalty_v1.parallel_env(engine=args.engine) as env:
         out["penalty_env_steps_per_s"] = round(_steps_per_s(env, n), 1)
     with game_v1.parallel_env(engine=args.engine, left_types=(0, 1), right_types=(0, 1)) as env:
         out["game_2v2_steps_per_s"] = round(_steps_per_s(env, n), 1)

@@ -120,6 +120,14 @@ def other(side: str) -> str:
     return "right" if side == "left" else "left"
 
 
+def restart_side(play_mode: str) -> str | None:
+    """The team that restarts play in ``play_mode`` (a kick-off or set piece: ``"left"`` or
+    ``"right"``; the other team keeps its distance), else ``None``."""
+    if play_mode in ("KickOff_Left", "KickOff_Right"):
+        return "left" if play_mode == "KickOff_Left" else "right"
+    return _SET_PIECES.get(play_mode)
+
+
 class InitError(Exception):
     """An ``init`` that the server rejects (the message says why)."""
 

@@ -1,5 +1,5 @@
-"""RoboCup 3D soccer as a PettingZoo Parallel environment; the scenarios (:mod:`.penalty_v0`,
-:mod:`.keepaway_v0`, :mod:`.game_v1`) say only where an episode starts, when it ends and what
+"""RoboCup 3D soccer as a PettingZoo Parallel environment; the scenarios (:mod:`.penalty_v1`,
+:mod:`.keepaway_v1`, :mod:`.game_v1`) say only where an episode starts, when it ends and what
 they reward beyond goals.
 
 Agents are named by team and uniform number (``left_1`` … ``right_11``). Every agent acts every
@@ -41,6 +41,10 @@ option                default  meaning
                                on rcssserver3d (``game_v0``: False, its referee waited for the
                                drop ball after 15 s)
 ``actions``           joints   ``"joints"`` or ``"skills"`` (:mod:`robocup_gym.soccer.skills`)
+``walk_faces_x``      True     skill actions: the walk sees its player as if it faced +x, as
+                               it was trained (its observation of the torso's orientation is
+                               in the world frame); the scenarios' v0 versions: False, their
+                               walk went askew and hardly turned facing −x
 ``skill_cycles``      10       cycles per step with skill actions
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
 ``ball_progress``     0.0      per metre the ball moves toward the opponent goal
@@ -103,6 +107,7 @@ class SoccerConfig:
     contact_fouls: bool = False
     first_touch_plays_on: bool = True
     actions: str = "joints"
+    walk_faces_x: bool = True
     skill_cycles: int = 10
     reward_goal: float = 1.0
     ball_progress: float = 0.0
@@ -128,7 +133,7 @@ class SoccerConfig:
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
         Rules.of(self.rules)  # an unknown rule or a value that is not a bool: a clear error
-        for name in ("self_collisions", "contact_fouls", "first_touch_plays_on"):
+        for name in ("self_collisions", "contact_fouls", "first_touch_plays_on", "walk_faces_x"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.actions not in ("joints", "skills"):
@@ -228,7 +233,11 @@ class SoccerParallelEnv(ParallelEnv):
                 stop_margin_deg=0.5 if c.action_mode == "target_angle" else 0.0,
             )
         self.skills = (
-            SkillSet(self.game.robot_types, self_collisions=c.self_collisions)
+            SkillSet(
+                self.game.robot_types,
+                self_collisions=c.self_collisions,
+                walk_faces_x=c.walk_faces_x,
+            )
             if c.actions == "skills"
             else None
         )
@@ -422,6 +431,14 @@ class SoccerParallelEnv(ParallelEnv):
             positions={a: world.torso_position(game.index(a))[:2].copy() for a in agents},
             headings={a: heading_frame(world.torso_quat(game.index(a))) for a in agents},
             keepers=self.goalkeepers() & set(agents),
+            play_mode=game.referee.play_mode,
+            opponents=np.array(
+                [
+                    world.torso_position(game.index(o))[:2]
+                    for o in self.possible_agents
+                    if self.side_of(o) != self.side_of(agents[0])
+                ]
+            ).reshape(-1, 2),
         )
 
     def side_of(self, agent: str) -> str:

@@ -1,12 +1,12 @@
 """The game: N against N (1–11 a side, mixed robot types) on the full field with the automatic
 referee (kick-off, goals, ball out with kick-in, corner and goal kick, half time).
 
-Both teams stand in their kick-off formation (:mod:`robocup_gym.soccer.formation`) and the left
-team kicks off. The episode ends at game over (600 s of game time) or, truncated, after
-``max_cycles`` (3,000 = 60 s by default; 30,000 for a whole game). Goals pay ``reward_goal``
-(team-shared, zero-sum); ``ball_progress`` and ``possession`` are the optional shaping terms of
-:mod:`robocup_gym.soccer.env`. 11 against 11 with types mixed as the league allows is the real
-game.
+Both teams stand in their kick-off formation (:mod:`robocup_gym.soccer.formation`; the right
+team's player 2 outside the centre circle) and the left team kicks off. The episode ends at game
+over (600 s of game time) or, truncated, after ``max_cycles`` (3,000 = 60 s by default; 30,000
+for a whole game). Goals pay ``reward_goal`` (team-shared, zero-sum); ``ball_progress`` and
+``possession`` are the optional shaping terms of :mod:`robocup_gym.soccer.env`. 11 against 11
+with types mixed as the league allows is the real game.
 
 ``env(**options)`` is the AEC form, ``parallel_env(**options)`` the Parallel one; options are
 those of :class:`robocup_gym.soccer.env.SoccerConfig`.
@@ -14,7 +14,9 @@ those of :class:`robocup_gym.soccer.env.SoccerConfig`.
 Version history:
 
 * v1: a kick-off, kick-in, corner, goal or free kick ends at the first touch of the ball (after
-  a set piece's 1 s pause), as on rcssserver3d.
+  a set piece's 1 s pause), as on rcssserver3d; with skill actions the walk sees each player as
+  if it faced +x (a player facing −x walked askew, hardly turned clockwise and fell walking
+  sideways).
 * v0: the referee ended them only with the drop ball after 15 s.
 """
 
@@ -40,7 +42,7 @@ class GameEnv(SoccerParallelEnv):
         c = self.config
         players = {}
         for side, types in (("left", c.left_types), ("right", c.right_types)):
-            for k, pos in enumerate(kickoff_positions(side, len(types))):
+            for k, pos in enumerate(kickoff_positions(side, len(types), side == "left")):
                 players[f"{side}_{k + 1}"] = pos
         return Start(players=players, ball=(0.0, 0.0), play_mode="KickOff_Left")
 

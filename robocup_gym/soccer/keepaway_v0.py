@@ -26,7 +26,9 @@ __all__ = ["KeepawayEnv", "env", "parallel_env", "raw_env"]
 
 class KeepawayEnv(SoccerParallelEnv):
     metadata: ClassVar[dict] = {**SoccerParallelEnv.metadata, "name": "robocup_keepaway_v0"}
-    default_config = replace(SoccerConfig(), left_types=(0, 0), right_types=(0,), max_cycles=1500)
+    default_config = replace(
+        SoccerConfig(), left_types=(0, 0), right_types=(0,), max_cycles=1500, walk_faces_x=False
+    )
 
     def __init__(
         self,

@@ -1,7 +1,7 @@
 """The soccer scenarios on the league's current simulator: RCSSServerMJ's own game (``rcsssmj``:
 the Booster T1 or K1, its field, its referee and rules) in-process, stepped exactly as
 ``rcssservermj`` steps it (:class:`~robocup_gym.sim.engines.rcsssmj.LeagueWorld`), behind the same
-PettingZoo API as the Nao's scenarios. ``penalty_v0.parallel_env(robot="T1")`` and
+PettingZoo API as the Nao's scenarios. ``penalty_v1.parallel_env(robot="T1")`` and
 ``game_v1.parallel_env(robot="K1", left_size=2, right_size=2)`` build it; the actions are joint
 level (PD targets, as the single-agent environments' league robots take them).
 

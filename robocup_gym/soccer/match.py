@@ -2,7 +2,7 @@
 
 Each game is :mod:`robocup_gym.soccer.game_v1` with skill actions, ``players`` a side, for
 ``seconds`` of game time; the teams change sides every game (team A plays left in the first).
-With ``scenario="penalty"`` each game is a penalty (:mod:`robocup_gym.soccer.penalty_v0`):
+With ``scenario="penalty"`` each game is a penalty (:mod:`robocup_gym.soccer.penalty_v1`):
 team A's striker against team B's goalkeeper.
 The result is counted from team A's side: wins, draws, losses, goals for and against, and a 95 %
 interval of the mean goal difference per game (normal approximation, from two games on).
@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.soccer import game_v1, penalty_v0
+from robocup_gym.soccer import game_v1, penalty_v1
 from robocup_gym.soccer.scripted import TEAMS
 
 __all__ = ["GameResult", "MatchResult", "make_team", "play_match"]
@@ -120,7 +120,7 @@ def play_match(
         players: Players a side (1–11; default 2; a penalty has 1).
         seconds: Game time of each game, s (default 120; a penalty's: 10).
         scenario: ``"game"`` (:mod:`.game_v1`; the teams change sides every game) or
-            ``"penalty"`` (:mod:`.penalty_v0`: team A's striker against team B's goalkeeper
+            ``"penalty"`` (:mod:`.penalty_v1`: team A's striker against team B's goalkeeper
             in every game, which ends at a goal, when the ball leaves the field or after
             ``seconds``; the ball's spot varies by up to 0.3 m sideways).
         robot_types: Each team's robot types (default: types 0, 1, 2, 3, 4 in turn).
@@ -172,7 +172,7 @@ def play_match(
         "render_mode": None if video is None else "rgb_array",
     }
     if penalty:
-        env = penalty_v0.parallel_env(start_noise=penalty_v0.SPREAD_M, **options)
+        env = penalty_v1.parallel_env(start_noise=penalty_v1.SPREAD_M, **options)
     else:
         env = game_v1.parallel_env(**options)
     try:

@@ -30,7 +30,9 @@ SPREAD_M = 0.3
 
 class PenaltyEnv(SoccerParallelEnv):
     metadata: ClassVar[dict] = {**SoccerParallelEnv.metadata, "name": "robocup_penalty_v0"}
-    default_config = replace(SoccerConfig(), left_types=(0,), right_types=(0,), max_cycles=500)
+    default_config = replace(
+        SoccerConfig(), left_types=(0,), right_types=(0,), max_cycles=500, walk_faces_x=False
+    )
 
     def __init__(self, render_mode: str | None = None, start_noise: float = 0.0, **options: Any):
         for side in ("left_types", "right_types"):

@@ -115,8 +115,10 @@ def touching_replay(
     agent_port: int, monitor_port: int, fouls: list | None = None
 ) -> tuple[float, float]:
     """Four standing players of one team; a trainer puts the goalkeeper out of the way and
-    players 2 and 3 shoulder to shoulder (0.24 m apart), and one cycle later player 4 against
-    player 2 from the other side. Where player 4 is 0.2 s later."""
+    players 2 and 3 shoulder to shoulder (0.24 m apart), and three cycles later player 4 against
+    player 2 from the other side (later than the next cycle: a trainer's message can reach the
+    server a cycle late, and both moves in one cycle make a group that nobody joined last).
+    Where player 4 is 0.2 s later."""
 
     pair = [(1, (-10.0, 5.0)), (2, (-5.0, 0.0)), (3, (-5.0, 0.24))]
     script = [
@@ -125,10 +127,10 @@ def touching_replay(
             lambda t, n: n == 85,
             "".join(trainer_cmds.agent_move(u, "Left", (x, y, 0.4), -90.0) for u, (x, y) in pair),
         ),
-        (lambda t, n: n == 86, trainer_cmds.agent_move(4, "Left", (-5.0, -0.24, 0.4), -90.0)),
+        (lambda t, n: n == 88, trainer_cmds.agent_move(4, "Left", (-5.0, -0.24, 0.4), -90.0)),
     ]
     return replay(
-        agent_port, monitor_port, players=4, track=4, script=script, read_after=0.8, fouls=fouls
+        agent_port, monitor_port, players=4, track=4, script=script, read_after=0.84, fouls=fouls
     )
 
 

@@ -302,6 +302,8 @@ class ServerTeam:
             positions={a: gts[a].torso_pos[:2].copy() for a in agents},
             headings={a: heading_frame(gts[a].torso_quat) for a in agents},
             keepers=self.goalkeepers() & set(agents),
+            play_mode=self.players[0].last.game.play_mode,
+            opponents=np.array(list(self._opponents.values()), dtype=float).reshape(-1, 2),
         )
 
     # ------------------------------------------------------------------ observations

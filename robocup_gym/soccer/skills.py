@@ -18,14 +18,15 @@ faces, then the robot usually falls and gets up.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from robocup_gym.backends.base import Backend, EpisodeSetup
-from robocup_gym.envs.observations import up_z
+from robocup_gym.envs.observations import heading_frame, up_z
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.fidelity import load_data
 from robocup_gym.types import AgentCommand, Perception
@@ -41,6 +42,7 @@ __all__ = [
     "PlayerSkills",
     "SkillSet",
     "checked_action",
+    "facing_x",
 ]
 
 MAX_FORWARD_MPS = 0.8
@@ -112,17 +114,53 @@ KICK_CYCLES = 25 + KICK_FOLLOW_THROUGH_CYCLES
 """Cycles of the scripted kick: its 25 cycles of motion and the follow-through."""
 
 
+def facing_x(p: Perception) -> Perception:
+    """``p`` with its ground truth turned about the vertical through the world's origin so that
+    the robot faces +x: what a task trained from starts facing +x sees whichever way the player
+    faces. Its pitch, roll, turn rate and velocities in its own frame are unchanged."""
+    gt = p.ground_truth
+    if gt is None:
+        return p
+    c, s = heading_frame(gt.torso_quat)
+    half = 0.5 * math.atan2(s, c)
+    w0, z0 = math.cos(half), -math.sin(half)  # a turn by -heading about z
+    w, x, y, z = (float(v) for v in gt.torso_quat)
+    quat = np.array([w0 * w - z0 * z, w0 * x - z0 * y, w0 * y + z0 * x, w0 * z + z0 * w])
+
+    def turned(v: np.ndarray | None) -> np.ndarray | None:
+        if v is None:
+            return None
+        out = np.array(v, dtype=float, copy=True)
+        out[0], out[1] = c * v[0] + s * v[1], -s * v[0] + c * v[1]
+        return out
+
+    return replace(
+        p,
+        ground_truth=replace(
+            gt,
+            ball_pos=turned(gt.ball_pos),
+            ball_vel=turned(gt.ball_vel),
+            torso_pos=turned(gt.torso_pos),
+            torso_quat=quat,
+            torso_vel=turned(gt.torso_vel),
+            torso_ang_vel=turned(gt.torso_ang_vel),
+        ),
+    )
+
+
 class PlayerBackend(Backend):
     """A backend over one player of a running game (in-process, or a player connected to a
     server): the world is moved and stepped by the game, never by the task on top.
     :meth:`reset_episode` starts an episode where the player is (the perception given to
-    :meth:`see`), counting a start's settle cycles as run."""
+    :meth:`see`), counting a start's settle cycles as run. With ``turn_to_x`` the task sees the
+    player as if it faced +x (:func:`facing_x`), as its training episodes started."""
 
     name = "game-player"
 
-    def __init__(self, model: NaoModel) -> None:
+    def __init__(self, model: NaoModel, turn_to_x: bool = False) -> None:
         super().__init__(robot_type=model.robot_type.index, seed=None, vision=False)
         self._model = model
+        self.turn_to_x = turn_to_x
         self.perception: Perception | None = None
 
     @property
@@ -131,7 +169,7 @@ class PlayerBackend(Backend):
 
     def see(self, p: Perception) -> None:
         """The player's perception of the current cycle (perceived once, by the game)."""
-        self.perception = p
+        self.perception = facing_x(p) if self.turn_to_x else p
 
     def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
         if self.perception is None:
@@ -152,19 +190,30 @@ class _Skill:
 class PlayerSkills:
     """One player's walk and get-up tasks and what it is doing (``mode``: walk, kick, get-up)."""
 
-    def __init__(self, model: NaoModel, index: int, walk: Any, getup: Any) -> None:
+    def __init__(
+        self, model: NaoModel, index: int, walk: Any, getup: Any, walk_faces_x: bool = True
+    ) -> None:
         self.index = index
         self.backend = PlayerBackend(model)
-        self.walk = _Skill(walk(self.backend))
+        """The player as it is (the get-up's)."""
+        self.walk_backend = PlayerBackend(model, turn_to_x=walk_faces_x)
+        """The player as the walk sees it: its observations of the torso's orientation are in
+        the world frame, and it was trained facing +x (it walks askew facing the other way)."""
+        self.walk = _Skill(walk(self.walk_backend))
         self.getup = _Skill(getup(self.backend))
         self.mode = "walk"
         self.kick_cycle = 0
         self.failed_getups = 0
         self.command = np.zeros(3)
 
+    def see(self, p: Perception) -> None:
+        """This cycle's perception, to both skills."""
+        self.backend.see(p)
+        self.walk_backend.see(p)
+
     def start(self, p: Perception, seed: int | None) -> None:
         """A new episode: walking on the spot."""
-        self.backend.see(p)
+        self.see(p)
         self.command[:] = 0.0
         self.walk.obs, _ = self.walk.env.reset(seed=seed, options={"velocity_command": (0, 0, 0)})
         self.getup.env.reset(seed=None if seed is None else seed + 1000)
@@ -193,6 +242,9 @@ class SkillSet:
             alone, which keep clear of the rule: the shipped get-up's corrections were learnt
             over the scripts without it (from the front, with the rule, it gets up from 32 of
             64 lying poses, ``GetUp-v1``'s script alone from 62; docs/results.md).
+        walk_faces_x: The walk sees each player as if it faced +x (:func:`facing_x`): it was
+            trained facing +x and observes its torso's orientation in the world frame; facing
+            −x it walks askew, hardly turns clockwise and falls walking sideways.
     """
 
     def __init__(
@@ -201,6 +253,7 @@ class SkillSet:
         walk: str = "walk",
         getup: str = "get-up",
         self_collisions: bool = False,
+        walk_faces_x: bool = True,
     ) -> None:
         from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
 
@@ -218,7 +271,9 @@ class SkillSet:
                 ("get-up", self.getup_policy, {"self_collisions": True} if self_collisions else {}),
             ):
                 made[skill] = self._maker(pretrained_env, policy, skill, index, t, extra)
-            self.players.append(PlayerSkills(nao_model(t), index, made["walk"], made["get-up"]))
+            self.players.append(
+                PlayerSkills(nao_model(t), index, made["walk"], made["get-up"], walk_faces_x)
+            )
 
     def _maker(self, pretrained_env, policy, skill: str, index: int, robot_type: int, extra):
         def make(backend: PlayerBackend):
@@ -293,14 +348,14 @@ class SkillSet:
         up, one that is up again walks, a kick that ended walks."""
         for s in self.players:
             p = perceptions[s.index]
-            s.backend.see(p)
+            s.see(p)
             if s.mode == "kick":
                 s.kick_cycle += 1
                 if s.kick_cycle >= KICK_CYCLES:
                     self._walk_again(s)
                 continue
-            skill = s.walk if s.mode == "walk" else s.getup
-            obs, _, terminated, truncated, info = skill.env.observe_step(p)
+            skill, seen = (s.walk, s.walk_backend) if s.mode == "walk" else (s.getup, s.backend)
+            obs, _, terminated, truncated, info = skill.env.observe_step(seen.perception)
             skill.obs = obs
             if s.mode == "walk":
                 if s.fallen(p):

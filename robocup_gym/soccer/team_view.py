@@ -8,8 +8,8 @@ Scenarios by name (:data:`TEAM_SCENARIOS`):
 ===============  ===========================  ======================  =======================
 name             scenario                     the learning team       the opponent
 ===============  ===========================  ======================  =======================
-``penalty``      :mod:`.penalty_v0`           the striker (left)      the goalkeeper
-``keepaway``     :mod:`.keepaway_v0`          the two attackers       the defender
+``penalty``      :mod:`.penalty_v1`           the striker (left)      the goalkeeper
+``keepaway``     :mod:`.keepaway_v1`          the two attackers       the defender
 ``game-NvN``     :mod:`.game_v1`, N a side    left or right, drawn    the other side
                  (N = 1–11)                   at every reset
 ===============  ===========================  ======================  =======================
@@ -61,13 +61,13 @@ def team_scenario(name: str) -> tuple[type, str, dict[str, Any]]:
     Raises:
         ValueError: an unknown name (the message lists the known ones).
     """
-    from robocup_gym.soccer import game_v1, keepaway_v0, penalty_v0
+    from robocup_gym.soccer import game_v1, keepaway_v1, penalty_v1
 
     key = str(name).strip().lower().replace("_", "-")
     if key == "penalty":
-        return penalty_v0.PenaltyEnv, "left", {"start_noise": penalty_v0.SPREAD_M}
+        return penalty_v1.PenaltyEnv, "left", {"start_noise": penalty_v1.SPREAD_M}
     if key == "keepaway":
-        return keepaway_v0.KeepawayEnv, "left", {}
+        return keepaway_v1.KeepawayEnv, "left", {}
     m = _GAME.match(key)
     if m:
         left, right = int(m.group(1)), int(m.group(2))

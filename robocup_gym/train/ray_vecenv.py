@@ -90,6 +90,17 @@ FIRST_START_S = 60.0
 asked for, so only a slow start (a busy machine) keeps them, not a lack of resources."""
 
 
+def _check_actors(n_workers: int, n_blocks: int, cpus: int) -> None:
+    """Refuse more actors (``n_workers``, at most one per block) than the ``cpus`` of the Ray
+    cluster, one each."""
+    n_actors = max(1, min(n_workers, n_blocks)) if n_workers > 0 else 1
+    if n_actors > cpus:
+        raise ValueError(
+            f"{n_actors} Ray actors need {n_actors} CPUs, one each; the Ray cluster has "
+            f"{cpus} (use fewer workers, --n-workers {max(1, cpus)}, or add nodes)"
+        )
+
+
 class RayVecEnv(BlockVecEnv):
     """``n_envs`` environments in ``n_workers`` Ray actors (module docstring).
 
@@ -125,6 +136,8 @@ class RayVecEnv(BlockVecEnv):
         self.restarts = 0
         """Actors started again after one was lost."""
         self._owns_ray = False
+        if not ray.is_initialized() and not address:  # Ray on this machine: refuse at once
+            _check_actors(n_workers, len(env_fns), resolve_n_workers(1 << 30))
         if not ray.is_initialized():
             kwargs: dict[str, Any] = {
                 "include_dashboard": False,
@@ -152,13 +165,12 @@ class RayVecEnv(BlockVecEnv):
         if n_workers <= 0:
             n_workers = max(1, cpus)
         n_actors = max(1, min(n_workers, len(self._env_fns)))
-        if n_actors > cpus:
+        try:
+            _check_actors(n_actors, len(self._env_fns), cpus)
+        except ValueError:
             if self._owns_ray:
                 ray.shutdown()
-            raise ValueError(
-                f"{n_actors} Ray actors need {n_actors} CPUs, one each; the Ray cluster has "
-                f"{cpus} (use fewer workers, --n-workers {max(1, cpus)}, or add nodes)"
-            )
+            raise
         self._start_blocks(n_envs, n_actors, self._seats)
         self._actor_class = ray.remote(num_cpus=1, max_restarts=0)(_BlockActor)
         self._pending: list[tuple[str, Any, Any] | None] = [None] * len(self.blocks)

@@ -11,7 +11,7 @@ pytest.importorskip("rcsssmj", reason="the optional rcsssmj package is not insta
 
 from pettingzoo.test import parallel_api_test
 
-from robocup_gym.soccer import game_v1, keepaway_v0, penalty_v0
+from robocup_gym.soccer import game_v1, keepaway_v1, penalty_v1
 from robocup_gym.soccer.league import LeagueSoccerEnv
 
 
@@ -20,7 +20,7 @@ def _zero(env) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.parametrize(
-    ("module", "robot"), [(penalty_v0, "T1"), (game_v1, "K1")], ids=["penalty-T1", "game-K1"]
+    ("module", "robot"), [(penalty_v1, "T1"), (game_v1, "K1")], ids=["penalty-T1", "game-K1"]
 )
 def test_pettingzoo_api(module, robot):
     env = module.parallel_env(robot=robot, max_cycles=20, privileged=True)
@@ -44,7 +44,7 @@ def test_the_game_starts_from_the_left_kick_off_with_both_teams_in_their_halves(
 
 
 def test_a_goal_pays_the_scorers_and_ends_the_penalty():
-    env = penalty_v0.parallel_env(robot="T1")
+    env = penalty_v1.parallel_env(robot="T1")
     env.reset(seed=0)
     env.world.place_ball((26.0, 0.0, env.robot.ball_radius), (8.0, 0.0, 0.0))
     for _ in range(100):
@@ -80,7 +80,7 @@ def test_ball_progress_is_zero_sum_and_seeded_episodes_repeat():
 
 
 def test_bad_actions_and_options_name_the_problem():
-    env = penalty_v0.parallel_env(robot="T1")
+    env = penalty_v1.parallel_env(robot="T1")
     env.reset(seed=0)
     bad = _zero(env)
     bad["right_1"] = np.full_like(bad["right_1"], np.nan)
@@ -91,7 +91,7 @@ def test_bad_actions_and_options_name_the_problem():
     with pytest.raises(KeyError, match="no agent 'left_9'"):
         env.action_space("left_9")
     with pytest.raises(ValueError, match="keepaway needs the Nao"):
-        keepaway_v0.parallel_env(robot="T1")
+        keepaway_v1.parallel_env(robot="T1")
     with pytest.raises(TypeError, match="left_types"):
         game_v1.parallel_env(robot="T1", left_types=(0,))
     with pytest.raises(ValueError, match="0-7"):

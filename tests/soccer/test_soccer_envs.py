@@ -11,13 +11,23 @@ pytest.importorskip("pettingzoo")
 from pettingzoo.test import api_test, parallel_api_test
 
 from robocup_gym.sim import SimulationDivergedError
-from robocup_gym.soccer import SCENARIOS, game_v0, game_v1, keepaway_v0, penalty_v0
+from robocup_gym.soccer import (
+    SCENARIOS,
+    game_v0,
+    game_v1,
+    keepaway_v0,
+    keepaway_v1,
+    penalty_v0,
+    penalty_v1,
+)
 from robocup_gym.soccer.observations import observation_labels
 
 MODULES = {
+    "penalty_v1": penalty_v1,
+    "keepaway_v1": keepaway_v1,
+    "game_v1": game_v1,
     "penalty_v0": penalty_v0,
     "keepaway_v0": keepaway_v0,
-    "game_v1": game_v1,
     "game_v0": game_v0,
 }
 
@@ -77,7 +87,7 @@ def test_a_seeded_game_repeats_exactly(make):
             trace.append(np.concatenate([obs[a] for a in sorted(obs)] + [[*rew.values()]]))
         return np.concatenate(trace)
 
-    env = make(keepaway_v0, max_cycles=60)
+    env = make(keepaway_v1, max_cycles=60)
     first = run(env, 3)
     again = run(env, 3)
     other = run(env, 4)
@@ -86,7 +96,7 @@ def test_a_seeded_game_repeats_exactly(make):
 
 
 def test_bad_actions_name_the_agent_and_the_problem(make):
-    env = make(penalty_v0)
+    env = make(penalty_v1)
     env.reset(seed=0)
     acts = _zero(env)
     acts["right_1"] = np.full(22, np.nan)
@@ -107,17 +117,17 @@ def test_bad_actions_name_the_agent_and_the_problem(make):
 
 def test_unknown_options_and_bad_values_are_refused():
     with pytest.raises(TypeError, match=r"unknown soccer option.*nosuch"):
-        penalty_v0.parallel_env(nosuch=1)
+        penalty_v1.parallel_env(nosuch=1)
     with pytest.raises(ValueError, match="9 is not a Nao type"):
         game_v1.parallel_env(left_types=(0, 9))
     with pytest.raises(ValueError, match="one player a side"):
-        penalty_v0.parallel_env(left_types=(0, 0))
+        penalty_v1.parallel_env(left_types=(0, 0))
     with pytest.raises(ValueError, match="action_mode"):
-        keepaway_v0.parallel_env(action_mode="torque")
+        keepaway_v1.parallel_env(action_mode="torque")
 
 
 def test_a_penalty_goal_ends_the_episode_and_pays_the_striker(make):
-    env = make(penalty_v0)
+    env = make(penalty_v1)
     env.reset(seed=0)
     # the ball rolls into the goal past the keeper
     env.game.host.set_ball((14.5, 0.8, 0.041), (3.0, 0.0, 0.0))
@@ -137,7 +147,7 @@ def test_a_penalty_goal_ends_the_episode_and_pays_the_striker(make):
 
 
 def test_a_penalty_ball_out_ends_without_reward(make):
-    env = make(penalty_v0)
+    env = make(penalty_v1)
     env.reset(seed=0)
     env.game.referee.last_touch = env.game.players[0]  # the striker kicked it wide
     env.game.host.set_ball((14.0, 3.0, 0.041), (3.0, 0.0, 0.0))
@@ -150,7 +160,7 @@ def test_a_penalty_ball_out_ends_without_reward(make):
 
 
 def test_keepaway_pays_every_cycle_held_and_ends_when_the_defender_wins_the_ball(make):
-    env = make(keepaway_v0)
+    env = make(keepaway_v1)
     env.reset(seed=0)
     _, rew, *_ = env.step(_zero(env))
     assert rew["left_1"] == rew["left_2"] == pytest.approx(0.01)
@@ -185,7 +195,7 @@ def test_the_game_rewards_goals_zero_sum_and_runs_the_kickoff(make):
 
 
 def test_a_diverged_simulation_ends_the_episode_truncated_for_everyone(make, monkeypatch):
-    env = make(penalty_v0)
+    env = make(penalty_v1)
     env.reset(seed=0)
     world = env.game.world
 
@@ -303,7 +313,7 @@ def test_single_rules_can_be_switched_off(make):
         *_, info = env.step(_zero(env))
     assert info["left_1"]["play_mode"] == "KickIn_Right"
     # without goals a ball in the goal scores nothing
-    env = make(penalty_v0, rules={"goals": False}, max_cycles=60)
+    env = make(penalty_v1, rules={"goals": False}, max_cycles=60)
     env.reset(seed=0)
     env.game.host.set_ball((14.5, 0.8, 0.041), (3.0, 0.0, 0.0))
     rewards = []

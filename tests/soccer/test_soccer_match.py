@@ -14,7 +14,7 @@ pytest.importorskip("pettingzoo")
 from robocup_gym.sim.engines.ode import available
 from robocup_gym.soccer import game_v1
 from robocup_gym.soccer.match import GameResult, MatchResult, make_team, play_match
-from robocup_gym.soccer.scripted import ScriptedTeam
+from robocup_gym.soccer.scripted import ScriptedTeam, TeamView
 
 
 def test_a_match_result_counts_from_the_first_teams_side():
@@ -46,24 +46,87 @@ def test_unknown_teams_and_set_ups_are_refused():
         play_match("scripted", "standing", players=2, robot_types=[0])
 
 
-@pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")
-def test_the_scripted_striker_takes_the_ball_toward_the_goal_and_kicks():
-    """The scripted team's chaser walks round to the ball, lines up with the goal and kicks."""
-    env = game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=3000)
+def _chaser_alone(robot_type: int, ball: tuple[float, float], cycles: int):
+    """The scripted team's one player, Nao type ``robot_type``, in play on an empty field: 1 m in
+    front of the ball (toward the opponent goal) and 2 m to its right, facing away from the goal.
+    Plays until a goal or ``cycles``; returns the ball's largest x, the player's skill modes
+    and the left team's score."""
+    env = game_v1.parallel_env(
+        actions="skills", left_types=(robot_type,), right_types=(), max_cycles=3000
+    )
     env.reset(seed=0)
     env.game.referee.set_play_mode("PlayOn")
-    env.game.host.set_ball((5.0, 1.0, 0.041), (0.0, 0.0, 0.0))
+    env.game.host.set_ball((ball[0], ball[1], 0.041), (0.0, 0.0, 0.0))
     w = env.game.world
-    w.place_robot(0, 6.0, -1.0, heading_deg=180.0)  # in front of the ball, facing away from goal
+    w.place_robot(0, ball[0] + 1.0, ball[1] - 2.0, heading_deg=180.0)
     team = ScriptedTeam()
-    modes = []
-    for _ in range(300):  # 60 s
+    modes, furthest = [], ball[0]
+    for _ in range(cycles // env.config.skill_cycles):
         env.step(team(env, list(env.agents)))
         modes.append(env.skills.modes()[0])
+        furthest = max(furthest, float(w.ball_position()[0]))
+        if w.game.score_left:
+            break
+    score = w.game.score_left
     env.close()
-    assert "kick" in modes
-    ball = w.ball_position()
-    assert ball[0] > 6.5 or w.game.score_left == 1, ball
+    return furthest, modes, score
+
+
+@pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")
+def test_the_scripted_chaser_rounds_the_ball_and_dribbles_it_toward_the_goal():
+    """From in front of the ball, facing away from the goal, the chaser walks round the ball,
+    lines up and walks it forward without falling: 45 s take it 3 m on."""
+    furthest, modes, _ = _chaser_alone(0, (0.0, 1.0), cycles=2250)
+    assert "get-up" not in modes
+    assert furthest > 3.0
+
+
+@pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")
+def test_the_scripted_chaser_takes_the_ball_into_the_goal():
+    """3.6 m from the goal, facing away from it: a type 1 chaser, whose walk falls more often,
+    gets the ball into the goal within 60 s."""
+    _, _, score = _chaser_alone(1, (11.5, 1.0), cycles=3000)
+    assert score == 1
+
+
+def test_the_scripted_chaser_kicks_a_ball_before_its_right_foot_in_shooting_range():
+    """The kick decision: behind the ball, facing the goal, the ball 12 cm ahead and 6 cm to
+    the right: within 4 m of the goal it kicks; farther it walks on (dribbles)."""
+    team = ScriptedTeam()
+    for ball_x, kicks in ((12.0, True), (5.0, False)):
+        ball = np.array([ball_x, 0.0])
+        goal = np.array([15.0, 0.0])
+        pos = ball - np.array([0.12, -0.06])
+        act = team._chase(
+            "left_1", pos, (1.0, 0.0), ball, goal, np.array([1.0, 0.0]), np.zeros((0, 2))
+        )
+        assert bool(act[3] > 0.5) is kicks, (ball_x, act)
+        assert act[0] > 0  # walking on toward the goal
+
+
+def test_the_scripted_chaser_waits_outside_the_circle_at_the_other_team_s_kick_off():
+    """In play the chaser 1 m in front of the ball, facing it, walks to it; at the other team's
+    kick-off it does not: it heads for a spot 2.5 m from the ball on its own goal's side
+    (behind it: it turns)."""
+
+    class _Game:
+        play_mode = "PlayOn"
+
+        def team_view(self, agents):
+            return TeamView(
+                side="right",
+                ball=np.zeros(2),
+                positions={"right_1": np.array([14.0, 0.0]), "right_2": np.array([1.0, 0.0])},
+                headings={"right_1": (-1.0, 0.0), "right_2": (-1.0, 0.0)},
+                keepers={"right_1"},
+                play_mode=self.play_mode,
+            )
+
+    game, team = _Game(), ScriptedTeam()
+    assert team(game, ["right_1", "right_2"])["right_2"][0] > 0.2
+    game.play_mode = "KickOff_Left"
+    act = team(game, ["right_1", "right_2"])["right_2"]
+    assert act[0] <= 0.0 and abs(act[2]) > 0.5 and act[3] < 0
 
 
 @pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")

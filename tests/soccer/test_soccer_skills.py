@@ -13,7 +13,7 @@ from pettingzoo.test import parallel_api_test
 
 from robocup_gym.sim.engines.ode import available
 from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply, yaw_quat
-from robocup_gym.soccer import game_v1, penalty_v0
+from robocup_gym.soccer import game_v0, game_v1, penalty_v1
 from robocup_gym.soccer.skills import SKILL_ACTION_LABELS
 
 pytestmark = pytest.mark.skipif(not available(), reason="the shipped skills run on ODE")
@@ -28,7 +28,7 @@ def solo():
 
 
 def test_skill_actions_pass_the_api_test_and_name_their_values():
-    env = penalty_v0.parallel_env(actions="skills", max_cycles=200)
+    env = penalty_v1.parallel_env(actions="skills", max_cycles=200)
     assert env.action_space("left_1").shape == (len(SKILL_ACTION_LABELS),)
     parallel_api_test(env, num_cycles=30)
     env.reset(seed=0)
@@ -50,6 +50,35 @@ def test_a_player_walks_where_it_is_told(solo):
     assert abs(moved[1]) < 1.0, moved
     assert solo.skills.modes() == ["walk"]
     assert w.torso_position(0)[2] > 0.3  # still up
+
+
+@pytest.mark.parametrize("module", [game_v1, game_v0], ids=["v1", "v0"])
+def test_a_player_facing_the_other_way_walks_and_turns_as_told(module):
+    """The walk was trained facing +x and observes its torso's orientation in the world frame;
+    from ``game_v1`` on (``walk_faces_x``) it sees every player as if it faced +x. Facing −x it
+    then walks straight and turns clockwise; ``game_v0``'s walk went askew and hardly turned."""
+    from robocup_gym.envs.observations import heading_frame
+
+    env = module.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=10**5)
+    env.reset(seed=0)
+    env.game.referee.set_play_mode("PlayOn")
+    w = env.game.world
+    w.place_robot(0, 5.0, 0.0, heading_deg=180.0)
+    start = w.torso_position(0).copy()
+    for _ in range(25):  # 5 s at 0.5 m/s forward, along -x
+        env.step({"left_1": np.array([0.625, 0.0, 0.0, 0.0])})
+    moved = w.torso_position(0) - start
+    w.place_robot(0, 5.0, 0.0, heading_deg=180.0)
+    for _ in range(25):  # 5 s turning clockwise at 30 deg/s
+        env.step({"left_1": np.array([0.0, 0.0, -1.0, 0.0])})
+    c, s = heading_frame(w.torso_quat(0))
+    turned = (np.degrees(np.arctan2(s, c)) - 180.0 + 180.0) % 360.0 - 180.0
+    env.close()
+    if module is game_v1:
+        assert moved[0] < -2.4 and abs(moved[1]) < 0.5, moved
+        assert turned < -40.0, turned
+    else:
+        assert abs(moved[1]) > 0.6 or turned > -20.0, (moved, turned)
 
 
 def test_a_player_kicks_a_ball_in_front_of_its_right_foot(solo):

@@ -27,10 +27,11 @@ SMALL_PPO = {"n_steps": 64, "batch_size": 64, "n_epochs": 2}
 pytestmark = pytest.mark.timeout(600)
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def cluster():
     """A Ray cluster on this machine: a head without CPUs (the learner's side) and four nodes
-    of one CPU each; nodes die fast when removed."""
+    of one CPU each; nodes die fast when removed. The tests that take it remove nodes: each
+    starts from the nodes still alive (``live_nodes``)."""
     c = Cluster(
         initialize_head=True,
         head_node_args={
@@ -46,6 +47,12 @@ def cluster():
     finally:
         ray.shutdown()
         c.shutdown()
+
+
+def live_nodes(cluster, nodes) -> list:
+    """The nodes of ``nodes`` still in ``cluster``."""
+    alive = {n["NodeID"] for n in ray.nodes() if n["Alive"]}
+    return [n for n in nodes if n.node_id in alive]
 
 
 def _small_run(timesteps: int, **fields) -> TrainConfig:
@@ -132,6 +139,40 @@ def test_a_run_on_ray_learns_the_same_policy_as_on_local_workers(tmp_path):
         assert np.array_equal(value.numpy(), params["ray"][name].numpy()), name
 
 
+def test_ray_address_without_ray_vec_env_is_refused():
+    with pytest.raises(ValueError, match="needs vec_env='ray'"):
+        TrainConfig(ray_address="auto")
+    with pytest.raises(ValueError, match="vec_env must be one of"):
+        TrainConfig(vec_env="threads")
+
+
+def test_train_on_ray_from_the_command_line_and_resume_on_local_workers(tmp_path):
+    from .train_helpers import TINY_PPO, invoke
+
+    out = tmp_path / "runs"
+    common = ["--n-envs", 4, "--checkpoint-freq", 0, "--eval-freq", 0, "--no-progress"]
+    invoke(
+        ["train", "velocity-kick", "--ray", "--timesteps", 256, "--out", out, *common, *TINY_PPO]
+    )
+    (run,) = out.iterdir()
+    cfg = TrainConfig.load(run / "config.yaml")
+    assert cfg.vec_env == "ray" and cfg.ray_address == ""
+    assert not ray.is_initialized()
+    invoke(["train", "--resume", run, "--no-ray", "--timesteps", 512, "--no-progress"])
+    assert TrainConfig.load(run / "config.yaml").vec_env == "auto"
+    steps = [int(r.split(",")[0]) for r in (run / "progress.csv").read_text().splitlines()[1:]]
+    assert steps[-1] >= 512
+
+
+def test_more_actors_than_the_cluster_has_cpus_is_refused_at_once():
+    with pytest.raises(ValueError, match=r"64 Ray actors need 64 CPUs, one each; the Ray cluster"):
+        make_vec_env(TASK, 64, n_workers=64, kind="ray")
+    assert not ray.is_initialized()
+
+
+# the tests on the module's cluster come last: it is joined until the module ends
+
+
 class _RemoveNode(BaseCallback):
     """Removes the node of block ``worker``'s actor once ``after`` steps are done."""
 
@@ -152,6 +193,8 @@ class _RemoveNode(BaseCallback):
 
 def test_a_lost_node_s_environments_start_again_and_the_run_goes_on(cluster):
     c, nodes = cluster
+    nodes = live_nodes(c, nodes)
+    assert len(nodes) == 4  # (this test runs first: it needs two spare nodes)
     venv = make_vec_env(TASK, 4, seed=0, n_workers=2, kind="ray", ray_start_timeout_s=120)
     try:
         before = venv.actor_nodes()
@@ -188,8 +231,9 @@ def test_with_no_resources_left_the_run_saves_and_stops(cluster, tmp_path):
     from robocup_gym.train.trainer import train
 
     c, nodes = cluster
-    c.remove_node(nodes[2])  # two one-CPU nodes left, two actors: no spare
-    c.remove_node(nodes[3])
+    nodes = live_nodes(c, nodes)
+    for node in nodes[2:]:  # two one-CPU nodes left, two actors: no spare
+        c.remove_node(node)
     # the actors are placed only once Ray counts the removed nodes out (else one may be given a
     # dead node's CPU and never start)
     deadline = time.monotonic() + 60
@@ -217,34 +261,3 @@ def test_with_no_resources_left_the_run_saves_and_stops(cluster, tmp_path):
     assert "no Ray worker for environments" in message and "could start within 5 s" in message
     assert f"robocup-gym train --resume {run_dir}" in message
     assert (run_dir / "model.zip").exists()
-
-
-def test_ray_address_without_ray_vec_env_is_refused():
-    with pytest.raises(ValueError, match="needs vec_env='ray'"):
-        TrainConfig(ray_address="auto")
-    with pytest.raises(ValueError, match="vec_env must be one of"):
-        TrainConfig(vec_env="threads")
-
-
-def test_train_on_ray_from_the_command_line_and_resume_on_local_workers(tmp_path):
-    from .train_helpers import TINY_PPO, invoke
-
-    out = tmp_path / "runs"
-    common = ["--n-envs", 4, "--checkpoint-freq", 0, "--eval-freq", 0, "--no-progress"]
-    invoke(
-        ["train", "velocity-kick", "--ray", "--timesteps", 256, "--out", out, *common, *TINY_PPO]
-    )
-    (run,) = out.iterdir()
-    cfg = TrainConfig.load(run / "config.yaml")
-    assert cfg.vec_env == "ray" and cfg.ray_address == ""
-    assert not ray.is_initialized()
-    invoke(["train", "--resume", run, "--no-ray", "--timesteps", 512, "--no-progress"])
-    assert TrainConfig.load(run / "config.yaml").vec_env == "auto"
-    steps = [int(r.split(",")[0]) for r in (run / "progress.csv").read_text().splitlines()[1:]]
-    assert steps[-1] >= 512
-
-
-def test_more_actors_than_the_cluster_has_cpus_is_refused_at_once():
-    with pytest.raises(ValueError, match=r"64 Ray actors need 64 CPUs, one each; the Ray cluster"):
-        make_vec_env(TASK, 64, n_workers=64, kind="ray")
-    assert not ray.is_initialized()

@@ -100,3 +100,21 @@ def test_the_assist_is_shared_out_over_the_environments():
         assert not isinstance(env, TorsoAssist)
     finally:
         env.close()
+
+
+def test_workers_fork_from_a_server_that_imported_the_environments_once():
+    """With the fork server, the workers are forked from a server that imports torch, SB3 and
+    the tasks when it starts (each worker would spend ~1.5 s importing them)."""
+    import multiprocessing as mp
+    import multiprocessing.forkserver as fs
+
+    from robocup_gym.train.vecenv import WORKER_PRELOAD, worker_start_method
+
+    if "forkserver" not in mp.get_all_start_methods():
+        assert worker_start_method() == "spawn"
+        return
+    assert worker_start_method() == "forkserver"
+    assert fs._forkserver._preload_modules == list(WORKER_PRELOAD)
+    assert worker_start_method("spawn") == "spawn"
+    for module in WORKER_PRELOAD[1:]:  # each one importable (the server skips those that fail)
+        __import__(module)
