@@ -72,7 +72,7 @@ except ImportError as exc:  # pragma: no cover - depends on the installation
 
 from robocup_gym.envs.actions import ActionMapper, ActionMode
 from robocup_gym.envs.observations import heading_frame
-from robocup_gym.sim.referee import Rules
+from robocup_gym.sim.referee import Rules, other
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
 from robocup_gym.soccer.observations import PlayerObserver
 from robocup_gym.soccer.scripted import TeamView
@@ -425,20 +425,18 @@ class SoccerParallelEnv(ParallelEnv):
     def team_view(self, agents: list[str]) -> TeamView:
         """What a scripted team of ``agents`` (one side's) decides from, from ground truth."""
         world, game = self.game.world, self.game
+        side = self.side_of(agents[0])
+        others = teams_of(self.config)[other(side)]
         return TeamView(
-            side=self.side_of(agents[0]),
+            side=side,
             ball=world.ball_position()[:2].copy(),
             positions={a: world.torso_position(game.index(a))[:2].copy() for a in agents},
             headings={a: heading_frame(world.torso_quat(game.index(a))) for a in agents},
             keepers=self.goalkeepers() & set(agents),
             play_mode=game.referee.play_mode,
-            opponents=np.array(
-                [
-                    world.torso_position(game.index(o))[:2]
-                    for o in self.possible_agents
-                    if self.side_of(o) != self.side_of(agents[0])
-                ]
-            ).reshape(-1, 2),
+            opponents=np.array([world.torso_position(game.index(o))[:2] for o in others]).reshape(
+                -1, 2
+            ),
         )
 
     def side_of(self, agent: str) -> str:

@@ -279,17 +279,17 @@ class ScriptedTeam:
                     kick = 1.0
             return np.array([forward, side, turn, kick])
         self._dribbling.discard(agent)
-        goal = ball + _FACE_AHEAD_M * to_goal  # what to face: along the line (past an opponent)
+        face = ball + _FACE_AHEAD_M * to_goal  # along the line it dribbles (past an opponent)
         if behind < 0.15:  # beside or in front of the ball: pass it on the side it is on
             side = 1.0 if float(np.dot(pos - ball, right)) >= 0.0 else -1.0
             via = ball - _ROUND_M * to_goal + side * _ROUND_M * right
-            return _walk_to(pos, heading, via, goal)
+            return _walk_to(pos, heading, via, face)
         # the further off the line, the further behind the ball it lines up (the walk drifts
         # forward when it steps sideways: lined up close, it would walk into the ball askew)
         # (but never further back than it is: it steps onto the line, not back and forth)
         back = min(_APPROACH_M + _APPROACH_PER_OFF * abs(off_line), _APPROACH_MAX_M)
         back = max(min(back, behind - KICK_SPOT_BEHIND_M), _APPROACH_M)
-        return _walk_to(pos, heading, spot - back * to_goal, goal)
+        return _walk_to(pos, heading, spot - back * to_goal, face)
 
 
 TEAMS = {"scripted": ScriptedTeam, "standing": StandingTeam}

@@ -26,9 +26,10 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.backends.base import Backend, EpisodeSetup
-from robocup_gym.envs.observations import heading_frame, up_z
+from robocup_gym.envs.observations import heading_frame, in_heading_frame, up_z
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.fidelity import load_data
+from robocup_gym.sim.rotations import quat_multiply, yaw_quat
 from robocup_gym.types import AgentCommand, Perception
 
 __all__ = [
@@ -121,17 +122,13 @@ def facing_x(p: Perception) -> Perception:
     gt = p.ground_truth
     if gt is None:
         return p
-    c, s = heading_frame(gt.torso_quat)
-    half = 0.5 * math.atan2(s, c)
-    w0, z0 = math.cos(half), -math.sin(half)  # a turn by -heading about z
-    w, x, y, z = (float(v) for v in gt.torso_quat)
-    quat = np.array([w0 * w - z0 * z, w0 * x - z0 * y, w0 * y + z0 * x, w0 * z + z0 * w])
+    heading = heading_frame(gt.torso_quat)
 
     def turned(v: np.ndarray | None) -> np.ndarray | None:
         if v is None:
             return None
         out = np.array(v, dtype=float, copy=True)
-        out[0], out[1] = c * v[0] + s * v[1], -s * v[0] + c * v[1]
+        out[0], out[1] = in_heading_frame(heading, v[0], v[1])
         return out
 
     return replace(
@@ -141,7 +138,7 @@ def facing_x(p: Perception) -> Perception:
             ball_pos=turned(gt.ball_pos),
             ball_vel=turned(gt.ball_vel),
             torso_pos=turned(gt.torso_pos),
-            torso_quat=quat,
+            torso_quat=quat_multiply(yaw_quat(-math.atan2(heading[1], heading[0])), gt.torso_quat),
             torso_vel=turned(gt.torso_vel),
             torso_ang_vel=turned(gt.torso_ang_vel),
         ),
@@ -161,7 +158,8 @@ class PlayerBackend(Backend):
         super().__init__(robot_type=model.robot_type.index, seed=None, vision=False)
         self._model = model
         self.turn_to_x = turn_to_x
-        self.perception: Perception | None = None
+        self._seen: Perception | None = None
+        self._perception: Perception | None = None
 
     @property
     def robot_model(self) -> NaoModel:
@@ -169,7 +167,15 @@ class PlayerBackend(Backend):
 
     def see(self, p: Perception) -> None:
         """The player's perception of the current cycle (perceived once, by the game)."""
-        self.perception = facing_x(p) if self.turn_to_x else p
+        self._seen, self._perception = p, None
+
+    @property
+    def perception(self) -> Perception | None:
+        """The current cycle's perception as the task sees it (turned when first asked for:
+        a player in another skill does not need it)."""
+        if self._perception is None and self._seen is not None:
+            self._perception = facing_x(self._seen) if self.turn_to_x else self._seen
+        return self._perception
 
     def _place(self, start: EpisodeSetup) -> tuple[Perception, int]:
         if self.perception is None:

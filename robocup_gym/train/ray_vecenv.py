@@ -90,15 +90,19 @@ FIRST_START_S = 60.0
 asked for, so only a slow start (a busy machine) keeps them, not a lack of resources."""
 
 
-def _check_actors(n_workers: int, n_blocks: int, cpus: int) -> None:
-    """Refuse more actors (``n_workers``, at most one per block) than the ``cpus`` of the Ray
-    cluster, one each."""
-    n_actors = max(1, min(n_workers, n_blocks)) if n_workers > 0 else 1
+def _n_actors(n_workers: int, n_blocks: int, cpus: int) -> int:
+    """The actors for ``n_workers`` (0: one per CPU of the cluster), at most one per block.
+
+    Raises:
+        ValueError: more actors than the ``cpus`` of the Ray cluster, one each.
+    """
+    n_actors = max(1, min(n_workers if n_workers > 0 else cpus, n_blocks))
     if n_actors > cpus:
         raise ValueError(
             f"{n_actors} Ray actors need {n_actors} CPUs, one each; the Ray cluster has "
             f"{cpus} (use fewer workers, --n-workers {max(1, cpus)}, or add nodes)"
         )
+    return n_actors
 
 
 class RayVecEnv(BlockVecEnv):
@@ -136,8 +140,9 @@ class RayVecEnv(BlockVecEnv):
         self.restarts = 0
         """Actors started again after one was lost."""
         self._owns_ray = False
+        here = resolve_n_workers(1 << 30)  # every core of this machine
         if not ray.is_initialized() and not address:  # Ray on this machine: refuse at once
-            _check_actors(n_workers, len(env_fns), resolve_n_workers(1 << 30))
+            _n_actors(n_workers, len(env_fns), here)
         if not ray.is_initialized():
             kwargs: dict[str, Any] = {
                 "include_dashboard": False,
@@ -147,7 +152,7 @@ class RayVecEnv(BlockVecEnv):
             if address:
                 kwargs["address"] = address
             else:
-                kwargs["num_cpus"] = resolve_n_workers(1 << 30)  # every core here
+                kwargs["num_cpus"] = here
             try:
                 ray.init(**kwargs)
             except ConnectionError as e:
@@ -162,11 +167,8 @@ class RayVecEnv(BlockVecEnv):
         self._last_obs: np.ndarray | None = None
         n_envs = len(self._env_fns) * self._seats
         cpus = int(ray.cluster_resources().get("CPU", 0))
-        if n_workers <= 0:
-            n_workers = max(1, cpus)
-        n_actors = max(1, min(n_workers, len(self._env_fns)))
         try:
-            _check_actors(n_actors, len(self._env_fns), cpus)
+            n_actors = _n_actors(n_workers, len(self._env_fns), cpus)
         except ValueError:
             if self._owns_ray:
                 ray.shutdown()

@@ -57,7 +57,7 @@ def test_a_player_facing_the_other_way_walks_and_turns_as_told(module):
     """The walk was trained facing +x and observes its torso's orientation in the world frame;
     from ``game_v1`` on (``walk_faces_x``) it sees every player as if it faced +x. Facing −x it
     then walks straight and turns clockwise; ``game_v0``'s walk went askew and hardly turned."""
-    from robocup_gym.envs.observations import heading_frame
+    from robocup_gym.envs.observations import heading_frame, turn_to_deg
 
     env = module.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=10**5)
     env.reset(seed=0)
@@ -71,8 +71,7 @@ def test_a_player_facing_the_other_way_walks_and_turns_as_told(module):
     w.place_robot(0, 5.0, 0.0, heading_deg=180.0)
     for _ in range(25):  # 5 s turning clockwise at 30 deg/s
         env.step({"left_1": np.array([0.0, 0.0, -1.0, 0.0])})
-    c, s = heading_frame(w.torso_quat(0))
-    turned = (np.degrees(np.arctan2(s, c)) - 180.0 + 180.0) % 360.0 - 180.0
+    turned = -turn_to_deg(heading_frame(w.torso_quat(0)), np.pi)  # from facing -x, deg
     env.close()
     if module is game_v1:
         assert moved[0] < -2.4 and abs(moved[1]) < 0.5, moved

@@ -49,8 +49,8 @@ def cluster():
         c.shutdown()
 
 
-def live_nodes(cluster, nodes) -> list:
-    """The nodes of ``nodes`` still in ``cluster``."""
+def live_nodes(nodes) -> list:
+    """The nodes of ``nodes`` still alive in the joined cluster."""
     alive = {n["NodeID"] for n in ray.nodes() if n["Alive"]}
     return [n for n in nodes if n.node_id in alive]
 
@@ -193,7 +193,7 @@ class _RemoveNode(BaseCallback):
 
 def test_a_lost_node_s_environments_start_again_and_the_run_goes_on(cluster):
     c, nodes = cluster
-    nodes = live_nodes(c, nodes)
+    nodes = live_nodes(nodes)
     assert len(nodes) == 4  # (this test runs first: it needs two spare nodes)
     venv = make_vec_env(TASK, 4, seed=0, n_workers=2, kind="ray", ray_start_timeout_s=120)
     try:
@@ -231,7 +231,7 @@ def test_with_no_resources_left_the_run_saves_and_stops(cluster, tmp_path):
     from robocup_gym.train.trainer import train
 
     c, nodes = cluster
-    nodes = live_nodes(c, nodes)
+    nodes = live_nodes(nodes)
     for node in nodes[2:]:  # two one-CPU nodes left, two actors: no spare
         c.remove_node(node)
     # the actors are placed only once Ray counts the removed nodes out (else one may be given a
