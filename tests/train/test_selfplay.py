@@ -354,14 +354,14 @@ def test_the_team_games_benchmark_reports_every_size(run_benchmark):
 def test_the_shipped_striker_scores_more_penalties_than_the_scripted_one():
     """``penalty-striker`` (trained with ``robocup-gym train penalty``) against the scripted
     goalkeeper on the 20 seeded penalties the shipped figure is measured on, and the scripted
-    striker on the first 10 of them (it scores none of the 20)."""
+    striker on the first 5 of them (it scores none of the 20)."""
     from robocup_gym.train.pretrained import pretrained_names
 
     assert "penalty-striker" in pretrained_names()
     learnt = play_match(
         "pretrained:penalty-striker", "scripted", scenario="penalty", games=20
     ).summary
-    scripted = play_match("scripted", "scripted", scenario="penalty", games=10).summary
-    assert learnt["games"] == 20 and scripted["games"] == 10
+    scripted = play_match("scripted", "scripted", scenario="penalty", games=5).summary
+    assert learnt["games"] == 20 and scripted["games"] == 5
     assert learnt["goals_for"] >= 2 > scripted["goals_for"]
     assert learnt["goals_against"] == 0  # a penalty: the keeper cannot score

@@ -81,64 +81,6 @@ def _rollout(venv, steps: int, seed: int = 3):
     return out
 
 
-def test_ray_actors_step_what_local_workers_step():
-    local = make_vec_env(TASK, 4, seed=5, n_workers=2)
-    try:
-        expected = _rollout(local, 40)
-        local_frame_size = local.get_attr("frame_size", indices=[0])
-    finally:
-        local.close()
-    remote = make_vec_env(TASK, 4, seed=5, n_workers=2, kind="ray")
-    try:
-        assert isinstance(remote, RayVecEnv) and len(remote.blocks) == 2
-        got = _rollout(remote, 40)
-        assert remote.get_attr("frame_size") == local_frame_size * 4
-        assert remote.env_method("get_wrapper_attr", "league", indices=[3]) == [False]
-    finally:
-        remote.close()
-    assert not ray.is_initialized()  # the embedded Ray ends with the environments
-    assert len(got) == len(expected)
-    for a, b in zip(got, expected, strict=True):
-        np.testing.assert_array_equal(a, b)
-
-
-def test_team_games_on_ray_actors_play_what_local_workers_play():
-    """Each actor hosts whole games (the players of a game are consecutive environments)."""
-    pytest.importorskip("pettingzoo")
-    from robocup_gym.sim.engines.ode import available
-    from robocup_gym.train.selfplay import make_team_vec_env
-
-    if not available():
-        pytest.skip("the shipped skills run on ODE")
-    runs = {}
-    for kind in ("subproc", "ray"):
-        venv = make_team_vec_env(
-            "game-2v2", 3, options={"max_cycles": 60}, seed=2, kind=kind, n_workers=2
-        )
-        try:
-            assert venv.num_envs == 6 and [len(b) for b in venv.blocks] == [4, 2]
-            runs[kind] = _rollout(venv, 8)  # past the end of a game: its reset too
-        finally:
-            venv.close()
-    for a, b in zip(runs["ray"], runs["subproc"], strict=True):
-        np.testing.assert_array_equal(a, b)
-    assert not ray.is_initialized()
-
-
-def test_a_run_on_ray_learns_the_same_policy_as_on_local_workers(tmp_path):
-    from stable_baselines3 import PPO
-
-    from robocup_gym.train.trainer import train
-
-    params = {}
-    for vec in ("subproc", "ray"):
-        result = train(_small_run(512, vec_env=vec), out=tmp_path / vec, progress=False)
-        assert result.timesteps == 512
-        params[vec] = PPO.load(result.run_dir / "model.zip").policy.state_dict()
-    for name, value in params["subproc"].items():
-        assert np.array_equal(value.numpy(), params["ray"][name].numpy()), name
-
-
 def test_ray_address_without_ray_vec_env_is_refused():
     with pytest.raises(ValueError, match="needs vec_env='ray'"):
         TrainConfig(ray_address="auto")
@@ -170,7 +112,64 @@ def test_more_actors_than_the_cluster_has_cpus_is_refused_at_once():
     assert not ray.is_initialized()
 
 
-# the tests on the module's cluster come last: it is joined until the module ends
+# the tests on the module's cluster come last: it is joined until the module ends (the ones that
+# remove nodes after the ones that need them all)
+
+
+def test_ray_actors_step_what_local_workers_step(cluster):
+    local = make_vec_env(TASK, 4, seed=5, n_workers=2)
+    try:
+        expected = _rollout(local, 40)
+        local_frame_size = local.get_attr("frame_size", indices=[0])
+    finally:
+        local.close()
+    remote = make_vec_env(TASK, 4, seed=5, n_workers=2, kind="ray")
+    try:
+        assert isinstance(remote, RayVecEnv) and len(remote.blocks) == 2
+        got = _rollout(remote, 40)
+        assert remote.get_attr("frame_size") == local_frame_size * 4
+        assert remote.env_method("get_wrapper_attr", "league", indices=[3]) == [False]
+    finally:
+        remote.close()
+    assert len(got) == len(expected)
+    for a, b in zip(got, expected, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_team_games_on_ray_actors_play_what_local_workers_play(cluster):
+    """Each actor hosts whole games (the players of a game are consecutive environments)."""
+    pytest.importorskip("pettingzoo")
+    from robocup_gym.sim.engines.ode import available
+    from robocup_gym.train.selfplay import make_team_vec_env
+
+    if not available():
+        pytest.skip("the shipped skills run on ODE")
+    runs = {}
+    for kind in ("subproc", "ray"):
+        venv = make_team_vec_env(
+            "game-2v2", 3, options={"max_cycles": 60}, seed=2, kind=kind, n_workers=2
+        )
+        try:
+            assert venv.num_envs == 6 and [len(b) for b in venv.blocks] == [4, 2]
+            runs[kind] = _rollout(venv, 8)  # past the end of a game: its reset too
+        finally:
+            venv.close()
+    for a, b in zip(runs["ray"], runs["subproc"], strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_run_on_ray_learns_the_same_policy_as_on_local_workers(cluster, tmp_path):
+    from stable_baselines3 import PPO
+
+    from robocup_gym.train.trainer import train
+
+    params = {}
+    for vec in ("subproc", "ray"):
+        result = train(_small_run(512, vec_env=vec), out=tmp_path / vec, progress=False)
+        assert result.timesteps == 512
+        params[vec] = PPO.load(result.run_dir / "model.zip").policy.state_dict()
+    for name, value in params["subproc"].items():
+        assert np.array_equal(value.numpy(), params["ray"][name].numpy()), name
 
 
 class _RemoveNode(BaseCallback):
@@ -194,7 +193,7 @@ class _RemoveNode(BaseCallback):
 def test_a_lost_node_s_environments_start_again_and_the_run_goes_on(cluster):
     c, nodes = cluster
     nodes = live_nodes(nodes)
-    assert len(nodes) == 4  # (this test runs first: it needs two spare nodes)
+    assert len(nodes) == 4  # (no node removed before: it needs two spare nodes)
     venv = make_vec_env(TASK, 4, seed=0, n_workers=2, kind="ray", ray_start_timeout_s=120)
     try:
         before = venv.actor_nodes()
