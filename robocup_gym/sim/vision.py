@@ -231,17 +231,22 @@ def see(
         pol, used = _noisy_from(pol, z, used)
     objects = {names[i]: pol[i] for i in np.flatnonzero(vis_all[:n_obj])}
 
+    # the seen players' parts: one noise group per player, all players at once
+    ppol = pol_all[n_obj:n_pts].reshape(len(players), n_parts, 3)[seen]
+    if noise and len(seen):
+        n = n_parts * len(seen)
+        zz = z[used : used + 3 * n].reshape(len(seen), 3, n_parts) * _NOISE_SIGMA
+        zz += 0.0
+        ppol = ppol.copy()
+        ppol[:, :, 0] += zz[:, 0] * ppol[:, :, 0] / 100.0
+        ppol[:, :, 1] += zz[:, 1]
+        ppol[:, :, 2] += zz[:, 2]
+        used += 3 * n
     seen_players: list[SeenPlayer] = []
-    for j in seen:
+    for j, parts, shown in zip(seen.tolist(), ppol, pvis_all[seen].tolist(), strict=True):
         team, unum, _ = players[j]
-        k = n_obj + n_parts * j
-        ppol = pol_all[k : k + n_parts]
-        if noise:
-            ppol, used = _noisy_from(ppol, z, used)
-        pvis = pvis_all[j]
-        seen_players.append(
-            SeenPlayer(team, unum, {PLAYER_PARTS[i]: ppol[i] for i in np.flatnonzero(pvis)})
-        )
+        visible = {name: parts[i] for i, name in enumerate(PLAYER_PARTS) if shown[i]}
+        seen_players.append(SeenPlayer(team, unum, visible))
 
     lines = np.zeros((0, 2, 3))
     if n_lines:
