@@ -774,17 +774,29 @@ if typer is not None:
                 "following the ball (headless: MUJOCO_GL=egl)."
             ),
         ] = None,
+        on: Annotated[
+            str,
+            typer.Option(
+                help="in-process, serve (a fresh robocup-gym serve each game) or rcssserver3d "
+                "(a real one: RCSSSERVER3D or PATH); on a server each player is its own "
+                "connection acting on its own perceptors."
+            ),
+        ] = "in-process",
     ) -> None:
-        """Play two teams against each other in-process (multi-agent soccer with skill
-        actions); a table, then one JSON object from the first team's side."""
+        """Play two teams against each other, in-process (multi-agent soccer with skill
+        actions) or on a server; a table, then one JSON object from the first team's side."""
         import json
 
         from rich.table import Table
 
         try:
-            from robocup_gym.soccer.match import play_match
+            from robocup_gym.soccer.match import SERVERS, play_match, play_server_match
         except ImportError as exc:
             _fail(str(exc))
+        if on not in ("in-process", *SERVERS):
+            _fail(f"--on must be in-process, {', '.join(SERVERS)}; got {on!r}")
+        if on != "in-process" and (scenario != "game" or video is not None):
+            _fail(f"on {on} a match plays games (no --scenario penalty, no --video)")
         robot_types = _robot_types(types)
         console = _console()
 
@@ -797,20 +809,34 @@ if typer is not None:
             )
 
         try:
-            result = play_match(
-                team_a,
-                team_b,
-                games=games,
-                players=players,
-                seconds=seconds,
-                robot_types=robot_types,
-                engine=engine,
-                seed=seed,
-                on_game=progress,
-                video=video,
-                scenario=scenario,
-            )
-        except (ValueError, RuntimeError) as exc:
+            if on == "in-process":
+                result = play_match(
+                    team_a,
+                    team_b,
+                    games=games,
+                    players=players,
+                    seconds=seconds,
+                    robot_types=robot_types,
+                    engine=engine,
+                    seed=seed,
+                    on_game=progress,
+                    video=video,
+                    scenario=scenario,
+                )
+            else:
+                result = play_server_match(
+                    team_a,
+                    team_b,
+                    server=on,
+                    games=games,
+                    players=2 if players is None else players,
+                    seconds=120.0 if seconds is None else seconds,
+                    robot_types=robot_types,
+                    engine=engine,
+                    seed=seed,
+                    on_game=progress,
+                )
+        except (ValueError, RuntimeError, OSError) as exc:
             _fail(str(exc))
         summary = result.summary
         first = result.games[0]

@@ -128,6 +128,23 @@ def restart_side(play_mode: str) -> str | None:
     return _SET_PIECES.get(play_mode)
 
 
+def half_kickoff_side(half: int) -> str:
+    """The team whose kick-off starts half ``half`` (1 or 2) when a trainer's ``kickOff`` names
+    no side: the left team in the first half, the right team in the second."""
+    return "left" if half == 1 else "right"
+
+
+def next_kickoff_side(play_mode: str, game_time: float) -> str | None:
+    """The team that kicks off next, during the pauses in which players beam: after a goal the
+    team that conceded it; before a half's kick-off :func:`half_kickoff_side` (what a trainer's
+    ``kickOff`` without a side gives); else ``None``."""
+    if play_mode in ("Goal_Left", "Goal_Right"):
+        return "right" if play_mode == "Goal_Left" else "left"
+    if play_mode == "BeforeKickOff":
+        return half_kickoff_side(1 if game_time < HALF_TIME else 2)
+    return None
+
+
 class InitError(Exception):
     """An ``init`` that the server rejects (the message says why)."""
 
@@ -416,7 +433,7 @@ class Referee:
         """Trainer ``(kickOff Left|Right|None)``: ball and robots are not moved by this."""
         if team == "None":
             if self.kickoffs_this_half == 0:
-                side = "left" if self.half == 1 else "right"
+                side = half_kickoff_side(self.half)
             else:
                 side = "left" if self.rng.random() < 0.5 else "right"
         else:

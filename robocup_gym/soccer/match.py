@@ -1,4 +1,5 @@
-"""Matches between two teams, in-process: ``robocup-gym match A B --games G``.
+"""Matches between two teams: ``robocup-gym match A B --games G`` (in-process, or on a server
+with ``--on serve|rcssserver3d``).
 
 Each game is :mod:`robocup_gym.soccer.game_v1` with skill actions, ``players`` a side, for
 ``seconds`` of game time; the teams change sides every game (team A plays left in the first).
@@ -6,6 +7,11 @@ With ``scenario="penalty"`` each game is a penalty (:mod:`robocup_gym.soccer.pen
 team A's striker against team B's goalkeeper.
 The result is counted from team A's side: wins, draws, losses, goals for and against, and a 95 %
 interval of the mean goal difference per game (normal approximation, from two games on).
+
+:func:`play_server_match` plays the same games on a server, each on a fresh one: every player
+its own connection acting on its own perceptors (:class:`robocup_gym.soccer.remote.ServerTeam`),
+the server's referee, a trainer's kick-off; the team that connects first plays left (team A in
+the first game, the teams change sides every game).
 """
 
 from __future__ import annotations
@@ -22,7 +28,10 @@ import numpy as np
 from robocup_gym.soccer import game_v1, penalty_v1
 from robocup_gym.soccer.scripted import TEAMS
 
-__all__ = ["GameResult", "MatchResult", "make_team", "play_match"]
+__all__ = ["SERVERS", "GameResult", "MatchResult", "make_team", "play_match", "play_server_match"]
+
+SERVERS = ("serve", "rcssserver3d")
+"""What :func:`play_server_match` plays on: ``robocup-gym serve`` or a real rcssserver3d."""
 
 Team = Callable[[Any, list[str], dict[str, np.ndarray]], dict[str, np.ndarray]]
 """A team: ``team(env, agents, obs) → {agent: skill action}``."""
@@ -200,3 +209,147 @@ def play_match(
     finally:
         env.close()
     return result
+
+
+def play_server_match(
+    team_a: str,
+    team_b: str,
+    *,
+    server: str = "serve",
+    games: int = 20,
+    players: int = 2,
+    seconds: float = 120.0,
+    robot_types: Sequence[int] | None = None,
+    engine: str = "ode",
+    seed: int = 0,
+    binary: str | os.PathLike | None = None,
+    on_game: Callable[[int, GameResult], None] | None = None,
+) -> MatchResult:
+    """Play ``games`` games of ``team_a`` against ``team_b`` on a server, a fresh one each game.
+
+    Args:
+        server: ``"serve"`` (``robocup-gym serve`` in sync mode, real time off, on ``engine``,
+            game k's noise seeded with ``seed + k``) or ``"rcssserver3d"`` (a real one in sync
+            mode, real time off: ``binary``, else ``RCSSSERVER3D`` or ``PATH``).
+        players, seconds, robot_types: as :func:`play_match` (1–11 players, default 120 s).
+
+    Raises:
+        ValueError: an unknown server or team, or an impossible set-up.
+        RcssServerNotFoundError: ``"rcssserver3d"`` where none is installed.
+        ConnectionError: a server that stops answering mid-game (its message says which).
+    """
+    if server not in SERVERS:
+        raise ValueError(f"server must be one of {', '.join(SERVERS)}, got {server!r}")
+    if isinstance(games, bool) or not isinstance(games, int) or games < 1:
+        raise ValueError(f"games must be a positive integer, got {games!r}")
+    if not 1 <= int(players) <= 11:
+        raise ValueError(f"players must be 1-11 a side, got {players!r}")
+    seconds = float(seconds)
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise ValueError(f"seconds must be a positive duration, got {seconds!r}")
+    types = tuple(robot_types) if robot_types is not None else tuple(k % 5 for k in range(players))
+    if len(types) != players:
+        raise ValueError(f"{players} players need {players} robot types, got {types!r}")
+    teams = {}
+    for name, spec in (("A", team_a), ("B", team_b)):
+        teams[name] = make_team(spec)
+        if hasattr(teams[name], "check_fits"):
+            teams[name].check_fits("game", int(players))
+    result = MatchResult(team_a, team_b)
+    for k in range(games):
+        order = ("A", "B") if k % 2 == 0 else ("B", "A")
+        with _GameServer(server, engine, seed + k, binary) as ports:
+            played = _server_game(teams, order, ports, types, seconds)
+        a = played["A"]
+        game = GameResult(a.side, int(a.goals_for), int(a.goals_against), seconds)
+        result.games.append(game)
+        if on_game is not None:
+            on_game(k, game)
+    return result
+
+
+def _server_game(
+    teams: dict[str, Team],
+    order: tuple[str, str],
+    ports: tuple[int, int],
+    types: tuple[int, ...],
+    seconds: float,
+) -> dict[str, Any]:
+    """One game on a running server: ``teams[order[0]]`` joins first (and plays left), then
+    the other; a trainer kicks off; returns each team's :class:`TeamResult` by name."""
+    import threading
+
+    from robocup_gym.protocol import trainer as trainer_cmds
+    from robocup_gym.protocol.framing import connect, send_frame
+    from robocup_gym.soccer.remote import ServerTeam
+
+    agent_port, monitor_port = ports
+    joined: dict[str, Any] = {}
+    played: dict[str, Any] = {}
+    errors: list[BaseException] = []
+    changed = threading.Condition()
+
+    def play(name: str) -> None:
+        try:
+            with ServerTeam(
+                teams[name], port=agent_port, name=f"Team{name}", players=len(types),
+                robot_types=types, timeout=60.0,
+            ) as team:  # fmt: skip
+                with changed:
+                    joined[name] = team
+                    changed.notify_all()
+                played[name] = team.play(seconds)
+        except BaseException as exc:  # raised on the caller's thread
+            with changed:
+                errors.append(exc)
+                changed.notify_all()
+
+    threads = []
+    for n, name in enumerate(order):
+        threads.append(threading.Thread(target=play, args=(name,), daemon=True))
+        threads[-1].start()
+        with changed:  # the first team in plays left: the second waits for it
+            changed.wait_for(lambda n=n: len(joined) > n or errors, timeout=120.0)
+        if errors or len(joined) <= n:
+            raise errors[0] if errors else RuntimeError("a team did not join in 120 s")
+    trainer = connect("127.0.0.1", monitor_port, retry_s=10.0)
+    try:
+        send_frame(trainer, trainer_cmds.kick_off("Left"))
+    finally:
+        trainer.close()
+    for t in threads:
+        t.join()
+    if errors:
+        raise errors[0]
+    return played
+
+
+class _GameServer:
+    """A fresh server for one game: ``(agent port, monitor port)`` on entering, stopped on
+    leaving."""
+
+    def __init__(self, server: str, engine: str, seed: int, binary) -> None:
+        self.server, self.engine, self.seed, self.binary = server, engine, seed, binary
+        self._proc: Any = None
+        self._real: Any = None
+
+    def __enter__(self) -> tuple[int, int]:
+        if self.server == "serve":
+            from robocup_gym.server.bench import start_server_process
+
+            args = ("--sync", "--no-real-time", "--engine", self.engine, "--seed", str(self.seed))
+            self._proc, agent_port, monitor_port = start_server_process(*args)
+            return agent_port, monitor_port
+        from robocup_gym.backends.process import ServerProcess
+
+        self._real = ServerProcess(self.binary, sync=True, real_time=False)
+        self._real.start()
+        return self._real.agent_port, self._real.monitor_port
+
+    def __exit__(self, *exc: object) -> None:
+        if self._proc is not None:
+            from robocup_gym.server.bench import stop_server_process
+
+            stop_server_process(self._proc)
+        if self._real is not None:
+            self._real.stop()

@@ -43,6 +43,7 @@ from robocup_gym.protocol.framing import (
 )
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import nao_model
+from robocup_gym.sim.referee import BEAM_MODES, next_kickoff_side
 from robocup_gym.soccer.formation import kickoff_positions
 from robocup_gym.soccer.localisation import Estimator, level_offsets
 from robocup_gym.soccer.scripted import TeamView
@@ -55,9 +56,6 @@ from robocup_gym.soccer.skills import (
 from robocup_gym.types import AgentCommand, Perception
 
 __all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
-
-STOPPED_MODES = ("BeforeKickOff", "Goal_Left", "Goal_Right")
-"""Play modes in which players may beam, and the team stands in its formation."""
 
 
 class ServerGoneError(ConnectionError):
@@ -368,7 +366,6 @@ class ServerTeam:
             if on_event is not None:
                 on_event(text)
 
-        places = kickoff_positions("left", len(self.players))
         started = False
         start_time: float | None = None
         beamed_in: str | None = None
@@ -401,8 +398,11 @@ class ServerTeam:
                     result.end = "time"
                     break
                 commands: dict[int, AgentCommand] = {}
-                stopped = g.play_mode in STOPPED_MODES
+                stopped = g.play_mode in BEAM_MODES  # the team beams to its formation and stands
                 if stopped and beamed_in != g.play_mode:  # beam once per stop, then stand
+                    # (a beam is in the team's own frame: as the left team's places)
+                    kicker = next_kickoff_side(g.play_mode, g.game_time)
+                    places = kickoff_positions("left", len(self.players), kicker == self.side)
                     for k, p in enumerate(self.players):
                         commands[k] = p.beam(*places[k])
                     beamed_in = g.play_mode

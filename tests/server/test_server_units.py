@@ -11,7 +11,7 @@ from robocup_gym.protocol.framing import FrameDecoder
 from robocup_gym.server.wire import Connection, fast_joint_message, salvage
 from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES
-from robocup_gym.sim.referee import InitError, Player, Referee, TeamRegistry
+from robocup_gym.sim.referee import InitError, Player, Referee, TeamRegistry, next_kickoff_side
 from robocup_gym.sim.vision import VisionConfig
 
 
@@ -160,8 +160,11 @@ def test_goal_scores_and_restarts_with_kickoff(game):
     _settle(host, ref, players, 1)
     assert ref.play_mode == "Goal_Left"
     assert host.world.game.score_left == 1
+    # what players beaming in the pause are told to expect
+    assert next_kickoff_side(ref.play_mode, host.world.game.game_time) == "right"
     _settle(host, ref, players, 151)
     assert ref.play_mode == "KickOff_Right"
+    assert next_kickoff_side(ref.play_mode, host.world.game.game_time) is None
     np.testing.assert_allclose(host.ball_state()[0][:2], [0, 0], atol=1e-6)
 
 
@@ -213,11 +216,13 @@ def test_before_kickoff_and_half_time(game):
     _settle(host, ref, players, 1)
     assert host.world.torso_position(0)[0] < 0
     np.testing.assert_allclose(host.ball_state()[0][:2], [0, 0], atol=1e-6)
+    assert next_kickoff_side(ref.play_mode, host.world.game.game_time) == "left"
     ref.kick_off("None")
     assert ref.play_mode == "KickOff_Left"
     host.world.game.game_time = 299.99
     _settle(host, ref, players, 1)
     assert ref.play_mode == "BeforeKickOff" and ref.half == 2
+    assert next_kickoff_side(ref.play_mode, host.world.game.game_time) == "right"
     ref.kick_off("None")
     assert ref.play_mode == "KickOff_Right"
     host.world.game.game_time = 600.0

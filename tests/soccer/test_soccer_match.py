@@ -185,3 +185,62 @@ def test_the_match_command_names_an_unknown_team():
     )
     assert out.returncode == 1
     assert "unknown team 'nosuch'" in out.stdout + out.stderr
+
+
+def test_a_match_on_serve_plays_each_game_on_a_fresh_server_and_changes_sides():
+    """``--on serve``: each player its own connection; the first team in plays left, the
+    teams change sides every game; the result is counted from the first team's side."""
+    cmd = ["match", "scripted", "standing", "--on", "serve", "--games", "2", "--seconds", "10"]
+    out = subprocess.run(
+        [sys.executable, "-m", "robocup_gym.cli", *cmd, "--players", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "game 1/2: scripted (left)" in out.stdout
+    assert "game 2/2: scripted (right)" in out.stdout
+    summary = json.loads(out.stdout.strip().splitlines()[-1])
+    assert summary["games"] == 2 and summary["team_a"] == "scripted"
+    assert summary["wins"] + summary["draws"] + summary["losses"] == 2
+
+
+def test_a_match_on_a_real_server(real_rcssserver3d):
+    from robocup_gym.soccer.match import play_server_match
+
+    games = []
+    result = play_server_match(
+        "standing",
+        "scripted",
+        server="rcssserver3d",
+        binary=real_rcssserver3d,
+        games=2,
+        players=1,
+        seconds=10.0,
+        on_game=lambda k, g: games.append(k),
+    )
+    assert games == [0, 1]
+    assert [g.a_side for g in result.games] == ["left", "right"]
+    assert result.games[0].seconds == 10.0
+    assert result.summary["goals_for"] == 0  # standing players do not score
+
+
+def test_a_match_on_a_server_refuses_what_it_cannot_play():
+    from robocup_gym.soccer.match import play_server_match
+
+    with pytest.raises(ValueError, match="server must be one of serve, rcssserver3d"):
+        play_server_match("scripted", "standing", server="nowhere")
+    with pytest.raises(ValueError, match="unknown team 'nosuch'"):
+        play_server_match("scripted", "nosuch", games=1)
+    out = subprocess.run(
+        [sys.executable, "-m", "robocup_gym.cli", "match", "scripted", "standing", "--on",
+         "serve", "--scenario", "penalty"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )  # fmt: skip
+    assert out.returncode == 1
+    assert (
+        "on serve a match plays games (no --scenario penalty, no --video)"
+        in out.stderr + out.stdout
+    )
