@@ -45,6 +45,9 @@ option                default  meaning
                                it was trained (its observation of the torso's orientation is
                                in the world frame); the scenarios' v0 versions: False, their
                                walk went askew and hardly turned facing −x
+``random_start``      False    the game only: every player and the ball at a random place on
+                               the field, in play (as dm_control's soccer starts), instead of
+                               the kick-off; a training aid (:func:`random_start`)
 ``skill_cycles``      10       cycles per step with skill actions
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
 ``ball_progress``     0.0      per metre the ball moves toward the opponent goal
@@ -72,6 +75,7 @@ except ImportError as exc:  # pragma: no cover - depends on the installation
 
 from robocup_gym.envs.actions import ActionMapper, ActionMode
 from robocup_gym.envs.observations import heading_frame
+from robocup_gym.sim.field import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH
 from robocup_gym.sim.referee import Rules, other
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
 from robocup_gym.soccer.observations import PlayerObserver
@@ -84,7 +88,7 @@ from robocup_gym.soccer.skills import (
 )
 from robocup_gym.types import reject_unknown_fields
 
-__all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel"]
+__all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel", "random_start"]
 
 _ACTION_MODES = ("velocity", "target_angle")
 
@@ -108,6 +112,7 @@ class SoccerConfig:
     first_touch_plays_on: bool = True
     actions: str = "joints"
     walk_faces_x: bool = True
+    random_start: bool = False
     skill_cycles: int = 10
     reward_goal: float = 1.0
     ball_progress: float = 0.0
@@ -133,7 +138,10 @@ class SoccerConfig:
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
         Rules.of(self.rules)  # an unknown rule or a value that is not a bool: a clear error
-        for name in ("self_collisions", "contact_fouls", "first_touch_plays_on", "walk_faces_x"):
+        for name in (
+            "self_collisions", "contact_fouls", "first_touch_plays_on", "walk_faces_x",
+            "random_start",
+        ):  # fmt: skip
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.actions not in ("joints", "skills"):
@@ -178,6 +186,8 @@ class SoccerParallelEnv(ParallelEnv):
         "is_parallelizable": True,
     }
     default_config = SoccerConfig()
+    random_starts: ClassVar[bool] = False
+    """Whether the scenario has the option ``random_start``."""
 
     def __init__(
         self,
@@ -198,6 +208,8 @@ class SoccerParallelEnv(ParallelEnv):
         self._scene: Any = None
         self._camera: Any = None
         self.config = SoccerConfig.with_options(self.default_config, options)
+        if self.config.random_start and not self.random_starts:
+            raise ValueError(f"random_start is an option of the game, not of {type(self).__name__}")
         c = self.config
         self.game = SoccerGame(
             c.left_types,
@@ -572,3 +584,30 @@ def teams_of(config: SoccerConfig) -> dict[str, list[str]]:
         side: [f"{side}_{k + 1}" for k in range(len(types))]
         for side, types in zip(SIDES, (config.left_types, config.right_types), strict=True)
     }
+
+
+RANDOM_START_MARGIN_M = (2.0, 1.0)
+"""How far inside the goal lines and the side lines :func:`random_start` places players and
+the ball (x, y), m."""
+RANDOM_START_SPACING_M = 0.8
+"""The least distance :func:`random_start` leaves between two players, and between a player
+and the ball, m."""
+
+
+def random_start(agents: Sequence[str], rng: np.random.Generator) -> Start:
+    """Every agent and the ball at a uniformly random place on the field (at least
+    :data:`RANDOM_START_MARGIN_M` inside its lines, :data:`RANDOM_START_SPACING_M` apart),
+    each agent facing a random direction, in play."""
+    hx = FIELD_HALF_LENGTH - RANDOM_START_MARGIN_M[0]
+    hy = FIELD_HALF_WIDTH - RANDOM_START_MARGIN_M[1]
+    ball = rng.uniform((-hx, -hy), (hx, hy))
+    taken = [ball]
+    players = {}
+    for name in agents:
+        while True:
+            xy = rng.uniform((-hx, -hy), (hx, hy))
+            if all(float(np.hypot(*(xy - t))) >= RANDOM_START_SPACING_M for t in taken):
+                break
+        taken.append(xy)
+        players[name] = (float(xy[0]), float(xy[1]), float(rng.uniform(-180.0, 180.0)))
+    return Start(players=players, ball=(float(ball[0]), float(ball[1])), play_mode="PlayOn")

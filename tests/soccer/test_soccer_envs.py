@@ -323,3 +323,27 @@ def test_single_rules_can_be_switched_off(make):
     assert env.game.world.game.score_left == 0 and sum(rewards) == 0.0
     with pytest.raises(ValueError, match=r"unknown rule.*offside.*rules: ball_out"):
         game_v1.parallel_env(rules={"offside": False})
+
+
+def test_a_random_start_places_players_and_ball_on_the_field_in_play(make):
+    from robocup_gym.soccer.env import RANDOM_START_MARGIN_M, RANDOM_START_SPACING_M
+
+    env = make(game_v1, left_types=(0, 1, 2), right_types=(0, 1, 2), random_start=True)
+    starts = []
+    for seed in (0, 0, 1):
+        env.reset(seed=seed)
+        world = env.game.world
+        assert env.game.referee.play_mode == "PlayOn"
+        ball = world.ball_position()[:2]
+        xy = np.array([world.torso_position(env.game.index(a))[:2] for a in env.agents])
+        for p in (ball, *xy):
+            assert abs(p[0]) <= 15.0 - RANDOM_START_MARGIN_M[0] + 0.05
+            assert abs(p[1]) <= 10.0 - RANDOM_START_MARGIN_M[1] + 0.05
+        points = np.vstack([ball, xy])
+        gaps = np.hypot(*(points[:, None] - points[None]).transpose(2, 0, 1))
+        assert gaps[np.triu_indices(len(points), 1)].min() >= RANDOM_START_SPACING_M - 0.05
+        starts.append(points)
+    np.testing.assert_array_equal(starts[0], starts[1])  # the seed repeats the start
+    assert np.abs(starts[0] - starts[2]).max() > 1.0
+    with pytest.raises(ValueError, match="random_start is an option of the game"):
+        make(penalty_v1, random_start=True)
