@@ -18,11 +18,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from robocup_gym.protocol.constants import DEFAULT_ENVIRONMENT, PLAY_MODES, play_mode_id
 from robocup_gym.protocol.values import fmt_g
+
+if TYPE_CHECKING:
+    from robocup_gym.sim.kick_rules import KickRules
 
 SLT_THRESHOLD = 0.005
 
@@ -191,6 +195,9 @@ class MonitorStream:
         self._team_names_sent: set[str] = set()
         self.fouls: Sequence[tuple[int, int, str, int]] = ()
         """The referee's fouls (``Referee.fouls``); each goes out once, in the next frame."""
+        self.kick_rules: KickRules | None = None
+        """The referee's kick rules (``Referee.kicks``): in play, each frame carries how long
+        a team is still barred from scoring after its pass mode."""
         self._last_foul = 0
 
     # ------------------------------------------------------------------ environment
@@ -214,8 +221,22 @@ class MonitorStream:
         for key in ("half", "score_left", "score_right", "play_mode"):
             parts.append(f"({key} {vals[key]})")
         self._env_sent = dict(vals)
+        parts.append(self._score_waits(world))
         parts.append(self._new_fouls())
         return "(" + "".join(parts) + ")"
+
+    def _score_waits(self, world) -> str:
+        """``(pass_mode_score_wait_left s)`` / ``…_right``: in play, while a team is barred
+        from scoring after its pass mode (in every frame, full or delta)."""
+        kicks = self.kick_rules
+        if kicks is None or world.game.play_mode != "PlayOn":
+            return ""
+        out = []
+        for side in ("left", "right"):
+            wait = kicks.score_wait(side, world.game.game_time)
+            if wait is not None:
+                out.append(f"(pass_mode_score_wait_{side} {fmt_g(wait)})")
+        return "".join(out)
 
     def _new_fouls(self) -> str:
         """``(foul index type team unum)`` of every foul not sent yet (team 1: left, 2: right)."""
@@ -233,6 +254,7 @@ class MonitorStream:
             if v is not None and v != self._env_sent.get(key):
                 parts.append(f"({key} {v})")
         self._env_sent = dict(vals)
+        parts.append(self._score_waits(world))
         parts.append(self._new_fouls())
         return "(" + "".join(parts) + ")"
 

@@ -182,6 +182,7 @@ class SimServer(AgentMessages, TrainerCommands):
         )
         self.stream = MonitorStream()
         self.stream.fouls = self.referee.fouls
+        self.stream.kick_rules = self.referee.kicks
         self.agents: list[AgentState] = []
         self.monitors: list[MonitorState] = []
         self.cycle = 0

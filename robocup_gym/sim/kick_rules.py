@@ -170,6 +170,15 @@ class KickRules:
         return "goal_kick", scored_on
 
     # ------------------------------------------------------------------ pass mode
+    def score_wait(self, side: str, game_time: float) -> float | None:
+        """How long ``side`` is still barred from scoring after its pass mode (s; its last
+        cycle in pass mode less than :data:`PASS_MODE_SCORE_WAIT_S` ago and not cleared), else
+        ``None``. In single precision, as rcssserver3d computes the monitors' figure."""
+        since = np.float32(game_time) - np.float32(self.pass_time[side])
+        if game_time - self.pass_time[side] >= PASS_MODE_SCORE_WAIT_S or self.pass_cleared[side]:
+            return None
+        return float(np.float32(PASS_MODE_SCORE_WAIT_S) - since)
+
     def in_pass_mode(self, side: str, game_time: float, ball_xy: np.ndarray) -> None:
         """A cycle of ``side``'s pass mode: its scoring window starts again."""
         self.pass_time[side] = float(game_time)

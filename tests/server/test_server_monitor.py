@@ -216,3 +216,31 @@ def test_robot_subtree_matches_the_real_server():
     shape = [n.kind for n in parse_delta_nodes(parse(delta)[2])]
     real = [n.kind for n in parse_delta_nodes(parse(MONITOR[3])[2])]
     assert shape == real
+
+
+def test_the_frames_carry_how_long_a_team_may_not_score_after_its_pass_mode():
+    """rcssserver3d's ``(pass_mode_score_wait_left s)``: in play, in full and delta frames,
+    while the team's last pass-mode cycle is less than 10 s ago and it has not cleared it."""
+    from robocup_gym.server.monitor import MonitorStream
+    from robocup_gym.server.worldhost import WorldHost
+    from robocup_gym.sim.kick_rules import KickRules
+
+    host = WorldHost()
+    game = host.world.game
+    stream = MonitorStream()
+    kicks = KickRules()
+    stream.kick_rules = kicks
+    kicks.in_pass_mode("left", 12.0, np.zeros(3))
+    game.play_mode = "pass_left"
+    assert "pass_mode_score_wait" not in stream.full_frame(host.world, [], 1, {})
+    game.play_mode, game.game_time = "PlayOn", 14.5
+    assert "(pass_mode_score_wait_left 7.5)" in stream.full_frame(host.world, [], 1, {})
+    game.game_time = 21.98
+    delta = stream.delta_frame(host.world, [], 1, {})
+    assert "(pass_mode_score_wait_left 0.02" in delta and "wait_right" not in delta
+    game.game_time = 22.0
+    assert "pass_mode_score_wait" not in stream.delta_frame(host.world, [], 1, {})
+    kicks.in_pass_mode("right", 30.0, np.zeros(3))
+    kicks.pass_cleared["right"] = True  # two team-mates played it outside the circle
+    game.game_time = 31.0
+    assert "pass_mode_score_wait" not in stream.delta_frame(host.world, [], 1, {})
