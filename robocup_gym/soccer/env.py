@@ -327,6 +327,9 @@ class SoccerParallelEnv(ParallelEnv):
         ended = None
         skills = self.skills
         seen: dict[str, np.ndarray] = {}
+        # with skills every cycle is perceived: the observers keep each cycle's perception and
+        # build an observation from the last one only
+        pending: Mapping[int, Any] | None = None
         cycles = self.config.skill_cycles if skills is not None else self.config.cycles_per_step
         for _ in range(cycles):
             if skills is not None:
@@ -341,7 +344,10 @@ class SoccerParallelEnv(ParallelEnv):
             if skills is not None:  # the skills (and vision) see every cycle
                 perceptions = self._perceive_all()
                 skills.observe(perceptions)
-                seen = self._observe(self.agents, perceptions)
+                if pending is not None:
+                    for name in self.agents:
+                        self._observers[name].remember(pending[self.game.index(name)])
+                pending = perceptions
             goal = goal or report.goal
             for k, v in self._cycle_terms(report).items():
                 terms[k] = terms.get(k, 0.0) + v
@@ -354,6 +360,8 @@ class SoccerParallelEnv(ParallelEnv):
         terminated = ended is not None and report.diverged is None
         rewards, obs, infos = {}, {}, {}
         left_reward = sum(terms.values())
+        if pending is not None:
+            seen = self._observe(self.agents, pending)
         last = self._perceive_all() if report.diverged is None and not seen else {}
         if last:
             seen = self._observe(self.agents, last)

@@ -172,7 +172,14 @@ class PlayerObserver:
         np.clip(out, -1.0, 1.0, out=out)
         return out
 
-    def _vision(self, p: Perception, out: np.ndarray, k: int) -> int:
+    def remember(self, p: Perception) -> None:
+        """What a call with ``p`` keeps for the next one (the joint angles, what vision
+        showed), without building the observation: a cycle whose observation nobody reads."""
+        self._last_angles = np.asarray(p.joint_angles_deg, float)
+        self._see(p)
+
+    def _see(self, p: Perception) -> bool:
+        """Keep what vision shows (the ball, the goal posts); whether it shows the ball."""
         v = p.vision
         seen_ball = False
         if v is not None:
@@ -186,6 +193,10 @@ class PlayerObserver:
                 if seen is not None:
                     self._posts[name] = np.asarray(seen, float)
         self._ball_age = 0.0 if seen_ball else min(self._ball_age + 1.0, _SEEN_MAX_CYCLES)
+        return seen_ball
+
+    def _vision(self, p: Perception, out: np.ndarray, k: int) -> int:
+        seen_ball = self._see(p)
         d, h, vert = self._ball
         out[k : k + 5] = (
             d / 10.0 - 1.0,
