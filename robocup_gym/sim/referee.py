@@ -764,21 +764,18 @@ class Referee:
     def _kickoff_clear(self, kicker: str) -> None:
         w = self.host.world
         for p in self.players:
-            lo, hi = self._body_x_extent(p.index)
+            xy = w.body_frames(p.index)[0][:, :2]
+            lo, hi = float(xy[:, 0].min()), float(xy[:, 0].max())
             own = -1.0 if p.side == "left" else 1.0
+            into_other = hi > 0 if p.side == "left" else lo < 0
             if p.side != kicker:
-                into_other = hi > 0 if p.side == "left" else lo < 0
-                xy = w.body_frames(p.index)[0][:, :2]
                 in_circle = bool(np.any(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
                 if into_other or in_circle:
                     self._move_x(p, own * FREE_KICK_MOVE)
-            else:
-                into_other = hi > 0 if p.side == "left" else lo < 0
-                if into_other:
-                    xy = w.body_frames(p.index)[0][:, :2]
-                    inside = bool(np.all(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
-                    if not inside:
-                        self._move_x(p, own * FREE_KICK_MOVE)
+            elif into_other:
+                inside = bool(np.all(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
+                if not inside:
+                    self._move_x(p, own * FREE_KICK_MOVE)
 
     def _count_posture(self, players: list[Player], positions: dict[int, np.ndarray]) -> None:
         """Count how long each player (not being penalised) has not stood."""
