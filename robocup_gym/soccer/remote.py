@@ -241,9 +241,7 @@ class ServerTeam:
                         connect_s=min(float(timeout), 5.0),
                     )
                 )
-                # one at a time: a real rcssserver3d given several players' scenes at once
-                # stalls for seconds (5 players: 12 s, against 3 s joining one by one)
-                self._handshake(timeout)
+            self._handshake(timeout)
         except BaseException:
             self.close()
             raise
