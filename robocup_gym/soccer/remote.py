@@ -58,15 +58,6 @@ from robocup_gym.types import AgentCommand, Perception
 __all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
 
 
-JOIN_ATTEMPT_S = 10.0
-"""How long a player waits for the server to take it before it connects again, s."""
-JOIN_ATTEMPTS = 3
-"""How many times a player connects before the team gives up."""
-JOIN_RELEASE_S = 1.0
-"""How long the team plays on after closing a player's stuck connection, before it connects
-again (the server drops the connection and frees its uniform number), s."""
-
-
 class ServerGoneError(ConnectionError):
     """The server closed a player's connection or stopped answering."""
 
@@ -239,7 +230,18 @@ class ServerTeam:
         self.players: list[RemotePlayer] = []
         try:
             for k in range(players):
-                self._join(host, port, k + 1, int(types[k]), float(timeout))
+                self.players.append(
+                    RemotePlayer(
+                        host,
+                        port,
+                        name,
+                        k + 1,
+                        int(types[k]),
+                        timeout=timeout,
+                        connect_s=min(float(timeout), 5.0),
+                    )
+                )
+            self._handshake(timeout)
         except BaseException:
             self.close()
             raise
@@ -247,46 +249,6 @@ class ServerTeam:
         self._observers: dict[str, Any] = {}
         self._opponents: dict[int, np.ndarray] = {}
         """Where the team's players last saw each opponent (by uniform number), world (x, y)."""
-
-    def _join(self, host: str, port: int, unum: int, robot_type: int, timeout: float) -> None:
-        """Connect player ``unum`` and answer every player's percepts until the server has
-        taken it. The players join one at a time: a real rcssserver3d given several ``scene``s
-        at once takes them slowly (5 players: 5–10 s; 11: not within a minute), one by one
-        they take ~0.1 s each. Now and then (2 joins in ~100 here) the real server does not take
-        a new player at all: after :data:`JOIN_ATTEMPT_S` its connection is closed (the server
-        then stops waiting for it) and the player connects again, up to :data:`JOIN_ATTEMPTS`
-        times within ``timeout`` per attempt."""
-        for attempt in range(JOIN_ATTEMPTS):
-            player = RemotePlayer(
-                host,
-                port,
-                self.name,
-                unum,
-                robot_type,
-                timeout=timeout,
-                connect_s=min(timeout, 5.0),
-            )
-            self.players.append(player)
-            last = attempt == JOIN_ATTEMPTS - 1
-            try:
-                self._handshake(timeout if last else min(timeout, JOIN_ATTEMPT_S))
-                return
-            except ServerGoneError:
-                if last:
-                    raise
-                self.players.remove(player)
-                player.close()
-                self._answer(JOIN_RELEASE_S)  # the server drops the connection, frees its number
-
-    def _answer(self, seconds: float) -> None:
-        """Answer the players' percepts for ``seconds`` (the server goes on cycling)."""
-        deadline = time.monotonic() + seconds
-        by_sock = {p.sock: p for p in self.players}
-        while by_sock and (left := deadline - time.monotonic()) > 0:
-            ready = {p.sock for p in self.players if p.decoder.pending}
-            ready |= set(select.select(list(by_sock), [], [], min(left, 0.1))[0])
-            for sock in ready:
-                by_sock[sock].handshake_step()
 
     def _handshake(self, timeout: float) -> None:
         """Answer every player's percepts as they come (a server in sync mode waits for each

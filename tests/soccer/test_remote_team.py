@@ -219,25 +219,3 @@ def test_a_team_plays_on_a_real_rcssserver3d(real_rcssserver3d):
     # steps on the spot and turns a little: the heading is not checked)
     assert fix is not None and fix.landmarks >= 2
     assert abs(fix.x + 14.0) < 0.3 and abs(fix.y) < 0.3
-
-
-def test_a_player_the_server_does_not_take_connects_again(server, monkeypatch):
-    """Players join one at a time; one whose join times out (as a real rcssserver3d's now and
-    then does) is closed, the server drops it, and it connects again with its own number."""
-    from robocup_gym.soccer import remote
-
-    _, agent_port, _ = server
-    real = ServerTeam._handshake
-    calls = {"n": 0}
-
-    def stuck_once(self, timeout):
-        calls["n"] += 1
-        if calls["n"] == 2:  # the second player's first attempt
-            raise remote.ServerGoneError("the server did not take it")
-        real(self, timeout)
-
-    monkeypatch.setattr(ServerTeam, "_handshake", stuck_once)
-    with ServerTeam(make_team("standing"), port=agent_port, name="Re", players=3) as team:
-        assert calls["n"] == 4  # three joins, one of them twice
-        assert [p.unum for p in team.players] == [1, 2, 3]
-        assert all(p.stage == "ready" and p.side == "left" for p in team.players)
