@@ -155,10 +155,7 @@ class KickRules:
         ):
             return self._punish(k.taker, scored_on)
         scorer = _other(scored_on)
-        if (
-            game_time - self.pass_time[scorer] < PASS_MODE_SCORE_WAIT_S
-            and not self.pass_cleared[scorer]
-        ):
+        if self._waiting(scorer, game_time):
             return "goal_kick", scored_on
         return "goal", None
 
@@ -174,10 +171,18 @@ class KickRules:
         """How long ``side`` is still barred from scoring after its pass mode (s; its last
         cycle in pass mode less than :data:`PASS_MODE_SCORE_WAIT_S` ago and not cleared), else
         ``None``. In single precision, as rcssserver3d computes the monitors' figure."""
-        since = np.float32(game_time) - np.float32(self.pass_time[side])
-        if game_time - self.pass_time[side] >= PASS_MODE_SCORE_WAIT_S or self.pass_cleared[side]:
+        if not self._waiting(side, game_time):
             return None
+        since = np.float32(game_time) - np.float32(self.pass_time[side])
         return float(np.float32(PASS_MODE_SCORE_WAIT_S) - since)
+
+    def _waiting(self, side: str, game_time: float) -> bool:
+        """Whether ``side`` is barred from scoring after its pass mode: its last cycle in pass
+        mode less than :data:`PASS_MODE_SCORE_WAIT_S` ago and not cleared since."""
+        return (
+            game_time - self.pass_time[side] < PASS_MODE_SCORE_WAIT_S
+            and not self.pass_cleared[side]
+        )
 
     def in_pass_mode(self, side: str, game_time: float, ball_xy: np.ndarray) -> None:
         """A cycle of ``side``'s pass mode: its scoring window starts again."""
@@ -194,10 +199,7 @@ class KickRules:
         1 m circle and a second team-mate touches it."""
         team = None
         for side in ("left", "right"):
-            if (
-                game_time - self.pass_time[side] < PASS_MODE_SCORE_WAIT_S
-                and not self.pass_cleared[side]
-            ):
+            if self._waiting(side, game_time):
                 team = side
                 break
         if team is None:

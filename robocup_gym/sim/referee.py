@@ -601,7 +601,7 @@ class Referee:
         elif pm in ("Goal_Left", "Goal_Right"):
             if not rules.goals:
                 return
-            conceding = "right" if pm == "Goal_Left" else "left"
+            conceding = next_kickoff_side(pm, t)
             self._kickoff_clear(conceding)
             if self.mode_time >= GOAL_PAUSE:
                 self.host.set_ball((0.0, 0.0, BALL_RADIUS), (0.0, 0.0, 0.0))

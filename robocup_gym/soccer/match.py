@@ -141,8 +141,6 @@ def play_match(
     Raises:
         ValueError: an unknown team or an impossible set-up.
     """
-    if isinstance(games, bool) or not isinstance(games, int) or games < 1:
-        raise ValueError(f"games must be a positive integer, got {games!r}")
     if scenario not in ("game", "penalty"):
         raise ValueError(f"scenario must be 'game' or 'penalty', got {scenario!r}")
     penalty = scenario == "penalty"
@@ -150,17 +148,7 @@ def play_match(
     seconds = (10.0 if penalty else 120.0) if seconds is None else float(seconds)
     if penalty and players != 1:
         raise ValueError(f"a penalty has 1 player a side, got {players!r}")
-    if not 1 <= int(players) <= 11:
-        raise ValueError(f"players must be 1-11 a side, got {players!r}")
-    if not (math.isfinite(seconds) and seconds > 0):
-        raise ValueError(f"seconds must be a positive duration, got {seconds!r}")
-    a, b = make_team(team_a), make_team(team_b)
-    for team in (a, b):
-        if hasattr(team, "check_fits"):  # a learnt team plays what it was trained for
-            team.check_fits(scenario, int(players))
-    types = tuple(robot_types) if robot_types is not None else tuple(k % 5 for k in range(players))
-    if len(types) != players:
-        raise ValueError(f"{players} players need {players} robot types, got {types!r}")
+    a, b, types = _match_setup(team_a, team_b, scenario, games, players, seconds, robot_types)
     cycles = round(seconds / 0.02)
     result = MatchResult(team_a, team_b)
     recorder = None
@@ -211,6 +199,37 @@ def play_match(
     return result
 
 
+def _match_setup(
+    team_a: str,
+    team_b: str,
+    scenario: str,
+    games: int,
+    players: int,
+    seconds: float,
+    robot_types: Sequence[int] | None,
+) -> tuple[Team, Team, tuple[int, ...]]:
+    """The two teams and the robot types of a match, its numbers checked.
+
+    Raises:
+        ValueError: a count, duration or robot types that cannot be played, an unknown team, or
+            a learnt team made for another scenario or size.
+    """
+    if isinstance(games, bool) or not isinstance(games, int) or games < 1:
+        raise ValueError(f"games must be a positive integer, got {games!r}")
+    if not 1 <= int(players) <= 11:
+        raise ValueError(f"players must be 1-11 a side, got {players!r}")
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise ValueError(f"seconds must be a positive duration, got {seconds!r}")
+    a, b = make_team(team_a), make_team(team_b)
+    for team in (a, b):
+        if hasattr(team, "check_fits"):  # a learnt team plays what it was trained for
+            team.check_fits(scenario, int(players))
+    types = tuple(robot_types) if robot_types is not None else tuple(k % 5 for k in range(players))
+    if len(types) != players:
+        raise ValueError(f"{players} players need {players} robot types, got {types!r}")
+    return a, b, types
+
+
 def play_server_match(
     team_a: str,
     team_b: str,
@@ -240,21 +259,9 @@ def play_server_match(
     """
     if server not in SERVERS:
         raise ValueError(f"server must be one of {', '.join(SERVERS)}, got {server!r}")
-    if isinstance(games, bool) or not isinstance(games, int) or games < 1:
-        raise ValueError(f"games must be a positive integer, got {games!r}")
-    if not 1 <= int(players) <= 11:
-        raise ValueError(f"players must be 1-11 a side, got {players!r}")
     seconds = float(seconds)
-    if not (math.isfinite(seconds) and seconds > 0):
-        raise ValueError(f"seconds must be a positive duration, got {seconds!r}")
-    types = tuple(robot_types) if robot_types is not None else tuple(k % 5 for k in range(players))
-    if len(types) != players:
-        raise ValueError(f"{players} players need {players} robot types, got {types!r}")
-    teams = {}
-    for name, spec in (("A", team_a), ("B", team_b)):
-        teams[name] = make_team(spec)
-        if hasattr(teams[name], "check_fits"):
-            teams[name].check_fits("game", int(players))
+    a, b, types = _match_setup(team_a, team_b, "game", games, players, seconds, robot_types)
+    teams = {"A": a, "B": b}
     result = MatchResult(team_a, team_b)
     for k in range(games):
         order = ("A", "B") if k % 2 == 0 else ("B", "A")
