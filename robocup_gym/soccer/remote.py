@@ -127,24 +127,35 @@ class RemotePlayer:
     def perceive(self) -> Perception:
         """The newest percept (older ones waiting in the socket are skipped: a team that fell
         behind a real-time server acts on what is now), its ground truth set to the player's
-        own estimate."""
-        text = self._recv()
+        own estimate.
+
+        The side and number the server says once, after ``init``, are taken from a skipped
+        percept too: a server in sync mode does not wait for a player in its first cycles, so
+        that percept may come with the next one behind it."""
+        texts = [self._recv()]
         while True:
             frame = self.decoder.pop_frame()
             if frame is None:
                 if not select.select([self.sock], [], [], 0.0)[0]:
                     break
-                text = self._recv()
+                texts.append(self._recv())
             else:
-                text = decode_payload(frame)
-        p = parse_perception(text, robot_type=self.robot_type)
+                texts.append(decode_payload(frame))
+        for text in texts[:-1]:
+            if "(unum" in text:
+                self._identify(parse_perception(text, robot_type=self.robot_type))
+        p = parse_perception(texts[-1], robot_type=self.robot_type)
+        self._identify(p)
+        p.ground_truth = self.estimator.update(p)
+        self.last = p
+        return p
+
+    def _identify(self, p: Perception) -> None:
+        """Take the side and number the server told."""
         if p.game.team_side is not None:
             self.side = p.game.team_side
         if p.game.unum is not None:
             self.unum = p.game.unum
-        p.ground_truth = self.estimator.update(p)
-        self.last = p
-        return p
 
     def send(self, command: AgentCommand) -> None:
         self._send(format_command(command, self.robot_type, sync=True))
@@ -229,7 +240,7 @@ class ServerTeam:
         self.decision_cycles = int(decision_cycles)
         self.players: list[RemotePlayer] = []
         try:
-            for k in range(players):
+            for k in range(players):  # one at a time: see _handshake
                 self.players.append(
                     RemotePlayer(
                         host,
@@ -241,7 +252,7 @@ class ServerTeam:
                         connect_s=min(float(timeout), 5.0),
                     )
                 )
-            self._handshake(timeout)
+                self._handshake(timeout)
         except BaseException:
             self.close()
             raise
@@ -253,10 +264,27 @@ class ServerTeam:
     def _handshake(self, timeout: float) -> None:
         """Answer every player's percepts as they come (a server in sync mode waits for each
         connected player's reply before the next cycle) until the server has told every player
-        its side and number."""
+        its side and number.
+
+        The team calls this after each new player's ``scene``, so the players join one at a
+        time. A robot enters the world at the centre of the field and stays there until its
+        ``init`` places it at the touchline; robots that enter together lie inside one another,
+        and rcssserver3d's physics step on that heap takes seconds a cycle (5 at once: 5-10 s
+        to join, 11: not within a minute; one at a time, 11 join in a few seconds).
+
+        It returns when every player has answered the same cycle's percept: a player that had
+        answered it while another's was still on its way would wait for the next percept, which
+        the server sends only once the other has answered, and the team answers all its
+        players together."""
         deadline = time.monotonic() + timeout
-        by_sock = {p.sock: p for p in self.players}
-        while any(p.stage != "ready" for p in self.players):
+
+        def behind() -> list[RemotePlayer]:
+            if any(p.stage != "ready" for p in self.players):
+                return self.players
+            newest = max(p.last.time for p in self.players)
+            return [p for p in self.players if p.last.time < newest]
+
+        while players := behind():
             left = deadline - time.monotonic()
             if left <= 0:
                 raise ServerGoneError(
@@ -264,7 +292,8 @@ class ServerTeam:
                     f"{timeout:g} s (is the team full, or another team named {self.name!r} "
                     "playing?)"
                 )
-            ready = {p.sock for p in self.players if p.decoder.pending}
+            by_sock = {p.sock: p for p in players}
+            ready = {p.sock for p in players if p.decoder.pending}
             ready |= set(select.select(list(by_sock), [], [], min(left, 0.5))[0])
             for sock in ready:
                 by_sock[sock].handshake_step()

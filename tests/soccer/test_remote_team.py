@@ -4,10 +4,13 @@ own perceptors."""
 from __future__ import annotations
 
 import os
+import re
+import socket
 import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,10 +18,19 @@ import pytest
 pytest.importorskip("pettingzoo")
 
 from robocup_gym.protocol import trainer as trainer_cmds
-from robocup_gym.protocol.framing import connect, send_frame
+from robocup_gym.protocol.framing import (
+    FrameDecoder,
+    connect,
+    decode_payload,
+    recv_frame,
+    send_frame,
+)
 from robocup_gym.server.bench import start_server_process, stop_server_process
 from robocup_gym.soccer.match import make_team
-from robocup_gym.soccer.remote import ServerTeam
+from robocup_gym.soccer.remote import RemotePlayer, ServerTeam
+from robocup_gym.types import AgentCommand
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "rcssserver3d"
 
 
 @pytest.fixture
@@ -219,3 +231,139 @@ def test_a_team_plays_on_a_real_rcssserver3d(real_rcssserver3d):
     # steps on the spot and turns a little: the heading is not checked)
     assert fix is not None and fix.landmarks >= 2
     assert abs(fix.x + 14.0) < 0.3 and abs(fix.y) < 0.3
+
+
+def test_a_full_team_joins_a_real_rcssserver3d(real_rcssserver3d):
+    """Eleven players join a real rcssserver3d, each told its side and number. (Robots that
+    enter the world together lie inside one another at the centre spot until their ``init``
+    places them; on that heap the real server's physics step takes seconds, and 11 scenes sent
+    together did not join within a minute.)"""
+    from robocup_gym.backends.process import ServerProcess
+
+    server = ServerProcess(real_rcssserver3d, sync=True, real_time=False)
+    server.start()
+    try:
+        with ServerTeam(
+            make_team("standing"), port=server.agent_port, name="Full", players=11, timeout=30.0
+        ) as t:
+            told = [(p.side, p.unum) for p in t.players]
+            for _ in range(20):  # and the server goes on cycling with all of them
+                for p in t.players:
+                    p.perceive()
+                for p in t.players:
+                    p.send(AgentCommand())
+            times = {p.last.time for p in t.players}
+    finally:
+        server.stop()
+    assert told == [("left", k) for k in range(1, 12)]
+    assert len(times) == 1
+
+
+def test_a_player_takes_its_side_from_a_percept_it_skips():
+    """The server says a player's side and number once, after ``init``; when that percept
+    comes with a newer one behind it (a sync-mode server does not wait for a player in its first
+    cycles), the player acts on the newer one and still knows its side. (Percepts captured
+    from a real rcssserver3d: the third is the one that tells.)"""
+    percepts = (DATA / "perceptor_messages.txt").read_text().splitlines()
+    assert "(unum 1) (team left)" in percepts[2] and "(unum" not in percepts[3]
+    assert percepts[3].startswith("(time (now 6.800))")
+    listener = socket.create_server(("127.0.0.1", 0))
+    got: list[str] = []
+
+    def fake_server() -> None:
+        conn, _ = listener.accept()
+        dec = FrameDecoder()
+        got.append(decode_payload(recv_frame(conn, dec, 5.0)))  # scene
+        send_frame(conn, percepts[0])
+        got.append(decode_payload(recv_frame(conn, dec, 5.0)))  # init
+        send_frame(conn, percepts[2])
+        send_frame(conn, percepts[3])
+        got.append(decode_payload(recv_frame(conn, dec, 5.0)))
+        conn.close()
+
+    thread = threading.Thread(target=fake_server)
+    thread.start()
+    try:
+        player = RemotePlayer("127.0.0.1", listener.getsockname()[1], "T", 1, 0, timeout=5.0)
+        player.handshake_step()  # answers the first percept with init
+        deadline = time.monotonic() + 5.0
+        while len(got) < 2 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.2)  # both later percepts are in the socket
+        player.handshake_step()
+        thread.join(5.0)
+        player.close()
+    finally:
+        listener.close()
+    assert got[0].startswith("(scene") and got[1].startswith("(init (unum 1)")
+    assert player.last.time == pytest.approx(6.80)  # the newer: "(time (now 6.800))"
+    assert (player.side, player.unum, player.stage) == ("left", 1, "ready")
+
+
+def test_a_team_joins_with_every_player_on_the_same_cycle():
+    """A sync-mode server sends the next percept once every player has answered this one, and
+    the team answers all its players together: so it has joined only when every player has
+    answered the same cycle, even when one player's percept of that cycle comes late. (A fake
+    server in sync mode; percepts captured from a real rcssserver3d.)"""
+    percepts = (DATA / "perceptor_messages.txt").read_text().splitlines()
+    plain, told = percepts[3], percepts[2]
+
+    def at(text: str, t: float, unum: int | None = None) -> str:
+        text = re.sub(r"\(time \(now [0-9.]+\)\)", f"(time (now {t:.3f}))", text)
+        return text if unum is None else text.replace("(unum 1)", f"(unum {unum})")
+
+    listener = socket.create_server(("127.0.0.1", 0))
+    listener.settimeout(5.0)
+    got: dict[int, list[str]] = {1: [], 2: []}
+
+    def fake_server() -> None:
+        conns, decs = {}, {}
+
+        def join(k: int) -> None:
+            conns[k], _ = listener.accept()
+            decs[k] = FrameDecoder()
+            reply(k)  # scene
+
+        def reply(k: int) -> None:
+            got[k].append(decode_payload(recv_frame(conns[k], decs[k], 5.0)))
+
+        join(1)
+        send_frame(conns[1], at(plain, 1.00))
+        reply(1)  # init
+        send_frame(conns[1], at(told, 1.02, 1))
+        reply(1)
+        join(2)
+        for k in (1, 2):
+            send_frame(conns[k], at(plain, 1.04))
+        for k in (1, 2):
+            reply(k)  # player 2: init
+        send_frame(conns[2], at(told, 1.06, 2))  # player 2 is told first ...
+        time.sleep(0.3)
+        send_frame(conns[1], at(plain, 1.06))  # ... player 1's percept of that cycle comes late
+        for k in (1, 2):
+            reply(k)
+        for k in (1, 2):
+            send_frame(conns[k], at(plain, 1.08))
+        for k in (1, 2):
+            reply(k)
+        for c in conns.values():
+            c.close()
+
+    thread = threading.Thread(target=fake_server)
+    thread.start()
+    try:
+        team = ServerTeam(
+            make_team("standing"), port=listener.getsockname()[1], players=2, timeout=5.0
+        )
+        joined = [(p.side, p.unum, p.last.time) for p in team.players]
+        for p in team.players:  # the team's first cycle: one percept waiting for each
+            p.perceive()
+        for p in team.players:
+            p.send(AgentCommand())
+        thread.join(5.0)
+        team.close()
+    finally:
+        listener.close()
+    assert joined == [("left", 1, pytest.approx(1.06)), ("left", 2, pytest.approx(1.06))]
+    # player 1: scene, init, 4 cycles answered; player 2: scene, init, 2 cycles
+    assert [len(got[k]) for k in (1, 2)] == [6, 4]
