@@ -367,3 +367,12 @@ def test_a_team_joins_with_every_player_on_the_same_cycle():
     assert joined == [("left", 1, pytest.approx(1.06)), ("left", 2, pytest.approx(1.06))]
     # player 1: scene, init, 4 cycles answered; player 2: scene, init, 2 cycles
     assert [len(got[k]) for k in (1, 2)] == [6, 4]
+
+
+def test_the_join_benchmark_reports_joins_and_failures(run_benchmark):
+    """``benchmarks/team_joins.py`` joins a team to ``serve`` (the real server left out here)
+    and reports the join times and failures, JSON last."""
+    env = {k: v for k, v in os.environ.items() if k != "RCSSSERVER3D"}
+    res, lines = run_benchmark("team_joins.py", "--players", 3, "--runs", 1, env=env)
+    assert res["serve_failures"] == 0 and res["serve_join_s_median"] > 0.0
+    assert "real_failures" not in res and lines[-1].startswith("serve: 1/1 joins of 3 players")
