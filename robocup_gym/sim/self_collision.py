@@ -243,6 +243,9 @@ class SelfCollisions:
         t = np.float32(game_time)
         if self._clock is not None and t < self._clock:  # the clock was set back: start again
             self.clear()
+        if not robot_types:  # nobody on the field (the last player left a server)
+            self.clear()
+            return
         self._clock = t
         plan = _plan(tuple(robot_types))
         positions, rotations = world.every_body_frame()

@@ -21,6 +21,7 @@ from robocup_gym.protocol.monitor import MonitorState
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.server.client import AgentClient, MonitorClient
 from robocup_gym.sim.fidelity import load_data
+from robocup_gym.sim.physics import CYCLE_S
 
 FIXTURE = load_data("kick_D.json")
 PARKED_BALL = "(ball (pos 20 10 0.042)(vel 0 0 0))"
@@ -35,6 +36,8 @@ class KickRun:
 
     balls: list[np.ndarray | None] = field(default_factory=list)
     feet: list[set[str]] = field(default_factory=list)
+    times: list[float] = field(default_factory=list)
+    """The game time each command-sequence cycle's percept reports, s."""
     accel_before: list[np.ndarray] = field(default_factory=list)
     """The accelerometer in the 24 cycles between the two trainer messages."""
 
@@ -58,12 +61,26 @@ class KickRun:
         return None
 
 
-def _drain(monitor: MonitorClient, state: MonitorState) -> None:
+_GAME_TIME = re.compile(r"\(GS [^\n]*?\(t ([0-9.]+)\)")
+
+
+def _drain(monitor: MonitorClient, state: MonitorState, balls: dict, wait: float = 0.002) -> None:
+    """Read the monitor frames that have come (waiting up to ``wait`` s for each); ``balls``
+    gets the ball each frame shows, by the frame's game time."""
     while True:
         try:
-            state.update(monitor.recv(timeout=0.002))
+            state.update(monitor.recv(timeout=wait))
         except TimeoutError:
             return
+        if state.has_scene and state.info.time is not None:
+            ball = state.scene.ball_position()
+            balls[round(state.info.time, 3)] = None if ball is None else np.asarray(ball, float)
+
+
+def _shown_at(balls: dict, t: float) -> np.ndarray | None:
+    """The ball of the newest frame of game time ``t`` or earlier (what a monitor shows then)."""
+    times = [u for u in balls if u <= t + 1e-6]
+    return balls[max(times)] if times else None
 
 
 def run(host: str, agent_port: int, monitor_port: int, *, trainer_first: bool = True) -> KickRun:
@@ -95,22 +112,28 @@ def run(host: str, agent_port: int, monitor_port: int, *, trainer_first: bool = 
             cycle(zero)
         monitor = MonitorClient(host, monitor_port, timeout=20.0)
         state = MonitorState()
+        balls: dict[float, np.ndarray | None] = {}
         placement = FIXTURE["robot_placement"]["trainer_cmd"] + PARKED_BALL + "(playMode PlayOn)"
         cycle(zero, placement)
         for _ in range(24):
             percept = cycle(zero)
             out.accel_before.append(np.array(_ACC.search(percept).group(1).split(), float))
-            _drain(monitor, state)
+            _drain(monitor, state, balls)
         first = True
+        times = out.times
         for segment in FIXTURE["command_sequence"]:
             message = command(segment["velocities_rad_per_s"])
             for _ in range(segment["cycles"]):
                 trainer = FIXTURE["ball_placement_cmd"] if first else None
                 first = False
                 percept = cycle(message, trainer)
-                _drain(monitor, state)
-                ball = state.scene.ball_position() if state.has_scene else None
-                out.balls.append(None if ball is None else np.asarray(ball, float))
+                _drain(monitor, state, balls)
+                times.append(float(_GAME_TIME.search(percept).group(1)))
                 out.feet.append(set(_FRP.findall(percept)))
+        _drain(monitor, state, balls, wait=0.5)  # the frames still on their way
         monitor.close()
+    # each cycle's ball from the frames by their game time, not by when they were read (a
+    # frame read a cycle late on a busy machine would otherwise move the kick by a cycle); a
+    # frame of a cycle carries the game time a cycle on from its percept's (on both servers)
+    out.balls = [_shown_at(balls, t + CYCLE_S) for t in times]
     return out

@@ -249,3 +249,21 @@ def test_a_collision_that_freezes_joints_anew_is_a_foul_once():
     first = next(k for k, f in enumerate(fouls) if f)
     assert fouls[first] == [0]
     assert not any(fouls[first + 1 : first + 50])
+
+
+def test_the_rule_with_nobody_on_the_field():
+    """When the last player leaves a running game on ``serve``, the world steps on with the rule
+    on and nothing to test (the rule's state cleared)."""
+    from robocup_gym.server import SimServer
+
+    server = SimServer(0, 0, "127.0.0.1", sync=True, real_time=False)
+    server.world_host.change_robots([(1, 0)], [])
+    server.world.set_game(play_mode="PlayOn", game_time=1.0)
+    server.world.step()
+    server.world_host.change_robots([], [1])
+    world = server.world
+    world.set_game(play_mode="PlayOn", game_time=1.02)
+    assert world.n_robots == 0 and world.self_collision_rule
+    for _ in range(3):
+        world.step()
+    assert world.self_collisions.collisions == [] and world.self_collisions.fouls == []
