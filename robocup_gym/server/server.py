@@ -407,7 +407,7 @@ class SimServer(AgentMessages, TrainerCommands):
     # ------------------------------------------------------------------ the cycle
     def _cycle(self) -> None:
         monitor_cycle = self.cycle % self.monitor_interval == 0
-        self._read_phase()
+        self._read_phase(monitor_cycle)
         if self._stop.is_set():
             return
         self._send_percepts()
@@ -417,7 +417,7 @@ class SimServer(AgentMessages, TrainerCommands):
         if self.on_cycle is not None:
             self.on_cycle(self)
 
-    def _read_phase(self) -> None:
+    def _read_phase(self, monitor_cycle: bool) -> None:
         self._poll(0)
         self._process_agents()
         if self.sync:
@@ -436,9 +436,11 @@ class SimServer(AgentMessages, TrainerCommands):
                     break
                 self._poll(_POLL_S)
                 self._process_agents()
-        # trainer commands take effect in the next cycle, as on rcssserver3d (only the monitor's
-        # frames go out every monitor_interval cycles)
-        self._process_monitors()
+        # the monitor port is read on monitor cycles only, as on rcssserver3d (SimSpark runs a
+        # control node's StartCycle once its own clock, stepped by the monitor step, has caught
+        # up): a trainer command sent in any other cycle takes effect a cycle later
+        if monitor_cycle:
+            self._process_monitors()
 
     def _all_synced(self) -> bool:
         return all(a.synced for a in self.agents if a.waited_for)
@@ -562,7 +564,9 @@ class SimServer(AgentMessages, TrainerCommands):
             if not m.conn.alive and not m.conn.closed:
                 self._unregister(m.conn)
                 m.conn.close()
-        self.monitors = [m for m in self.monitors if m.conn.alive]
+        # a trainer that sent its commands and closed at once: they wait for the next monitor
+        # cycle, as rcssserver3d reads a monitor's data and its end together
+        self.monitors = [m for m in self.monitors if m.conn.alive or m.conn.inbox]
         # percepts for the next cycle
         world = self.world
         host = self.world_host

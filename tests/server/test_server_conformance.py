@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from robocup_gym.protocol.perceptors import parse_perception
+from robocup_gym.robot.nao import nao_model
 from robocup_gym.server import SimServer
 from robocup_gym.server.client import AgentClient, MonitorClient
 
@@ -74,9 +75,17 @@ def test_every_handshake_order_gets_its_percepts(server, messages):
         assert got_number or server.world.n_robots == 1
 
 
-def test_trainer_commands_act_in_the_next_cycle(make_server):
-    """On every cycle, not only on monitor cycles (serve sends monitor frames every second
-    cycle, but reads the trainer's commands every cycle, as rcssserver3d)."""
+def _before_a_monitor_cycle(c: AgentClient) -> None:
+    """Answer percepts until the next cycle reads the monitor port (every second cycle: after the
+    percept of an odd cycle), so that a trainer command sent now acts in it."""
+    while round(parse_perception(_answer(c)).time / 0.02) % 2 == 0:
+        c.send("(syn)")
+
+
+def test_trainer_commands_act_on_the_next_monitor_cycle(make_server):
+    """serve reads the trainer's commands on monitor cycles (every second cycle), as
+    rcssserver3d: a command in before the agent's (syn) lets a monitor cycle run acts in it;
+    in before any other cycle, in the cycle after."""
     server = make_server(monitor_interval=2)
     with (
         AgentClient(HOST, server.agent_port, timeout=3.0) as c,
@@ -84,12 +93,27 @@ def test_trainer_commands_act_in_the_next_cycle(make_server):
     ):
         c.handshake("T", 1)
         m.send("(playMode PlayOn)")  # before kick-off the referee keeps the ball on the spot
-        for _ in range(2):
+        for _ in range(3):
             c.send("(syn)")
             _answer(c)
-        for x in (1.0, 2.0, 3.0, 4.0):  # both parities of the cycle counter
+        for x in (1.0, 2.0):
+            c.send("(syn)")
+            _before_a_monitor_cycle(c)
             m.send(f"(ball (pos {x} 1 0.042)(vel 0 0 0))")
             time.sleep(0.05)  # the command is in before the agent's (syn) lets the cycle run
+            c.send("(syn)")
+            _answer(c)
+            np.testing.assert_allclose(server.world.ball_position()[:2], (x, 1.0), atol=0.01)
+        for x in (3.0, 4.0):  # after an even cycle's percept: a cycle later
+            c.send("(syn)")
+            _before_a_monitor_cycle(c)
+            c.send("(syn)")
+            _answer(c)
+            m.send(f"(ball (pos {x} 1 0.042)(vel 0 0 0))")
+            time.sleep(0.05)
+            c.send("(syn)")
+            _answer(c)
+            assert abs(server.world.ball_position()[0] - x) > 0.5
             c.send("(syn)")
             _answer(c)
             np.testing.assert_allclose(server.world.ball_position()[:2], (x, 1.0), atol=0.01)
@@ -238,7 +262,7 @@ def test_the_forks_rot_turns_the_robot_about_its_torso(make_server):
     ):
         c.handshake("T", 1)
         c.send("(syn)")
-        _answer(c)
+        _before_a_monitor_cycle(c)
         joints = server.world.joint_angles_deg(0).copy()
         m.send("(agent (unum 1) (team Left) (pos -2 1 0.5) (rot -80 0 -90))")
         time.sleep(0.05)
@@ -299,3 +323,81 @@ def test_the_kick_procedure_on_a_real_server_equals_serve(real_rcssserver3d):
     kick = kick_procedure.FIXTURE["ball_first_moves_at_cycle"]
     assert served.feet[: kick - 5] == real_run.feet[: kick - 5]
     assert served.ball_travel() == pytest.approx(real_run.ball_travel(), abs=5e-4)
+
+
+def _trainer_delay(agent_port: int, monitor_port: int, cycles_first: int) -> tuple[int, int]:
+    """An agent plays ``cycles_first`` zero cycles, then a trainer sends ``(playMode PlayOn)``
+    after a percept and before its answer. Returns the cycle number of that percept (simulation
+    time / 0.02) and how many percepts later the game clock first shows running (2 when the
+    command acts in the next cycle: a percept shows the world of the cycle before it)."""
+    names = nao_model(0).effector_names
+    zero = "".join(f"({n} 0.00)" for n in names) + "(syn)"
+    with AgentClient(HOST, agent_port, timeout=20.0) as agent:
+        agent.handshake("Left", 1, 0)
+        for _ in range(cycles_first):
+            agent.send(zero)
+            percept = agent.recv()
+        monitor = MonitorClient(HOST, monitor_port, timeout=20.0)
+        try:
+            for _ in range(4):
+                agent.send(zero)
+                percept = agent.recv()
+            cycle = round(parse_perception(percept).time / 0.02)
+            monitor.send("(playMode PlayOn)")
+            for k in range(1, 5):
+                agent.send(zero)
+                if parse_perception(agent.recv()).game.game_time > 0.0:
+                    return cycle, k
+        finally:
+            monitor.close()
+    raise AssertionError("the game clock did not run within 4 cycles of PlayOn")
+
+
+@pytest.mark.parametrize("cycles_first", [20, 21])
+def test_a_trainer_command_takes_effect_on_the_next_monitor_cycle(cycles_first):
+    """The monitor port is read every second cycle (the monitor step, 0.04 s): a trainer's
+    command sent after the percept of an even cycle takes effect a cycle later than one sent
+    after an odd cycle's, as on rcssserver3d (and measured there:
+    ``test_trainer_commands_wait_for_a_monitor_cycle_on_a_real_server``)."""
+    server = SimServer(0, 0, HOST, sync=True, real_time=False, seed=1, engine="ode")
+    server.start_in_thread()
+    try:
+        cycle, delay = _trainer_delay(server.agent_port, server.monitor_port, cycles_first)
+    finally:
+        server.stop()
+    assert delay == (3 if cycle % 2 == 0 else 2), (cycle, delay)
+
+
+def test_trainer_commands_wait_for_a_monitor_cycle_on_a_real_server(real_rcssserver3d):
+    """Where a real rcssserver3d is installed: the same rule on it (which parity a run's
+    cycles fall on depends on how long the server cycled before the agent came)."""
+    from robocup_gym.backends.process import ServerProcess
+
+    for cycles_first in (20, 21, 20, 21):
+        real = ServerProcess(real_rcssserver3d, monitor_step=0.04)
+        agent_port, monitor_port = real.start()
+        try:
+            cycle, delay = _trainer_delay(agent_port, monitor_port, cycles_first)
+        finally:
+            real.stop()
+        assert delay == (3 if cycle % 2 == 0 else 2), (cycle, delay)
+
+
+def test_a_trainer_that_closes_at_once_still_acts(make_server):
+    """A trainer that sends a command and closes its connection at once (before the next
+    monitor cycle): the command still acts, as on rcssserver3d, which reads a monitor's data and
+    its end together."""
+    server = make_server(monitor_interval=2)
+    with AgentClient(HOST, server.agent_port, timeout=3.0) as c:
+        c.handshake("T", 1)
+        c.send("(syn)")
+        _before_a_monitor_cycle(c)
+        c.send("(syn)")
+        _answer(c)  # the next cycle is not a monitor cycle
+        with MonitorClient(HOST, server.monitor_port, timeout=3.0) as m:
+            m.send("(playMode PlayOn)(ball (pos 3 -2 0.042)(vel 0 0 0))")
+        time.sleep(0.1)  # closed before the cycles run
+        for _ in range(2):
+            c.send("(syn)")
+            _answer(c)
+        np.testing.assert_allclose(server.world.ball_position()[:2], (3.0, -2.0), atol=0.01)
