@@ -28,6 +28,7 @@ import json
 import math
 import os
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -44,7 +45,8 @@ def start_server_process(
     *extra_args: str, timeout: float = 60.0
 ) -> tuple[subprocess.Popen[str], int, int]:
     """Start ``python -m robocup_gym.server`` on free loopback ports; returns (process, agent
-    port, monitor port). The caller must terminate the process.
+    port, monitor port). The caller must terminate the process (on Linux it also ends when
+    its parent dies).
 
     Raises:
         RuntimeError: if it does not report its ports within ``timeout`` seconds.
@@ -61,9 +63,16 @@ def start_server_process(
         "127.0.0.1",
         *extra_args,
     ]
+    from robocup_gym.backends.process import _death_signal_preexec
+
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(
-        cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+        preexec_fn=_death_signal_preexec(signal.SIGTERM),  # ends with its parent (Linux)
     )
     deadline = time.monotonic() + timeout
     lines: list[str] = []

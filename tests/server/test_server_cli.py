@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import signal
 import socket
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -84,3 +86,29 @@ def test_without_libode_serve_says_so_in_one_line_and_names_the_other_engine(tmp
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "Open Dynamics Engine" in lines[0], res.stderr
     assert "--engine mujoco" in lines[0] and "Traceback" not in res.stderr
+
+
+@pytest.mark.skipif(
+    not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's"
+)
+def test_a_started_server_ends_with_its_parent():
+    """``start_server_process`` (matches on ``serve``, the benchmarks): a parent that dies
+    without stopping its server does not leave it running."""
+    code = (
+        "import os\n"
+        "from robocup_gym.server.bench import start_server_process\n"
+        "proc, _, _ = start_server_process('--sync')\n"
+        "print(proc.pid, flush=True)\n"
+        "os._exit(0)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    pid = int(out.stdout.split()[-1])
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return
+        time.sleep(0.05)
+    os.kill(pid, signal.SIGKILL)
+    raise AssertionError(f"the server {pid} outlived its parent")
