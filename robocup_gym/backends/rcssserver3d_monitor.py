@@ -20,6 +20,8 @@ log = logging.getLogger("robocup_gym.backends.rcssserver3d")
 
 TIME_TOLERANCE_S = 0.006
 """Tolerance when matching a monitor frame's game time to a percept's (2–3 decimals on the wire)."""
+FROZEN_CLOCK_MODES = frozenset({"BeforeKickOff", "GameOver"})
+"""Play modes in which the game clock stands still (ground truth then cannot be matched by time)."""
 
 
 @dataclass

@@ -1,6 +1,6 @@
 """What the server does with an agent's messages (wire reference §3): ``scene`` creates its
 robot, ``init`` gives it a team and number (the rules of
-:class:`~robocup_gym.sim.referee.TeamRegistry`), hinge velocities, ``beam``, ``say``, ``pass``
+:class:`~robocup_gym.sim.teams.TeamRegistry`), hinge velocities, ``beam``, ``say``, ``pass``
 and ``syn`` act as on rcssserver3d. A mixin of :class:`~robocup_gym.server.server.SimServer`."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from robocup_gym.protocol import effectors as fx
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.server.agent import AgentState
 from robocup_gym.server.wire import agent_actions, fast_joint_message
-from robocup_gym.sim.referee import InitError
+from robocup_gym.sim.teams import InitError
 
 log = logging.getLogger("robocup_gym.server")
 

@@ -54,7 +54,8 @@ from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES, SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator
 from robocup_gym.sim.physics import CYCLE_S
-from robocup_gym.sim.referee import BEAM_MODES, Player, Referee, Rules
+from robocup_gym.sim.referee import BEAM_MODES, Referee, Rules
+from robocup_gym.sim.teams import Player
 from robocup_gym.sim.vision import VisionConfig
 
 log = logging.getLogger("robocup_gym.server")

@@ -10,7 +10,7 @@ import math
 from robocup_gym.protocol import trainer as tc
 from robocup_gym.server.agent import AgentState
 from robocup_gym.server.wire import Connection, trainer_commands
-from robocup_gym.sim.referee import Player
+from robocup_gym.sim.teams import Player
 
 log = logging.getLogger("robocup_gym.server")
 

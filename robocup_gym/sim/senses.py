@@ -37,7 +37,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robocup_gym.sim.referee import BEAM_MODES, FOULS_PAUSED_MODES, PAUSED_MODES
+from robocup_gym.sim.referee import BEAM_MODES, PAUSED_MODES
+from robocup_gym.sim.referee_fouls import FOULS_PAUSED_MODES
 from robocup_gym.sim.self_collision import SelfCollisions
 from robocup_gym.sim.vision import CALIBRATION_ERROR_M, see
 from robocup_gym.types import GameState, HeardMessage, Perception

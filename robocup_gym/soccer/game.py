@@ -18,7 +18,8 @@ import numpy as np
 from robocup_gym.sim import SimulationDivergedError, make_world
 from robocup_gym.sim.game_host import GameHost
 from robocup_gym.sim.physics import BALL_REST_Z
-from robocup_gym.sim.referee import Player, Referee, Rules
+from robocup_gym.sim.referee import Referee, Rules
+from robocup_gym.sim.teams import Player
 from robocup_gym.sim.vision import VisionConfig
 from robocup_gym.types import PLAY_MODES
 

@@ -11,7 +11,8 @@ from robocup_gym.protocol.framing import FrameDecoder
 from robocup_gym.server.wire import Connection, fast_joint_message, salvage
 from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES
-from robocup_gym.sim.referee import InitError, Player, Referee, TeamRegistry, next_kickoff_side
+from robocup_gym.sim.referee import Referee, next_kickoff_side
+from robocup_gym.sim.teams import InitError, Player, TeamRegistry
 from robocup_gym.sim.vision import VisionConfig
 
 

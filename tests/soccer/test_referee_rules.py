@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robocup_gym.sim.referee import INCAPABLE_S, MAX_PLAYERS_IN_OWN_AREA, Rules
+from robocup_gym.sim.fouls import MAX_PLAYERS_IN_OWN_AREA
+from robocup_gym.sim.referee import Rules
+from robocup_gym.sim.referee_fouls import INCAPABLE_S
 from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply, yaw_quat
 from robocup_gym.soccer.game import SoccerGame, Start
 from robocup_gym.soccer.referee_replays import illegal_defence_replay, touching_replay

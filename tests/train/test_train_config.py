@@ -121,7 +121,7 @@ def test_a_run_records_every_option_of_its_environment(tmp_path):
 
 
 def test_hp_flags_read_exponent_notation():
-    from robocup_gym.cli import _parse_assignments
+    from robocup_gym.cli.common import _parse_assignments
 
     got = _parse_assignments(["learning_rate=3e-4", "policy_kwargs={log_std_init: -1e0}"], "--hp")
     assert got == {"learning_rate": 3e-4, "policy_kwargs": {"log_std_init": -1.0}}

@@ -1,6 +1,7 @@
 """The embedded SimSpark world on MuJoCo: robots, ball, field, 20 ms cycles, perception.
 
-:class:`World` is the in-process simulator every environment drives by default. One
+:class:`World` is the fast approximation of the ODE world (the default engine,
+:class:`~robocup_gym.sim.engines.ode.OdeWorld`), with the same interface. One
 :meth:`World.step` is one SimSpark agent cycle (0.02 s). Joints are velocity-controlled exactly as
 on rcssserver3d (target angular velocity in rad/s, clipped to the joint's max speed, driven by a
 10 N·m motor; commands are ignored while a joint is at or beyond a stop), with a configurable dead
@@ -23,39 +24,33 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
-from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim import SimulationDivergedError
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
+from robocup_gym.sim.engines.mujoco.commands import WorldCommands
+from robocup_gym.sim.engines.mujoco.layout import WorldLayout
 from robocup_gym.sim.engines.mujoco.motors import (
-    _SATURATED,
-    CREEP_WINDOW_RAD,
-    DIVERGED_QVEL_SQ,
     OdeRowsNumpy,
-    _any,
-    _clip,
 )
 from robocup_gym.sim.engines.mujoco.readings import WorldReadings
+from robocup_gym.sim.engines.mujoco.robot import RobotState
 from robocup_gym.sim.engines.mujoco.scene import (
-    FRP_GEOMS,
     RobotSlot,
     apply_ode_softness,
-    frp_sensor_name,
     scene_xml,
 )
+from robocup_gym.sim.engines.mujoco.sleep import AUTO_DISABLE_SPEED, AutoDisable
 from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
-from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat, rigid_move
-from robocup_gym.sim.senses import AgentState, Senses
-from robocup_gym.sim.vision import PLAYER_PARTS, VisionConfig
+from robocup_gym.sim.pose import joint_angles_array, placement_quat, rigid_move
+from robocup_gym.sim.senses import Senses
+from robocup_gym.sim.vision import VisionConfig
 from robocup_gym.types import (
     AgentCommand,
-    ForceResistance,
     GameState,
 )
 
@@ -69,73 +64,7 @@ _RELAXED = compiled_step.FLAGS.index("relaxed")
 _BOUNCY = compiled_step.FLAGS.index("bouncy")
 
 
-def _contiguous(ids: np.ndarray) -> slice | None:
-    """``ids`` as a slice when they are consecutive ascending indices (views instead of
-    gathers on the hot path), else ``None`` (also when empty)."""
-    n = len(ids)
-    if n and np.array_equal(ids, np.arange(ids[0], ids[0] + n)):
-        return slice(int(ids[0]), int(ids[0]) + n)
-    return None
-
-
-_AUTO_DISABLE_SPEED = 0.01
-"""ODE's default auto-disable thresholds (linear m/s, angular rad/s) that SimSpark keeps: a body
-slower than both is resting (reference §7.1)."""
-
-
-@dataclass(kw_only=True)
-class RobotState(AgentState):
-    """Book-keeping of one robot in the world: ids into the MuJoCo model, motor state, and (from
-    :class:`~robocup_gym.sim.senses.AgentState`) its state as an agent."""
-
-    index: int
-    prefix: str
-    model: NaoModel
-    qpos_root: int = 0
-    qvel_root: int = 0
-    qpos_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    qvel_joints: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    torso_body: int = 0
-    head_body: int = 0
-    part_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    frp_sensors: list[tuple[str, int, int]] = field(default_factory=list)
-    """Per force resistance perceptor: name, address of its contact sensor's data
-    (contact count, force, point; world frame), foot/toe body."""
-    robot_bodies: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    robot_geoms: frozenset = frozenset()
-    shapes: tuple = ()
-    """Collision geoms by shape: (boxes, their half sizes, spheres, radii, capsules, radii,
-    half lengths), for the lowest point of the robot."""
-    range_rad: tuple = (np.zeros(0), np.zeros(0))
-    """(lower, upper) joint limits in rad, canonical order."""
-    max_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    min_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    """``-max_speeds`` (the lower clip of commands), rad/s."""
-    targets: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    """Active motor targets, rad/s, canonical order."""
-    q_ref: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    """Integral of the commanded velocities (rad) used for creep compensation."""
-    motor_lost: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    """Joints whose motor saturated or sat at a stop in the last step: their creep compensation
-    restarts from where they are (motion lost there is never caught up, as in ODE)."""
-    cmd: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    """Commands due this cycle for the compiled step (NaN: none), a view into the world's."""
-    joint_slice: slice = field(default_factory=lambda: slice(0, 0))
-    """This robot's joints in the world-level joint arrays."""
-    pending: list = field(default_factory=list)
-    """Commands waiting out the dead time: ``(due cycle, velocities in rad/s with NaN for "no
-    command", whether every joint has a command)``."""
-    accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
-    prev_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    last_frp: dict[str, ForceResistance] = field(default_factory=dict)
-    asleep: bool = False
-    """Held where it was placed (ODE auto-disable) until a non-zero motor target or a contact
-    with a moving body wakes it (see :meth:`World.place_robot`)."""
-    sleep_qpos: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    """Root pose (7) and joint angles at which a sleeping robot is held."""
-
-
-class World(OdeRowsNumpy, WorldReadings, Senses):
+class World(WorldLayout, WorldCommands, AutoDisable, OdeRowsNumpy, WorldReadings, Senses):
     """The SimSpark Nao world on MuJoCo.
 
     Args:
@@ -269,281 +198,6 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
         return "compiled" if self._compiled is not None else "numpy"
 
     # ------------------------------------------------------------------ construction helpers
-    def _init_compiled(self, mode: bool | None) -> None:
-        """Bind the compiled step (:mod:`robocup_gym.sim.compiled`) to this world's arrays when
-        ``mode`` is ``True`` (must work) or ``None`` (if it can be built)."""
-        if mode is False:
-            return
-        try:
-            compiled_step.load()
-        except compiled_step.CompiledStepUnavailableError as exc:
-            if mode:
-                raise
-            self.compiled_unavailable = str(exc)
-            return
-        m = self.model
-        n = len(self._qvel_j)
-        i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731
-        sort = self._motor_sort if self._motor_sort is not None else np.arange(n)
-        drag_bodies = m.sensor_objid[0 : 2 * len(self._drag_vel) : 2]
-        keep = {
-            "qpos_j": i32(self._qpos_j),
-            "qvel_j": i32(self._qvel_j),
-            "lo": np.ascontiguousarray(self._lo, dtype=float),
-            "hi": np.ascontiguousarray(self._hi, dtype=float),
-            "vmax": np.concatenate([r.max_speeds for r in self.robots]).astype(float)
-            if self.robots
-            else np.zeros(0),
-            "targets": self._targets,
-            "q_ref": self._q_ref,
-            "motor_lost": self._motor_lost,
-            "cmd": self._cmd,
-            "at_lo": np.zeros(n, dtype=bool),
-            "at_hi": np.zeros(n, dtype=bool),
-            "limited": np.zeros(n, dtype=bool),
-            "away": np.zeros(n, dtype=bool),
-            "q": np.zeros(n),
-            "mt": np.zeros(n),
-            "sort": i32(sort),
-            "dofs": i32(self._motor_dofs_sorted),
-            "motor_b": np.ascontiguousarray(self._motor_b, dtype=float),
-            "shift": np.zeros(n),
-            "rows": np.zeros(n, dtype=bool),
-            "qvel_root": i32([r.qvel_root for r in self.robots]),
-            "torso_body": i32([r.torso_body for r in self.robots]),
-            "prev_vel": self._prev_vel,
-            "accel": self._accel,
-            "drag_body": i32(drag_bodies),
-            "flags": self._flags,
-        }
-        st = compiled_step.WorldStruct()
-        for name, array in keep.items():
-            setattr(st, name, compiled_step.address(array))
-        st.n, st.nrobots, st.ndrag = n, len(self.robots), len(drag_bodies)
-        st.ball_qpos, st.ball_qvel = self._ball_qpos, self._ball_qvel
-        st.ball_pair = self._ball_ground_pair
-        st.ball_solref[:] = [*self._ball_ground_solref[False], *self._ball_ground_solref[True]]
-        st.cycle, st.inv_cycle, st.inv_timestep = CYCLE_S, 1.0 / CYCLE_S, self._inv_timestep
-        st.creep_window = CREEP_WINDOW_RAD
-        st.stop_erp, st.stop_bounce = phys.JOINT_STOP_ERP_CFM[0], phys.JOINT_STOP_BOUNCE
-        st.fudge_torque = phys.MOTOR_FUDGE_FACTOR * phys.MOTOR_MAX_TORQUE
-        st.max_torque, st.saturated = phys.MOTOR_MAX_TORQUE, _SATURATED
-        st.surface_layer, st.gravity = phys.SURFACE_LAYER, phys.GRAVITY
-        st.drag_lin, st.drag_ang = phys.BODY_LINEAR_DRAG, phys.BODY_ANGULAR_DRAG
-        st.ball_radius, st.ground_z = phys.BALL_RADIUS, phys.GROUND_PLANE_Z
-        st.bounce_min_speed, st.diverged_qvel_sq = phys.BALL_BOUNCE_MIN_SPEED, DIVERGED_QVEL_SQ
-        self._compiled = compiled_step.CompiledStep(st, m, self._data, list(keep.values()))
-
-    def _init_drag(self, drag_bodies: list[int]) -> None:
-        """Map the scene's drag sensors
-        (:func:`robocup_gym.sim.engines.mujoco.scene._drag_sensors`: per robot
-        body its centre-of-mass linear and angular velocity) onto ``xfrc_applied``."""
-        m, d = self.model, self._data
-        n = 2 * len(drag_bodies)  # the drag sensors come first; the FRP contact sensors follow
-        kinds = m.sensor_type[:n]
-        lin, ang = mujoco.mjtSensor.mjSENS_FRAMELINVEL, mujoco.mjtSensor.mjSENS_FRAMEANGVEL
-        bodies = m.sensor_objid[0:n:2]
-        if (
-            m.nsensor < n
-            or not np.array_equal(bodies, drag_bodies)
-            or not np.array_equal(m.sensor_objid[1:n:2], bodies)
-            or not (np.all(kinds[0::2] == lin) and np.all(kinds[1::2] == ang))
-            or not np.array_equal(m.sensor_adr[:n], 3 * np.arange(n))
-        ):
-            raise RuntimeError("the scene's drag sensors do not match the robot bodies")
-        self._drag_vel = d.sensordata[: 3 * n].reshape(-1, 6)
-        """Per robot body: centre-of-mass velocity (m/s) and angular velocity (rad/s), world."""
-        rows = _contiguous(bodies)
-        self._drag_index = None if rows is not None or len(bodies) == 0 else bodies
-        self._drag_force = d.xfrc_applied[rows] if rows is not None else None
-        """The robot bodies' rows of ``xfrc_applied`` (a view) when they are contiguous (always,
-        in our scenes); otherwise ``_drag_index`` lists them."""
-
-    def _init_views(self) -> None:
-        """Views into MjData's fixed buffers (they never move) for the per-cycle work."""
-        d = self._data
-        self._qpos = d.qpos
-        self._qvel = d.qvel
-        self._sensordata = d.sensordata
-        self._accel_io = [
-            (
-                r,
-                d.qvel[r.qvel_root : r.qvel_root + 3],
-                d.xmat[r.torso_body].reshape(3, 3),
-                np.zeros(3),
-            )
-            for r in self.robots
-        ]
-        """Per robot: state, torso velocity (world), torso rotation, scratch (accelerometer)."""
-        ms = self._motor_slice = _contiguous(self._motor_dofs_sorted)
-        """The motor dofs as one slice when they are contiguous (one robot), else ``None``."""
-        if ms is not None:
-            self._motor_views = (
-                self.model.dof_frictionloss[ms],
-                d.qacc_warmstart[ms],
-                d.qvel[ms],
-            )
-            """The motor dofs' friction loss (the motor rows' force bound), warm start and
-            velocity: views, so that the per-cycle work needs no MjModel/MjData lookups."""
-
-    def _init_motor_arrays(self) -> None:
-        """World-level arrays over every robot's joints (robot after robot, canonical order);
-        each robot's ``targets`` and ``q_ref`` are views into them (created here), so one cycle's
-        motor work is a few vector operations whatever the number of robots.
-
-        Motor rows are the dof friction-loss rows, which MuJoCo puts first in the constraint
-        list, in dof order (checked at construction, :meth:`_check_motor_rows`); ``_motor_sort``
-        maps canonical order to dof order.
-        """
-        m = self.model
-        robots = self.robots
-        cat = (lambda xs: np.concatenate(xs)) if robots else (lambda xs: np.zeros(0))
-        self._qpos_j = cat([r.qpos_joints for r in robots]).astype(int)
-        self._qvel_j = cat([r.qvel_joints for r in robots]).astype(int)
-        self._lo = cat([r.range_rad[0] for r in robots])
-        self._hi = cat([r.range_rad[1] for r in robots])
-        n = len(self._qvel_j)
-        self._targets = np.zeros(n)
-        self._q_ref = np.zeros(n)
-        self._motor_lost = np.zeros(n, dtype=bool)
-        self._cmd = np.full(n, np.nan)
-        """Due commands for the compiled step (NaN: none), see :meth:`_step_compiled`."""
-        self._accel = np.zeros((len(robots), 3))
-        self._prev_vel = np.zeros((len(robots), 3))
-        off = 0
-        for i, r in enumerate(robots):
-            k = len(r.qvel_joints)
-            r.targets = self._targets[off : off + k]
-            r.q_ref = self._q_ref[off : off + k]
-            r.motor_lost = self._motor_lost[off : off + k]
-            r.cmd = self._cmd[off : off + k]
-            self._accel[i] = r.accel
-            r.accel = self._accel[i]
-            r.prev_vel = self._prev_vel[i]
-            r.joint_slice = slice(off, off + k)
-            off += k
-        sort = np.argsort(self._qvel_j, kind="stable")
-        self._motor_sort = None if np.array_equal(sort, np.arange(n)) else sort
-        dofs = self._qvel_j if self._motor_sort is None else self._qvel_j[sort]
-        self._motor_dofs_sorted = dofs
-        tc = np.maximum(m.dof_solref[dofs, 0], 2 * m.opt.timestep)
-        self._motor_b = 2.0 / (m.dof_solimp[dofs, 1] * tc)
-        """Damping B of each motor row, dof order (MuJoCo's aref = −B·v for friction rows)."""
-
-    def _check_motor_rows(self) -> None:
-        """Check, once per world, what the joint motors rely on in MuJoCo's constraint rows, so
-        that a MuJoCo version that lays them out differently fails here with a clear error
-        instead of silently driving the wrong rows (tested with MuJoCo 3.4 and 4.0, see
-        docs/reference/engines.md §2.7):
-
-        * the dof friction-loss rows (the motors) are the first ``nrows`` constraint rows, one per
-          motor dof with non-zero ``dof_frictionloss``, in dof order, and no other row is one;
-        * their reference acceleration is ``efc_aref = −B·v`` with ``B`` from ``_motor_b``
-          (MuJoCo's damping of a row of impedance ``solimp[1]`` and time constant
-          ``max(solref[0], 2·timestep)``), which :meth:`step` shifts by ``B·v_cmd``.
-
-        Probes the freshly reset state with non-zero joint velocities and restores it.
-
-        Raises:
-            RuntimeError: naming the MuJoCo version and the assumption that does not hold.
-        """
-        dofs = self._motor_dofs_sorted
-        n = len(dofs)
-        if n == 0:
-            return
-        m, d = self.model, self.data
-        probe = np.where(np.arange(n) % 2 == 0, 1.0, -1.0) * (1.0 + np.arange(n) % 5)
-        d.qvel[dofs] = probe
-        mujoco.mj_forward(m, d)
-        friction = mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF
-        problem = None
-        rows = (d.efc_type == friction).nonzero()[0]
-        if len(rows) != n or not np.array_equal(rows, np.arange(n)):
-            problem = (
-                f"the {n} joint motor (dof friction-loss) rows are not the first constraint rows "
-                f"(friction-loss rows at {rows[:5].tolist()}…, {d.nefc} rows in all)"
-            )
-        elif not np.array_equal(d.efc_id[:n], dofs):
-            problem = "the joint motor (dof friction-loss) rows are not in dof order"
-        elif not np.allclose(d.efc_aref[:n], -self._motor_b * probe, rtol=1e-9, atol=0.0):
-            problem = (
-                "the motor rows' reference acceleration is not −B·v with MuJoCo's documented B "
-                f"(largest error {np.abs(d.efc_aref[:n] + self._motor_b * probe).max():.3g})"
-            )
-        d.qvel[dofs] = 0.0
-        d.qacc_warmstart[:] = 0.0
-        mujoco.mj_forward(m, d)
-        if problem is not None:
-            raise RuntimeError(
-                f"MuJoCo {mujoco.__version__}: {problem}. The World's joint motors "
-                "(robocup_gym/sim/engines/mujoco/world.py, robocup_gym/robot/mjcf.py) rely on it; "
-                "use a tested MuJoCo version (docs/reference/engines.md §2.7)."
-            )
-
-    def _check_contact_rows(self) -> None:
-        """Check the row layout that :meth:`_surface_layer` and :meth:`_bounce_stops` rely on
-        to find their rows without a per-row lookup: every contact has three constraint rows
-        (condim 3, elliptic cones), and the only limit rows are the joints' stops (no limited
-        tendon).
-
-        Raises:
-            RuntimeError: naming the geom or pair that would make contacts of another shape.
-        """
-        m = self.model
-        if m.ntendon and np.any(m.tendon_limited):
-            raise RuntimeError("the world's joint stops assume no limited tendons")
-        if m.opt.cone != mujoco.mjtCone.mjCONE_ELLIPTIC:
-            raise RuntimeError("the world's contact model needs elliptic friction cones")
-        colliding = (m.geom_contype != 0) | (m.geom_conaffinity != 0)
-        odd = np.flatnonzero(colliding & (m.geom_condim != 3))
-        if len(odd) or np.any(m.pair_dim != 3):
-            name = m.geom(int(odd[0])).name if len(odd) else "a contact pair"
-            raise RuntimeError(
-                f"{name} has condim ≠ 3: every contact must have three rows (see "
-                "World._surface_layer)"
-            )
-
-    def _index_robot(self, i: int, slot: RobotSlot) -> RobotState:
-        m = self.model
-        model = nao_model(slot.type_index)
-        p = slot.prefix
-        root = m.joint(f"{p}root").id
-        r = RobotState(index=i, prefix=p, model=model)
-        r.qpos_root = int(m.jnt_qposadr[root])
-        r.qvel_root = int(m.jnt_dofadr[root])
-        r.qpos_joints = np.array([m.jnt_qposadr[m.joint(p + e).id] for e in model.effector_names])
-        r.qvel_joints = np.array([m.jnt_dofadr[m.joint(p + e).id] for e in model.effector_names])
-        r.torso_body = m.body(f"{p}torso").id
-        r.head_body = m.body(f"{p}head").id
-        r.part_bodies = np.array([m.body(p + part).id for part in PLAYER_PARTS])
-        r.robot_bodies = np.array([m.body(p + b.name).id for b in model.bodies])
-        r.robot_geoms = frozenset(m.geom(p + b.name).id for b in model.bodies if b.collides)
-        feet = ["rf", "lf"] + (["rf1", "lf1"] if model.robot_type.has_toes else [])
-        r.frp_sensors = [
-            (f, int(m.sensor_adr[m.sensor(frp_sensor_name(p, f)).id]), m.body(p + FRP_GEOMS[f]).id)
-            for f in feet
-        ]
-        r.range_rad = tuple(np.radians(model.ranges_deg).T.copy())
-        r.max_speeds = model.max_speeds
-        r.min_speeds = -model.max_speeds
-        geoms = np.array(sorted(r.robot_geoms), dtype=int)
-        kind = m.geom_type[geoms]
-        box = geoms[kind == mujoco.mjtGeom.mjGEOM_BOX]
-        sphere = geoms[kind == mujoco.mjtGeom.mjGEOM_SPHERE]
-        capsule = geoms[kind == mujoco.mjtGeom.mjGEOM_CAPSULE]  # along local z
-        if len(box) + len(sphere) + len(capsule) != len(geoms):
-            raise ValueError("robot geoms must be boxes, spheres or capsules")
-        r.shapes = (
-            box,
-            m.geom_size[box].copy(),
-            sphere,
-            m.geom_size[sphere, 0].copy(),
-            capsule,
-            m.geom_size[capsule, 0].copy(),
-            m.geom_size[capsule, 1].copy(),
-        )
-        return r
-
     # ------------------------------------------------------------------ robot state transfer
     _AGENT_STATE = (
         "team",
@@ -783,8 +437,8 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
         r = self.robot(index)
         d = self.data
         still = not np.any(r.targets) and (
-            np.abs(d.qvel[r.qvel_root : r.qvel_root + 6]).max() < _AUTO_DISABLE_SPEED
-            and np.abs(d.qvel[r.qvel_joints]).max(initial=0.0) < _AUTO_DISABLE_SPEED
+            np.abs(d.qvel[r.qvel_root : r.qvel_root + 6]).max() < AUTO_DISABLE_SPEED
+            and np.abs(d.qvel[r.qvel_joints]).max(initial=0.0) < AUTO_DISABLE_SPEED
         )
         positions, rotations = self.body_frames(index)
         new_pos, new_rot = rigid_move(
@@ -803,42 +457,6 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
             r.sleep_qpos = np.concatenate((d.qpos[a : a + 7], d.qpos[r.qpos_joints]))
         self._update_sleepers()
         self.forward()
-
-    def _update_sleepers(self) -> None:
-        self._sleepers = [r for r in self.robots if r.asleep]
-
-    def _wake_touched(self) -> None:
-        """Wake every sleeping robot one of whose parts touches a moving body (the ball or
-        another robot) in this step's contacts: in ODE the contact joint joins it to that body's
-        island, which is enabled as a whole."""
-        d = self._data  # inside step(): the contacts are this step's
-        if d.ncon == 0:
-            return
-        pairs = d.contact.geom[: d.ncon].tolist()
-        static = self._static_geoms
-        woke = False
-        for r in self._sleepers:
-            own = r.robot_geoms
-            for g1, g2 in pairs:
-                if (g1 in own and g2 not in own and g2 not in static) or (
-                    g2 in own and g1 not in own and g1 not in static
-                ):
-                    r.asleep = False
-                    woke = True
-                    break
-        if woke:
-            self._update_sleepers()
-
-    def _hold_sleepers(self) -> None:
-        """Put every sleeping robot back into its held pose with zero velocity (a disabled ODE
-        body is not integrated)."""
-        d = self._data  # inside step(): only the state is written
-        for r in self._sleepers:
-            a = r.qpos_root
-            d.qpos[a : a + 7] = r.sleep_qpos[:7]
-            d.qpos[r.qpos_joints] = r.sleep_qpos[7:]
-            d.qvel[r.qvel_root : r.qvel_root + 6] = 0.0
-            d.qvel[r.qvel_joints] = 0.0
 
     def _lowest_point(self, r: RobotState) -> float:
         """Height of robot ``r``'s lowest collision point (m), from the current geom poses."""
@@ -905,87 +523,6 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
         self._poses_stale = self._com_stale = False
 
     # ------------------------------------------------------------------ commands
-    def command_array(self, index: int, velocities: Mapping[str, float] | np.ndarray) -> np.ndarray:
-        """Validate a joint-velocity command (rad/s) and return it as a canonical-order array in
-        which NaN marks "no command for this joint" (targets are sticky).
-
-        Raises:
-            KeyError: unknown effector name (lists the valid ones).
-            ValueError: NaN/inf value (names the joint) or wrong array shape.
-        """
-        r = self.robot(index)
-        n = len(r.max_speeds)
-        if type(velocities) is np.ndarray and velocities.shape == (n,):  # the hot path
-            out = velocities.astype(float)  # a copy: the caller may reuse its array
-            if not math.isfinite(out.dot(out)):  # one check for any NaN/inf (or a huge value)
-                self._raise_not_finite(r, out)
-            return out
-        if isinstance(velocities, Mapping):
-            out = np.full(n, np.nan)
-            for name, v in velocities.items():
-                i = joint_index(r.model, name)
-                v = float(v)
-                if not math.isfinite(v):
-                    raise ValueError(f"velocity command for joint {r.effector_names[i]} is {v}")
-                out[i] = v
-            return out
-        out = np.array(velocities, dtype=float)  # a copy: the caller may reuse its array
-        if out.shape != (n,):
-            raise ValueError(
-                f"velocity array must have shape ({n},) in effector order "
-                f"{', '.join(r.effector_names)}; got {out.shape}"
-            )
-        if not math.isfinite(out.dot(out)):
-            self._raise_not_finite(r, out)
-        return out
-
-    @staticmethod
-    def _raise_not_finite(r: RobotState, velocities: np.ndarray) -> None:
-        """Raise ``ValueError`` naming the first joint whose command is NaN/inf (if any: a
-        finite command whose squares overflow is left alone)."""
-        bad = ~np.isfinite(velocities)
-        if bad.any():
-            i = int(np.argmax(bad))
-            raise ValueError(f"velocity command for joint {r.effector_names[i]} is {velocities[i]}")
-
-    def command(self, index: int, command: AgentCommand | Mapping[str, float] | np.ndarray) -> None:
-        """Queue one cycle's command for robot ``index`` (it acts after the dead time)."""
-        r = self.robot(index)
-        if isinstance(command, AgentCommand):
-            velocities = command.joint_velocities
-            vel = self.command_array(index, velocities)
-            if command.beam is not None:
-                self.beam(index, *command.beam)
-            if command.say is not None:
-                self.say(index, command.say)
-        else:
-            velocities = command
-            vel = self.command_array(index, velocities)
-        # only a mapping can leave joints without a command (NaN): an array names them all
-        full = type(velocities) is np.ndarray or not np.isnan(vel).any()
-        r.pending.append((self.cycle + self.dead_time_cycles, vel, full))
-
-    def _realise_commands(self, r: RobotState, inside: np.ndarray | None) -> None:
-        """Write robot ``r``'s due commands into its motors (SimSpark's hinge effector, spec
-        §8.3): a command is taken only by joints strictly inside their limits (``inside``, this
-        robot's slice, ``None`` when all are); the others keep their previous target. Commands
-        are clipped to each joint's maximum speed."""
-        while r.pending and r.pending[0][0] <= self.cycle:
-            _, vel, full = r.pending.pop(0)
-            vel = self._frozen_to_zero(r.index, vel)
-            if inside is None and full:
-                _clip(vel, r.min_speeds, r.max_speeds, out=r.targets)  # every joint takes it
-                continue
-            clipped = _clip(vel, r.min_speeds, r.max_speeds)
-            if full:
-                take = inside
-            else:
-                # NaN (no command for that joint) compares False: the old target stays
-                take = vel == vel
-                if inside is not None:
-                    take &= inside
-            np.copyto(r.targets, clipped, where=take)
-
     # ------------------------------------------------------------------ stepping
     def step(
         self,
@@ -1017,13 +554,6 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
         self._advance_clocks(CYCLE_S)
         if diverged:
             self._raise_diverged()
-
-    def _wake_commanded(self) -> None:
-        """A non-zero motor target wakes a sleeping robot for this very step (reference §8.3)."""
-        for r in self._sleepers:
-            if _any(r.targets != 0.0):
-                r.asleep = False
-        self._update_sleepers()
 
     def _step_compiled(self) -> bool:
         """One cycle's physics with the per-cycle work in C (``cstep.c`` does what
@@ -1069,25 +599,6 @@ class World(OdeRowsNumpy, WorldReadings, Senses):
             + (f"; MuJoCo warnings: {', '.join(names)}" if names else "; NaN/inf state")
             + ". Call World.reset() to continue."
         )
-
-    def set_torso_force(self, index: int, force: Sequence[float]) -> None:
-        """Push robot ``index``'s torso with ``force`` (N, world frame, at the torso's origin,
-        through its free joint) in every step until it is changed or :meth:`reset`;
-        ``(0, 0, 0)`` ends it. SimSpark has no such force: it is a training aid
-        (``TrainConfig.assist_force``), never part of an evaluation.
-
-        Raises:
-            ValueError: ``force`` is not three finite numbers.
-        """
-        f = phys.finite_force(force)
-        a = self.robot(index).qvel_root
-        self._data.qfrc_applied[a : a + 3] = f
-
-    def set_motor_targets(self, index: int, targets: np.ndarray) -> None:
-        """Set robot ``index``'s motor targets (rad/s, canonical order) as they are, without the
-        hinge effector's rules: to restore what :meth:`motor_targets` returned after a placement
-        (which zeroes them)."""
-        self.robot(index).targets[:] = targets
 
     def close(self) -> None:
         """Nothing to free by hand (MuJoCo's model and data go with the object); kept for the

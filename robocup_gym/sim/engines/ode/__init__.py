@@ -2,6 +2,7 @@
 reference the MuJoCo world is compared with. Needs the system library ``libode``."""
 
 from robocup_gym.sim.engines.ode.lib import OdeUnavailableError, available
-from robocup_gym.sim.engines.ode.world import OdeWorld, mix_surfaces
+from robocup_gym.sim.engines.ode.surfaces import mix_surfaces
+from robocup_gym.sim.engines.ode.world import OdeWorld
 
 __all__ = ["OdeUnavailableError", "OdeWorld", "available", "mix_surfaces"]

@@ -30,45 +30,32 @@ import contextlib
 import copy
 import ctypes
 import math
-import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import fields
 
 import numpy as np
 
-from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.robot.nao import NaoModel
 from robocup_gym.sim import SimulationDivergedError
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
-from robocup_gym.sim.engines.mujoco.scene import FRP_GEOMS
 from robocup_gym.sim.engines.ode import lib as ode
+from robocup_gym.sim.engines.ode.contacts import MAX_CONTACTS, OdeContacts
 from robocup_gym.sim.engines.ode.fast import SANE_SPEED, FastLoops
 from robocup_gym.sim.engines.ode.fast import load as load_fast
+from robocup_gym.sim.engines.ode.motors import OdeMotors
 from robocup_gym.sim.engines.ode.readings import OdeReadings
-from robocup_gym.sim.engines.ode.surfaces import (
-    BALL_SURFACE,
-    GROUND_SURFACE,
-    ROBOT_SURFACE,
-    WALL_SURFACE,
-    mix_surfaces,
-    surface_parameters,
-)
+from robocup_gym.sim.engines.ode.robot import build_robot, kinematics
 from robocup_gym.sim.field import GOAL_BOXES, WALLS
-from robocup_gym.sim.pose import joint_angles_array, joint_index, placement_quat, rigid_move
+from robocup_gym.sim.pose import joint_angles_array, placement_quat, rigid_move
 from robocup_gym.sim.rotations import axis_angle_quat, quat_to_matrix
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import VisionConfig
-from robocup_gym.types import AgentCommand, ForceResistance, GameState
+from robocup_gym.types import GameState
 
 WORLD_CFM = 1e-5
 """SimSpark's world CFM (reference §7.1); the world ERP stays ODE's default 0.2."""
 WORLD_ERP = 0.2
-HINGE_CFM = 1e-8
-HINGE_STOP_ERP, HINGE_STOP_CFM = phys.JOINT_STOP_ERP_CFM
-HINGE_FUDGE_FACTOR = 1e-5
-HINGE_STOP_BOUNCE = 1.0
-MAX_CONTACTS = 4
-"""Contact points per geom pair (reference §7.3)."""
 SANE_POSITION = 1e3
 """A body this far (m) from the origin in a coordinate, or at NaN, means the world diverged."""
 
@@ -84,78 +71,13 @@ def _lowest(body, rot: np.ndarray, centre: np.ndarray) -> float:
     return float(centre[2] - abs(rot[2][2]) * size[1] / 2 - size[0])
 
 
-def _apart(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether two axis-aligned boxes ``(minx, maxx, miny, maxy, minz, maxz)`` are apart (then
-    their geoms cannot touch); ``ode_step.c``'s ``apart`` is the same test."""
-    return a[1] < b[0] or b[1] < a[0] or a[3] < b[2] or b[3] < a[2] or a[5] < b[4] or b[5] < a[4]
-
-
 def _mat3(r: np.ndarray) -> ode.Mat3:
     """ODE's 3×4 rotation layout of a 3×3 matrix (the padding column 0)."""
     (a, b, c), (d, e, f), (g, h, i) = r.tolist()
     return ode.Mat3(a, b, c, 0.0, d, e, f, 0.0, g, h, i, 0.0)
 
 
-_KINEMATICS: dict[int, tuple] = {}
-"""Per robot model (by ``id``, the model kept alive in the entry): what
-:meth:`OdeWorld._forward_kinematics` needs of it, as arrays, computed once."""
-
-
-def _kinematics(model: NaoModel) -> tuple:
-    """``(model, links)`` of ``model`` (cached): per body in order, ``(parent's index, joint
-    index, unit joint axis, joint anchor, zero-pose centre)`` (-1, -1, None, None for the
-    torso)."""
-    entry = _KINEMATICS.get(id(model))
-    if entry is None or entry[0] is not model:
-        index = {b.name: i for i, b in enumerate(model.bodies)}
-        joint_of = {j.child: j for j in model.joints}
-        k_of = {j.child: k for k, j in enumerate(model.joints)}
-        links = []
-        for b in model.bodies:
-            if b.parent is None:
-                links.append((-1, -1, None, None, np.array(b.pos)))
-                continue
-            j = joint_of[b.name]
-            axis = np.array(j.axis, float) / np.linalg.norm(j.axis)
-            links.append((index[b.parent], k_of[b.name], axis, np.array(j.anchor), np.array(b.pos)))
-        entry = _KINEMATICS[id(model)] = (model, links)
-    return entry
-
-
-@dataclass(kw_only=True)
-class OdeRobot(AgentState):
-    """One Nao in the ODE world: body and joint handles in the model's order, and (from
-    :class:`~robocup_gym.sim.senses.AgentState`) its state as an agent."""
-
-    model: NaoModel
-    bodies: list[int]
-    """ODE body handles, in ``model.bodies`` order (torso first)."""
-    joints: list[int]
-    """ODE hinge handles, canonical joint order."""
-    geoms: list[int]
-    child_body: list[int]
-    """Handle of each joint's child body (woken by a non-zero command)."""
-    limits: np.ndarray
-    """(n, 2) stops in rad."""
-    pending: list = field(default_factory=list)
-    """Commands given but not yet realised (dead time)."""
-    body_index: dict[str, int] = field(default_factory=dict)
-    """Body name → index into :attr:`bodies`."""
-    joint_slice: slice = field(default_factory=lambda: slice(0, 0))
-    """This robot's joints in the world's joint state arrays."""
-    frp_bodies: dict[str, int] = field(default_factory=dict)
-    """Force resistance perceptor name (``lf``, ``rf``, ``lf1``, ``rf1``) → its body handle."""
-    prev_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    """Torso velocity at the last accelerometer sample, m/s, world."""
-    accel: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, phys.GRAVITY]))
-    """Accelerometer reading, m/s², torso frame."""
-    frp: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    """The last step's foot contacts: name → (total force on the foot, force-weighted centre of
-    the contacts), world frame."""
-    last_frp: dict[str, ForceResistance] = field(default_factory=dict)
-
-
-class OdeWorld(OdeReadings, Senses):
+class OdeWorld(OdeMotors, OdeContacts, OdeReadings, Senses):
     """The SimSpark Nao world stepped by ODE 0.16 exactly as rcssserver3d steps it.
 
     Args:
@@ -217,74 +139,12 @@ class OdeWorld(OdeReadings, Senses):
             g = lib.dCreateBox(None, *size)
             lib.dGeomSetPosition(g, *centre)
             self._statics.append(g)
-        self.robots = [self._build_robot(int(t)) for t in robot_types]
-        self._contact_buf = (ode.ContactGeom * MAX_CONTACTS)()
-        self._contact = ode.Contact()
-        self._pairs = self._collision_pairs()
-        # the AABB pre-test: every geom but the ground plane has a slot; a pair whose boxes are
-        # apart cannot touch, so dCollide (which would return no contact) is skipped for it
-        self._slot_geoms = [
-            self._ball_geom,
-            *self._statics,
-            *(g for r in self.robots for g in r.geoms),
-        ]
-        slot = {g: k for k, g in enumerate(self._slot_geoms)}
-        self._pair_slots = np.array(
-            [(slot.get(p[0], -1), slot.get(p[1], -1)) for p in self._pairs], dtype=np.int32
-        ).reshape(-1, 2)
-        self._aabb = np.zeros((len(self._slot_geoms), 6))
-        n_sensed = sum(1 for p in self._pairs if p[5] or p[6])
-        self._feedback = (ode.JointFeedback * (MAX_CONTACTS * max(n_sensed, 1)))()
-        """Contact feedback slots for the contacts of foot/toe geoms (SimSpark's ``FRP``)."""
-        self._feedback_view = np.frombuffer(self._feedback, dtype=np.float64).reshape(-1, 16)
-        """The slots as numbers: force on body 1 in columns 0–2, on body 2 in 8–10."""
-        self._hit = np.full(len(self._pairs), -1, dtype=np.int32)
-        """Per pair, the stamp of the last collision pass in which it made a contact."""
-        self._stamp = 0
-        """Number of collision passes so far (the stamp of the latest)."""
-        robot_of = {g: i for i, r in enumerate(self.robots) for g in r.geoms}
-        ball_pairs = [
-            (p, robot_of[pair[0]])
-            for p, pair in enumerate(self._pairs)
-            if pair[1] == self._ball_geom and pair[0] in robot_of
-        ]
-        self._ball_pairs = np.array([p for p, _ in ball_pairs], dtype=np.int64)
-        self._ball_pair_robot = np.array([i for _, i in ball_pairs], dtype=np.int64)
-        # pairs of two robots' geoms whose contacts rcssserver3d's agent-collision handler sees
-        # (every part but the feet and toes carries one; a contact fires each handler it has)
-        robot_pairs = [
-            (p, robot_of[pair[0]], robot_of[pair[1]], (pair[5] is None) + (pair[6] is None))
-            for p, pair in enumerate(self._pairs)
-            if pair[0] in robot_of and pair[1] in robot_of
-        ]
-        robot_pairs = [rp for rp in robot_pairs if rp[3]]
-        self._robot_pairs = np.array([rp[0] for rp in robot_pairs], dtype=np.int64)
-        self._robot_pair_info = [rp[1:] for rp in robot_pairs]
-        self._robot_pair_of = np.full(len(self._pairs), -1, dtype=np.int64)
-        """Each pair's index in ``_robot_pairs`` (-1: not two robots' parts)."""
-        self._robot_pair_of[self._robot_pairs] = np.arange(len(self._robot_pairs))
-        self._robot_contacts: dict[tuple[int, int], tuple[np.ndarray, int]] = {}
-        self._robot_contacts_stamp = -1
+        self.robots = [build_robot(lib, self._world, int(t)) for t in robot_types]
         self._queued: dict[int, np.ndarray] = {}
         """Commands given with :meth:`command` for the next :meth:`step`."""
         self._pushes: dict[int, tuple[float, float, float]] = {}
         """Robot index → the external force on its torso (:meth:`set_torso_force`)."""
-        self._out_pair = np.zeros(len(self._feedback), dtype=np.int32)
-        self._out_pos = np.zeros((len(self._feedback), 3))
-        pair_frp = [(p[5], p[6]) for p in self._pairs]  # each body's (robot, name) or None
-        self._frp_slots = list(dict.fromkeys(f for pair in pair_frp for f in pair if f))
-        """Every force perceptor ``(robot, name)`` that a pair can touch: the rows of
-        ``_frp_sums``."""
-        slot_of = {f: k for k, f in enumerate(self._frp_slots)}
-        self._pair_frp_slot = np.array(
-            [[-1 if f is None else slot_of[f] for f in pair] for pair in pair_frp],
-            dtype=np.int32,
-        ).reshape(-1, 2)
-        """Per pair, the ``_frp_slots`` row of its two bodies' force perceptors (-1: none)."""
-        self._frp_sums = np.zeros((max(len(self._frp_slots), 1), 8))
-        """Per force perceptor, the last step's sums (:meth:`_read_feedback`)."""
-        self._frp_pending = False
-        """Whether the robots' ``frp`` are still to be made from the sums (:meth:`_sync_frp`)."""
+        self._init_contacts()
         # the state snapshot every reading comes from (one C call per step, see _read_state)
         self._state_bodies = self._drag_bodies()
         self._row = {b: k for k, b in enumerate(self._state_bodies)}
@@ -311,103 +171,6 @@ class OdeWorld(OdeReadings, Senses):
         self._reset_senses()
 
     # ------------------------------------------------------------------ construction
-    def _build_robot(self, type_index: int) -> OdeRobot:
-        """One robot of type ``type_index`` in the zero pose at the origin (torso frame = world
-        frame, so the reference's anchors and axes apply as they are); :meth:`place_robot` moves
-        it."""
-        lib = self._lib
-        model = nao_model(type_index)
-        names = [b.name for b in model.bodies]
-        bodies, geoms = [], []
-        for b in model.bodies:
-            body = lib.dBodyCreate(self._world)
-            lib.dBodySetPosition(body, *b.pos)
-            mass = ode.Mass()
-            if b.shape == "box":
-                lib.dMassSetBoxTotal(ctypes.byref(mass), b.mass, *b.size)
-            elif b.shape == "sphere":
-                lib.dMassSetSphereTotal(ctypes.byref(mass), b.mass, b.size[0])
-            else:  # capsule along local z (ODE direction 3)
-                lib.dMassSetCapsuleTotal(ctypes.byref(mass), b.mass, 3, b.size[0], b.size[1])
-            lib.dBodySetMass(body, ctypes.byref(mass))
-            bodies.append(body)
-            if b.collides:
-                if b.shape == "box":
-                    g = lib.dCreateBox(None, *b.size)
-                elif b.shape == "sphere":
-                    g = lib.dCreateSphere(None, b.size[0])
-                else:
-                    g = lib.dCreateCapsule(None, b.size[0], b.size[1])
-                lib.dGeomSetBody(g, body)
-                geoms.append(g)
-        joints, child = [], []
-        for j in model.joints:
-            h = lib.dJointCreateHinge(self._world, None)
-            c, p = bodies[names.index(j.child)], bodies[names.index(j.parent)]
-            lib.dJointAttach(h, c, p)  # body 1 = child, body 2 = parent (reference §1.5)
-            lib.dJointSetHingeAnchor(h, *j.anchor)
-            lib.dJointSetHingeAxis(h, *j.axis)  # the angle is 0 in this (zero) pose
-            lo, hi = j.range_rad
-            for param, value in (
-                (ode.PARAM_LO_STOP, lo),
-                (ode.PARAM_HI_STOP, hi),
-                (ode.PARAM_FMAX, j.max_torque),
-                (ode.PARAM_CFM, HINGE_CFM),
-                (ode.PARAM_STOP_ERP, HINGE_STOP_ERP),
-                (ode.PARAM_STOP_CFM, HINGE_STOP_CFM),
-                (ode.PARAM_FUDGE_FACTOR, HINGE_FUDGE_FACTOR),
-                (ode.PARAM_BOUNCE, HINGE_STOP_BOUNCE),
-                (ode.PARAM_VEL, 0.0),
-            ):
-                lib.dJointSetHingeParam(h, param, value)
-            joints.append(h)
-            child.append(c)
-        limits = np.array([j.range_rad for j in model.joints])
-        frp = {f: bodies[names.index(FRP_GEOMS[f])] for f in FRP_GEOMS if FRP_GEOMS[f] in names}
-        return OdeRobot(
-            model=model,
-            bodies=bodies,
-            joints=joints,
-            geoms=geoms,
-            child_body=child,
-            limits=limits,
-            body_index={name: i for i, name in enumerate(names)},
-            frp_bodies=frp,
-        )
-
-    def _collision_pairs(self) -> list[tuple]:
-        """Every geom pair that can touch, as ``(geom1, geom2, body1, body2, surface)`` (body
-        ``None`` for the static ground) with its mixed surface: robot parts with the ground,
-        the ball and other robots' parts (never with their own robot: inner collision is
-        disabled, reference §1.1); the ball with the ground."""
-        robot_ground = surface_parameters(mix_surfaces(ROBOT_SURFACE, GROUND_SURFACE))
-        robot_ball = surface_parameters(mix_surfaces(ROBOT_SURFACE, BALL_SURFACE))
-        robot_robot = surface_parameters(mix_surfaces(ROBOT_SURFACE, ROBOT_SURFACE))
-        ball_ground = surface_parameters(mix_surfaces(BALL_SURFACE, GROUND_SURFACE))
-        robot_wall = surface_parameters(mix_surfaces(ROBOT_SURFACE, WALL_SURFACE))
-        ball_wall = surface_parameters(mix_surfaces(BALL_SURFACE, WALL_SURFACE))
-        pairs = [(self._ball_geom, self._ground, ball_ground)]
-        for i, r in enumerate(self.robots):
-            for g in r.geoms:
-                pairs.append((g, self._ground, robot_ground))
-                pairs.append((g, self._ball_geom, robot_ball))
-                for other in self.robots[i + 1 :]:
-                    pairs.extend((g, g2, robot_robot) for g2 in other.geoms)
-        # walls and goals last: they touch nothing near the centre of the field, so the order of
-        # the contacts (and so every result) there is that of a world without them
-        for w in self._statics:
-            pairs.append((self._ball_geom, w, ball_wall))
-            pairs.extend((g, w, robot_wall) for r in self.robots for g in r.geoms)
-        body = self._lib.dGeomGetBody
-        sensor = {}  # body handle -> (robot, FRP name)
-        for i, r in enumerate(self.robots):
-            for name, b in r.frp_bodies.items():
-                sensor[b] = (i, name)
-        return [
-            (g1, g2, body(g1), body(g2), s, sensor.get(body(g1)), sensor.get(body(g2)))
-            for g1, g2, s in pairs
-        ]
-
     def _init_fast(self, mode: bool | None) -> FastLoops | None:
         """The compiled loops when ``mode`` is ``True`` (must work) or ``None`` (if they can
         be built); :attr:`stepper` says which run, :attr:`compiled_unavailable` why not."""
@@ -483,7 +246,7 @@ class OdeWorld(OdeReadings, Senses):
             else joint_angles_array(model, joint_angles_deg)
         )
         rot, trans = self._forward_kinematics(model, np.radians(angles), q)
-        links = _kinematics(model)[1]
+        links = kinematics(model)[1]
         centres = [rot[i] @ link[4] + trans[i] for i, link in enumerate(links)]
         if z is None:
             shift = -phys.SURFACE_LAYER - min(
@@ -565,7 +328,7 @@ class OdeWorld(OdeReadings, Senses):
         world points (relative to the torso's x, y; torso centre at height 0) for a torso with
         orientation ``quat``."""
         root = quat_to_matrix(quat)
-        links = _kinematics(model)[1]
+        links = kinematics(model)[1]
         rot: list = [None] * len(links)
         trans: list = [None] * len(links)
         for i, (p, k, axis, a, _) in enumerate(links):  # parents come before their children
@@ -604,30 +367,6 @@ class OdeWorld(OdeReadings, Senses):
         self._fresh = False
 
     # ------------------------------------------------------------------ stepping
-    def command(self, index: int, command: AgentCommand | Mapping[str, float] | np.ndarray) -> None:
-        """Give robot ``index`` its command for the next :meth:`step` (as the MuJoCo world's
-        ``command``): joint velocities in rad/s (by name, or an array in canonical order), or an
-        :class:`~robocup_gym.types.AgentCommand` whose ``beam`` and ``say`` act at once. A
-        second command before the step overrides the first joint by joint.
-
-        Raises:
-            KeyError: an unknown joint name (listing the valid ones).
-            ValueError: a NaN/inf velocity (naming the joint) or an array of the wrong shape.
-        """
-        r = self.robot(index)
-        if isinstance(command, AgentCommand):
-            arr = self._command_array(r, command.joint_velocities)
-            if command.beam is not None:
-                self.beam(index, *command.beam)
-            if command.say is not None:
-                self.say(index, command.say)
-        else:
-            arr = self._command_array(r, command)
-        old = self._queued.get(index)
-        if old is not None:
-            arr = np.where(np.isnan(arr), old, arr)
-        self._queued[index] = arr
-
     def step(self, commands: Mapping[int, Mapping[str, float] | np.ndarray] | None = None) -> None:
         """Advance one 20 ms cycle: realise due commands (target rad/s, clipped to the joint's
         max speed, ignored for a joint not strictly inside its limits, a non-zero one wakes the
@@ -672,22 +411,6 @@ class OdeWorld(OdeReadings, Senses):
         self._advance_clocks(phys.CYCLE_S)
         self._check_sane()
 
-    def set_torso_force(self, index: int, force: Sequence[float]) -> None:
-        """Push robot ``index``'s torso with ``force`` (N, world frame, at its centre of mass)
-        in every cycle until it is changed; ``(0, 0, 0)`` ends it. SimSpark has no such force:
-        it is a training aid (``TrainConfig.assist_force``, which lifts a robot that learns to
-        get up), never part of an evaluation.
-
-        Raises:
-            ValueError: ``force`` is not three finite numbers.
-        """
-        f = phys.finite_force(force)
-        self.robots[index]  # IndexError for an unknown robot
-        if any(f):
-            self._pushes[index] = f
-        else:
-            self._pushes.pop(index, None)
-
     def _check_sane(self) -> None:
         """Raise :class:`~robocup_gym.sim.SimulationDivergedError` (as the MuJoCo world does)
         when a body left the finite, plausible range (NaN/inf, or ``SANE_POSITION`` = 1 km
@@ -708,117 +431,6 @@ class OdeWorld(OdeReadings, Senses):
                 "place the ball and robots again"
             )
 
-    def sense_contacts(self) -> None:
-        """Fill the force perceptors for the current state without advancing it: with the
-        contact forces ODE's next step would apply (what MuJoCo's ``mj_forward`` gives the
-        world at a placement), so that the perception of a freshly placed robot shows its feet
-        loaded, as every later one does. The state is put back exactly; nothing else changes
-        (ODE's big-matrix step keeps no warm start, and placing re-arms auto-disable)."""
-        if self._fast is not None:
-            state = self._fast.save_bodies()
-            self._collide_and_step()
-            self._fast.restore_bodies(state)
-            self._fresh = False
-            return
-        lib = self._lib
-        bodies = [self._ball, *(b for r in self.robots for b in r.bodies)]
-        saved = [
-            (
-                self._vec(lib.dBodyGetPosition(b)),
-                ode.Vec4(*lib.dBodyGetQuaternion(b)[:4]),
-                self._vec(lib.dBodyGetLinearVel(b)),
-                self._vec(lib.dBodyGetAngularVel(b)),
-                lib.dBodyIsEnabled(b),
-            )
-            for b in bodies
-        ]
-        self._collide_and_step()
-        for b, (pos, quat, vel, ang, enabled) in zip(bodies, saved, strict=True):
-            lib.dBodySetPosition(b, *pos)
-            lib.dBodySetQuaternion(b, quat)
-            lib.dBodySetLinearVel(b, *vel)
-            lib.dBodySetAngularVel(b, *ang)
-            (lib.dBodyEnable if enabled else lib.dBodyDisable)(b)
-        self._fresh = False
-
-    def _collide_and_step(self) -> None:
-        """Contacts for the current poses, one ``dWorldStep(0.02)``, the force perceptors."""
-        lib = self._lib
-        self._stamp += 1
-        stamp = self._stamp
-        if self.engine_seconds is None:
-            sensed = self._fast.collide(stamp) if self._fast is not None else self._collide(stamp)
-            if len(self._robot_pairs):
-                self._note_robot_contacts(stamp)
-            lib.dWorldStep(self._world, phys.CYCLE_S)
-        else:  # measuring: the engine's own share (collision and dWorldStep)
-            t0 = time.perf_counter()
-            sensed = self._fast.collide(stamp) if self._fast is not None else self._collide(stamp)
-            if len(self._robot_pairs):
-                self._note_robot_contacts(stamp)
-            lib.dWorldStep(self._world, phys.CYCLE_S)
-            self.engine_seconds += time.perf_counter() - t0
-        self._read_feedback(sensed)  # the number of sensed contacts
-        lib.dJointGroupEmpty(self._contacts)
-
-    def _note_robot_contacts(self, stamp: int) -> None:
-        """The contacts between robots made by this collision pass, by robot pair, as
-        rcssserver3d's agent-collision handlers see them (:meth:`robot_contacts`). The contact
-        points of the pairs that touched are computed again (``dCollide`` of the same poses
-        gives the same points), before the step moves the bodies."""
-        hit = self._robot_pair_of[np.flatnonzero(self._hit == stamp)]
-        hit = hit[hit >= 0]
-        self._robot_contacts_stamp = stamp
-        if not hit.size:
-            self._robot_contacts = {}
-            return
-        lib, buf = self._lib, self._contact_buf
-        size = ctypes.sizeof(ode.ContactGeom)
-        sums: dict[tuple[int, int], list] = {}
-        for k in hit.tolist():
-            g1, g2 = self._pairs[int(self._robot_pairs[k])][:2]
-            i, j, weight = self._robot_pair_info[k]
-            n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
-            acc = sums.setdefault((i, j), [np.zeros(3), 0])
-            for c in range(n):
-                acc[0] += weight * np.array(buf[c].pos[:3])
-                acc[1] += weight
-        self._robot_contacts = {ij: (total / n, n) for ij, (total, n) in sums.items() if n}
-
-    def _collide(self, stamp: int) -> int:
-        """Contact joints for the current poses (the Python loop; ``ode_step.c``'s
-        ``ode_collide`` does the same): the contacts of foot/toe geoms get feedback slots in
-        order, their pairs and positions go to ``_out_pair``/``_out_pos``; returns how many.
-        Every pair that touches gets ``stamp`` in ``_hit``."""
-        lib = self._lib
-        buf, contact = self._contact_buf, self._contact
-        size = ctypes.sizeof(ode.ContactGeom)
-        m = 0
-        aabb = self._aabb
-        box = (ode.dReal * 6)()
-        for k, g in enumerate(self._slot_geoms):
-            lib.dGeomGetAABB(g, box)
-            aabb[k] = box[:]
-        for p, ((g1, g2, b1, b2, surface, frp1, frp2), (s1, s2)) in enumerate(
-            zip(self._pairs, self._pair_slots, strict=True)
-        ):
-            if s1 >= 0 and s2 >= 0 and _apart(aabb[s1], aabb[s2]):
-                continue
-            n = lib.dCollide(g1, g2, MAX_CONTACTS, buf, size)
-            if n:
-                self._hit[p] = stamp
-                contact.surface = surface
-                for k in range(n):
-                    contact.geom = buf[k]
-                    joint = lib.dJointCreateContact(self._world, self._contacts, contact)
-                    lib.dJointAttach(joint, b1, b2)
-                    if frp1 or frp2:
-                        lib.dJointSetFeedback(joint, self._feedback[m])
-                        self._out_pair[m] = p
-                        self._out_pos[m] = buf[k].pos[:3]
-                        m += 1
-        return m
-
     def _sense_accelerometers(self) -> None:
         """Each torso's accelerometer, sampled as
         :class:`robocup_gym.sim.engines.mujoco.world.World` samples
@@ -832,109 +444,6 @@ class OdeWorld(OdeReadings, Senses):
             a[2] += phys.GRAVITY
             r.prev_vel[:] = v
             r.accel[:] = a @ row[3:12].reshape(3, 3)
-
-    def _read_feedback(self, m: int) -> None:
-        """SimSpark's force resistance perceptors from the step's contact feedback (reference §4.6):
-        per foot/toe the total contact force on it and the contacts' centre weighted by the
-        magnitude of each contact's force, world frame. ``m`` sensed contacts: contact ``k``
-        has feedback slot ``k``, pair ``self._out_pair[k]`` and position ``self._out_pos[k]``
-        (written alike by the compiled and the Python contact loops). Both sum into
-        ``_frp_sums`` (the compiled ``ode_frp``, or this Python loop: the same additions in
-        the same order); :meth:`_sync_frp` makes the readings when they are read."""
-        self._frp_pending = True
-        if self._fast is not None:
-            self._fast.frp(m)
-            return
-        sums: dict[int, list[float]] = {}
-        fb = self._feedback_view
-        for k in range(m):
-            p = int(self._out_pair[k])
-            pos = self._out_pos[k]
-            for slot, f in (
-                (self._pair_frp_slot[p, 0], fb[k, 0:3]),
-                (self._pair_frp_slot[p, 1], fb[k, 8:11]),
-            ):
-                if slot < 0:
-                    continue
-                fx, fy, fz = float(f[0]), float(f[1]), float(f[2])
-                acc = sums.setdefault(int(slot), [0.0] * 8)
-                magnitude = math.sqrt(fx * fx + fy * fy + fz * fz)
-                acc[0] += fx
-                acc[1] += fy
-                acc[2] += fz
-                acc[3] += magnitude * float(pos[0])
-                acc[4] += magnitude * float(pos[1])
-                acc[5] += magnitude * float(pos[2])
-                acc[6] += magnitude
-                acc[7] += 1.0
-        self._frp_sums[:] = 0.0
-        for slot, acc in sums.items():
-            self._frp_sums[slot] = acc
-
-    def _sync_frp(self) -> None:
-        """Make every robot's ``frp`` from the last step's sums (:meth:`_read_feedback`), if not
-        done yet: the arrays are only built for a step whose perception is read."""
-        if not self._frp_pending:
-            return
-        self._frp_pending = False
-        for r in self.robots:
-            r.frp = {}
-        sums = self._frp_sums
-        for k in np.flatnonzero(sums[:, 7]).tolist():  # in _frp_slots order
-            i, name = self._frp_slots[k]
-            a = sums[k]
-            total = a[6]
-            centre = a[3:6] / total if total > 0.0 else None
-            self.robots[i].frp[name] = (a[0:3].copy(), centre)
-
-    def _command_array(self, r: OdeRobot, cmd: Mapping[str, float] | np.ndarray) -> np.ndarray:
-        """Targets in canonical order, rad/s; NaN marks a joint the command leaves alone.
-
-        Raises:
-            KeyError: an unknown joint name (listing the valid ones).
-            ValueError: a NaN/inf velocity (naming the joint) or an array of the wrong shape.
-        """
-        names = r.model.effector_names
-        if isinstance(cmd, np.ndarray) and cmd.shape == (len(names),):  # the common case
-            out = cmd.astype(float)  # a copy: the queue keeps it
-            if not np.isfinite(out).all():
-                k = int(np.argmin(np.isfinite(out)))
-                raise ValueError(f"velocity command for joint {names[k]} is {out[k]}")
-            return out
-        out = np.full(len(names), np.nan)
-        if isinstance(cmd, Mapping):
-            given = np.zeros(len(names), dtype=bool)
-            for name, v in cmd.items():
-                k = joint_index(r.model, name)
-                out[k] = float(v)
-                given[k] = True
-        else:
-            arr = np.asarray(cmd, dtype=float)
-            if arr.shape != out.shape:
-                raise ValueError(f"command array must have shape {out.shape}, got {arr.shape}")
-            out[:] = arr
-            given = np.ones(len(names), dtype=bool)
-        bad = given & ~np.isfinite(out)
-        if bad.any():
-            k = int(np.flatnonzero(bad)[0])
-            raise ValueError(f"velocity command for joint {names[k]} is {out[k]}")
-        return out
-
-    def _realise(self, r: OdeRobot, targets: np.ndarray) -> None:
-        lib = self._lib
-        vmax = r.model.max_speeds
-        for k, h in enumerate(r.joints):
-            v = targets[k]
-            if math.isnan(v):
-                continue
-            angle = lib.dJointGetHingeAngle(h)
-            lo, hi = r.limits[k]
-            if not lo < angle < hi:
-                continue  # SimSpark's hinge effector: the previous target stays
-            v = min(max(float(v), -vmax[k]), vmax[k])
-            lib.dJointSetHingeParam(h, ode.PARAM_VEL, v)
-            if v != 0.0:
-                lib.dBodyEnable(r.child_body[k])
 
     def _drag_bodies(self) -> list[int]:
         """Every body that feels drag, in the compiled loop's order: robots' parts, the ball."""
