@@ -1,5 +1,7 @@
 """Teams played by a learnt policy: one policy shared by the team's players, each acting on its
-own observation (:mod:`robocup_gym.soccer.observations`) with skill actions.
+own observation (:mod:`robocup_gym.soccer.observations`) with skill actions (or, for a team
+trained with ``plays``, skill actions or the ball played along a direction:
+:mod:`robocup_gym.soccer.ball_play`).
 
 A :class:`PolicyTeam` comes from a team run's folder (``robocup-gym train game-2v2``), from its
 ONNX export (``robocup-gym export RUN --onnx FILE``, or a shipped team as ``pretrained:NAME``),
@@ -14,6 +16,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from robocup_gym.soccer.ball_play import BallPlay
 
 __all__ = ["PolicyTeam", "team_task_error"]
 
@@ -48,6 +52,9 @@ class PolicyTeam:
         self.options = dict(options or {})
         self.task = task
         """The team scenario it was trained on (``soccer/game-2v2``; empty if unknown)."""
+        self._plays = BallPlay() if self.options.get("plays") else None
+        """Turns its ``plays`` actions into skill actions (``None``: it acts with skill
+        actions)."""
 
     @property
     def privileged(self) -> bool:
@@ -56,8 +63,14 @@ class PolicyTeam:
 
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def from_policy_file(cls, path: str | os.PathLike, name: str | None = None) -> PolicyTeam:
-        """A Stable-Baselines3 policy saved with ``policy.save`` (a self-play snapshot)."""
+    def from_policy_file(
+        cls,
+        path: str | os.PathLike,
+        name: str | None = None,
+        options: Mapping[str, Any] | None = None,
+    ) -> PolicyTeam:
+        """A Stable-Baselines3 policy saved with ``policy.save`` (a self-play snapshot), trained
+        with the scenario options ``options`` (``plays``: it acts with plays actions)."""
         import torch
         from stable_baselines3.common.policies import ActorCriticPolicy
 
@@ -68,7 +81,7 @@ class PolicyTeam:
         def act(x: np.ndarray) -> np.ndarray:
             return policy.predict(x, deterministic=True)[0]
 
-        return cls(act, policy.observation_space.shape[0], name or Path(path).stem)
+        return cls(act, policy.observation_space.shape[0], name or Path(path).stem, options)
 
     @classmethod
     def from_run(cls, run: str | os.PathLike) -> PolicyTeam:
@@ -144,5 +157,7 @@ class PolicyTeam:
                 f"team {self.name} observes {self.obs_size} values a player, the game gives "
                 f"{x.shape[1]} (its robot types or observation options differ from training)"
             )
-        actions = np.asarray(self.act(x), dtype=float)
-        return dict(zip(agents, actions, strict=True))
+        actions = dict(zip(agents, np.asarray(self.act(x), dtype=float), strict=True))
+        if self._plays is not None:  # the ball played along a direction: skill actions
+            return self._plays.skill_actions(env.team_view(agents), actions)
+        return actions

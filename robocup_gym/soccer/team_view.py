@@ -16,11 +16,12 @@ name             scenario                     the learning team       the oppone
 
 Observations are the scenario's per player (:mod:`robocup_gym.soccer.observations`) in the
 team's own frame, so a policy plays either side unchanged; actions are the scenario's (skill
-actions by default here: :data:`TEAM_DEFAULTS`). Rewards are the scenario's, per player. When
-a game ends, ``infos[0]["game"]`` holds its result: ``opponent`` (its name), ``side``,
-``goals_for``, ``goals_against`` and ``end`` (why it ended), and every player's info holds
-``episode`` (``r``: its return, ``l``: steps, ``t``: wall-clock seconds), as Stable-Baselines3's
-``Monitor`` writes it.
+actions by default here: :data:`TEAM_DEFAULTS`), or, with ``plays``, skill actions or the ball
+played along a direction (:mod:`robocup_gym.soccer.ball_play`). Rewards are the scenario's,
+per player. When a game ends, ``infos[0]["game"]`` holds its result: ``opponent`` (its
+name), ``side``, ``goals_for``, ``goals_against`` and ``end`` (why it ended), and every
+player's info holds ``episode`` (``r``: its return, ``l``: steps, ``t``: wall-clock
+seconds), as Stable-Baselines3's ``Monitor`` writes it.
 """
 
 from __future__ import annotations
@@ -33,7 +34,16 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["TEAM_DEFAULTS", "TEAM_SCENARIOS", "TeamView", "scenario_options", "team_scenario"]
+from robocup_gym.soccer.ball_play import PLAY_ACTION_LABELS, BallPlay
+
+__all__ = [
+    "TEAM_DEFAULTS",
+    "TEAM_OPTIONS",
+    "TEAM_SCENARIOS",
+    "TeamView",
+    "scenario_options",
+    "team_scenario",
+]
 
 TEAM_SCENARIOS = ("penalty", "keepaway", "game-NvN")
 """The scenario names a team trains on (``game-2v2``, ``game-3v3``, … for ``game-NvN``)."""
@@ -42,10 +52,18 @@ TEAM_DEFAULTS: dict[str, Any] = {
     "actions": "skills",
     "privileged": True,
     "ball_progress": 0.1,
+    "plays": False,
 }
 """Options a team scenario starts from, over the scenario's own: skill actions, the privileged
 observations (own and ball position and velocity from ground truth) and a small reward for
-moving the ball toward the opponent goal (0.1 per metre; a goal pays 1)."""
+moving the ball toward the opponent goal (0.1 per metre; a goal pays 1). ``plays``: the team
+acts with ``plays`` actions (:data:`~robocup_gym.soccer.ball_play.PLAY_ACTION_LABELS`: a skill
+action, or the ball played along a direction), which
+:class:`~robocup_gym.soccer.ball_play.BallPlay` turns into skill actions; the scenario itself
+takes skill actions."""
+
+TEAM_OPTIONS = ("plays",)
+"""The options of the learning team, not of the scenario's environment."""
 
 _GAME = re.compile(r"^game-(\d+)v(\d+)$")
 
@@ -93,11 +111,15 @@ def scenario_options(name: str, options: Mapping[str, Any] | None = None) -> dic
     extra = _scenario_keywords(cls)
     try:
         config = SoccerConfig.with_options(
-            cls.default_config, {k: v for k, v in merged.items() if k not in extra}
+            cls.default_config,
+            {k: v for k, v in merged.items() if k not in extra and k not in TEAM_OPTIONS},
         )
     except TypeError as exc:  # an unknown option
         raise ValueError(f"{name}: {exc}") from None
-    out = {k: v for k, v in merged.items() if k in extra}
+    for key in TEAM_OPTIONS:
+        if not isinstance(merged[key], bool):
+            raise ValueError(f"{name}: {key} must be true or false, got {merged[key]!r}")
+    out = {k: v for k, v in merged.items() if k in extra or k in TEAM_OPTIONS}
     for field, value in config.__dict__.items():
         out[field] = list(value) if isinstance(value, tuple) else value
     return out
@@ -137,7 +159,9 @@ class TeamView:
         for key in ("left_types", "right_types"):
             opts[key] = tuple(opts[key])
         self.options = opts
-        self.env = cls(**opts)
+        self.env = cls(**{k: v for k, v in opts.items() if k not in TEAM_OPTIONS})
+        self.plays = BallPlay() if opts["plays"] else None
+        """Turns the team's ``plays`` actions into skill actions (``None``: skill actions)."""
         self.opponents = opponents
         self._rng = np.random.default_rng(seed)
         c = self.env.config
@@ -148,6 +172,8 @@ class TeamView:
         first = self.env.possible_agents[0]
         self.observation_space: gym.spaces.Box = self.env.observation_space(first)
         self.action_space: gym.spaces.Box = self.env.action_space(first)
+        if self.plays is not None:
+            self.action_space = gym.spaces.Box(-1.0, 1.0, (len(PLAY_ACTION_LABELS),), np.float32)
         for agent in self.env.possible_agents:
             if self.env.observation_space(agent).shape != self.observation_space.shape:
                 raise ValueError(
@@ -203,6 +229,8 @@ class TeamView:
             )
         mine, theirs = self.mine, self.theirs
         joint = dict(zip(mine, actions, strict=True))
+        if self.plays is not None:
+            joint = self.plays.skill_actions(self.env.team_view(mine), joint)
         theirs_obs = {a: self._obs[a] for a in theirs}
         joint.update(self.opponent(self.env, theirs, theirs_obs) if theirs else {})
         self._obs, rewards, terms, truncs, infos = self.env.step(joint)

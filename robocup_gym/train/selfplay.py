@@ -125,17 +125,28 @@ class OpponentPool:
     while the pool is empty), else one of the newest ``pool_size`` snapshots in ``pool_dir``,
     uniformly. Picklable; each worker keeps the snapshots it has loaded."""
 
-    def __init__(self, pool_dir: str | os.PathLike | None, settings: SelfPlaySettings) -> None:
+    def __init__(
+        self,
+        pool_dir: str | os.PathLike | None,
+        settings: SelfPlaySettings,
+        team_options: Mapping[str, Any] | None = None,
+    ) -> None:
         self.pool_dir = None if pool_dir is None else str(pool_dir)
         self.settings = settings
+        self.team_options = dict(team_options or {})
+        """The learning team's own options (``plays``), which its snapshots play with."""
         self._loaded: dict[str, Any] = {}
         self._scripted: Any = None
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"pool_dir": self.pool_dir, "settings": self.settings}
+        return {
+            "pool_dir": self.pool_dir,
+            "settings": self.settings,
+            "team_options": self.team_options,
+        }
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__init__(state["pool_dir"], state["settings"])
+        self.__init__(state["pool_dir"], state["settings"], state.get("team_options"))
 
     def __call__(self, rng: np.random.Generator) -> Any:
         pool = [] if self.pool_dir is None else snapshots(self.pool_dir)
@@ -151,7 +162,7 @@ class OpponentPool:
         if team is None:
             from robocup_gym.soccer.learnt import PolicyTeam
 
-            team = PolicyTeam.from_policy_file(path, name=path.stem)
+            team = PolicyTeam.from_policy_file(path, name=path.stem, options=self.team_options)
             self._loaded = {path.name: team, **dict(list(self._loaded.items())[-15:])}
         return team
 
@@ -258,14 +269,18 @@ def make_team_vec_env(
     Raises:
         ValueError: an unknown scenario or option.
     """
-    from robocup_gym.soccer.team_view import team_scenario
+    from robocup_gym.soccer.team_view import TEAM_OPTIONS, scenario_options, team_scenario
     from robocup_gym.train.vecenv import block_vec_env
 
     pool = pool or OpponentPool(None, SelfPlaySettings())
+    resolved = scenario_options(scenario, options)
+    own = {k: resolved[k] for k in TEAM_OPTIONS}  # the snapshots act as the team does
     if team_scenario(scenario)[1] != "either":
         # the learning team has one role (the striker, the attackers): its earlier versions
         # cannot play the other, so the opponent is the scripted team
         pool = OpponentPool(None, pool.settings)
+    else:
+        pool = OpponentPool(pool.pool_dir, pool.settings, own)
     factories = [
         TeamFactory(scenario, options or {}, pool, None if seed is None else seed + i)
         for i in range(n_games)
@@ -463,6 +478,7 @@ def team_description(options: Mapping[str, Any]) -> dict[str, Any]:
     """A team policy's observation and action layout for its export: the scenario options,
     one label per observation value and per action value."""
     from robocup_gym.robot.nao import nao_model
+    from robocup_gym.soccer.ball_play import PLAY_ACTION_LABELS
     from robocup_gym.soccer.observations import observation_labels
     from robocup_gym.soccer.skills import SKILL_ACTION_LABELS
 
@@ -472,7 +488,7 @@ def team_description(options: Mapping[str, Any]) -> dict[str, Any]:
     return {
         "env_config": dict(options),
         "observation_labels": labels,
-        "action_labels": list(SKILL_ACTION_LABELS),
+        "action_labels": list(PLAY_ACTION_LABELS if options.get("plays") else SKILL_ACTION_LABELS),
     }
 
 
@@ -481,6 +497,7 @@ def team_observations(
 ) -> np.ndarray:
     """Observations of the learning team from a game in which it and its opponent play the
     scripted team (``steps`` steps; ``(steps × players, n)``): real inputs to check an export."""
+    from robocup_gym.soccer.ball_play import as_play_action
     from robocup_gym.soccer.scripted import ScriptedTeam
     from robocup_gym.soccer.team_view import TeamView
 
@@ -491,6 +508,8 @@ def team_observations(
         rows = [obs]
         for _ in range(steps - 1):
             acts = scripted(view.env, view.mine)
+            if view.plays is not None:
+                acts = {a: as_play_action(act) for a, act in acts.items()}
             obs, _, terminated, truncated, _ = view.step(np.stack([acts[a] for a in view.mine]))
             rows.append(obs)
             if terminated or truncated:

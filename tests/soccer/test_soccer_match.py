@@ -92,14 +92,19 @@ def test_the_scripted_chaser_takes_the_ball_into_the_goal():
 def test_the_scripted_chaser_kicks_a_ball_before_its_right_foot_in_shooting_range():
     """The kick decision: behind the ball, facing the goal, the ball 12 cm ahead and 6 cm to
     the right: within 4 m of the goal it kicks; farther it walks on (dribbles)."""
-    team = ScriptedTeam()
+
+    class _Game:
+        def __init__(self, view: TeamView) -> None:
+            self.view = view
+
+        def team_view(self, agents):
+            return self.view
+
     for ball_x, kicks in ((12.0, True), (5.0, False)):
         ball = np.array([ball_x, 0.0])
-        goal = np.array([15.0, 0.0])
         pos = ball - np.array([0.12, -0.06])
-        act = team._chase(
-            "left_1", pos, (1.0, 0.0), ball, goal, np.array([1.0, 0.0]), np.zeros((0, 2))
-        )
+        view = TeamView("left", ball, {"left_1": pos}, {"left_1": (1.0, 0.0)}, set())
+        act = ScriptedTeam()(_Game(view), ["left_1"])["left_1"]
         assert bool(act[3] > 0.5) is kicks, (ball_x, act)
         assert act[0] > 0  # walking on toward the goal
 

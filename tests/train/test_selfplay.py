@@ -87,7 +87,7 @@ def test_the_pool_draws_scripted_until_it_has_snapshots_then_the_newest(tmp_path
     drawn = []
     loaded = []
 
-    def fake_load(path, name=None):
+    def fake_load(path, name=None, options=None):
         loaded.append(name)
         return name
 

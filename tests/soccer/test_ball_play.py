@@ -1,0 +1,205 @@
+"""Playing the ball along a direction (``robocup_gym.soccer.ball_play``): the scripted chaser's
+dribble, and the ``plays`` actions of a learning team."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robocup_gym.sim.engines.ode import available as ode_available
+from robocup_gym.soccer.ball_play import PLAY_ACTION_LABELS, BallPlay, as_play_action
+from robocup_gym.soccer.scripted import ScriptedTeam, StandingTeam, TeamView
+from robocup_gym.soccer.team_view import TeamView as TeamGame
+from robocup_gym.soccer.team_view import scenario_options
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+
+needs_ode = pytest.mark.skipif(not ode_available(), reason="needs the system's libode")
+
+
+def _view(side: str = "left") -> TeamView:
+    """Two players of ``side``, one goalkeeper, near a ball off the middle of the field."""
+    return TeamView(
+        side=side,
+        ball=np.array([1.0, 0.5]),
+        positions={f"{side}_1": np.array([-10.0, 0.0]), f"{side}_2": np.array([0.3, 0.2])},
+        headings={f"{side}_1": (1.0, 0.0), f"{side}_2": (math.cos(0.3), math.sin(0.3))},
+        keepers={f"{side}_1"},
+    )
+
+
+def test_a_plays_action_that_does_not_play_the_ball_is_its_skill_action():
+    walk = np.array([0.5, -0.2, 0.1, 0.9, -1.0, 0.7])
+    out = BallPlay().skill_actions(_view(), {"left_2": walk})
+    np.testing.assert_array_equal(out["left_2"], walk[:4])
+    np.testing.assert_array_equal(as_play_action(walk[:4])[:4], walk[:4])
+    assert as_play_action(walk[:4])[4] < 0.5  # does not play the ball
+    assert len(PLAY_ACTION_LABELS) == 6
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_the_scripted_chaser_plays_the_ball_at_the_goal(side):
+    """With nobody in the way, the scripted chaser's action is the plays action "the ball
+    straight at the goal" (direction 0), the dribble far from the goal and the shot near it."""
+    for ball in (np.array([1.0, 0.5]), np.array([12.0 if side == "left" else -12.0, 1.0])):
+        view = _view(side)
+        view.ball = ball
+        view.positions[f"{side}_2"] = ball + np.array([-0.5 if side == "left" else 0.5, -0.3])
+        scripted = ScriptedTeam()(_Env(view), [f"{side}_1", f"{side}_2"])
+        near_goal = abs(ball[0]) > 10.0
+        play = np.array([0.0, 0.0, 0.0, 1.0 if near_goal else -1.0, 1.0, 0.0])
+        played = BallPlay().skill_actions(view, {f"{side}_2": play})
+        np.testing.assert_allclose(played[f"{side}_2"], scripted[f"{side}_2"], atol=1e-12)
+
+
+class _Env:
+    """A game that shows a fixed view to a team."""
+
+    def __init__(self, view: TeamView) -> None:
+        self.view = view
+
+    def team_view(self, agents: list[str]) -> TeamView:
+        return self.view
+
+
+def test_a_bad_plays_action_names_the_player_and_the_value():
+    with pytest.raises(ValueError, match=r"left_2: action value 5 \(direction\) is nan"):
+        BallPlay().skill_actions(_view(), {"left_2": np.array([0, 0, 0, 0, 1.0, np.nan])})
+    with pytest.raises(ValueError, match=r"left_2: action of shape \(4,\), expected \(6,\)"):
+        BallPlay().skill_actions(_view(), {"left_2": np.zeros(4)})
+
+
+@needs_ode
+@pytest.mark.parametrize("direction", [0.0, 0.5])
+def test_playing_the_ball_walks_it_the_way_asked(direction):
+    """From a random start, the ball 0.5 m from the player, 20 s of play along the line to the
+    goal and 90° to its left (``benchmarks/ball_play.py``'s episode)."""
+    from ball_play import episode
+
+    travel, error = episode(seed=0, direction=direction, seconds=20.0)
+    assert travel > 3.0
+    assert abs(error) < 20.0
+
+
+def test_a_team_option_plays_is_checked_and_gives_plays_actions():
+    assert scenario_options("game-2v2")["plays"] is False
+    assert scenario_options("game-2v2", {"plays": True})["plays"] is True
+    with pytest.raises(ValueError, match="game-2v2: plays must be true or false, got 'yes'"):
+        scenario_options("game-2v2", {"plays": "yes"})
+
+
+@needs_ode
+def test_a_team_with_plays_actions_trains_and_plays_against_its_snapshots(tmp_path):
+    """A team game with ``plays`` takes six values a player; the pool's snapshots of such a
+    team act with them too (their actions become skill actions before the game takes them)."""
+    import gymnasium as gym
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    from robocup_gym.soccer.learnt import PolicyTeam
+    from robocup_gym.train.selfplay import (
+        OpponentPool,
+        SelfPlaySettings,
+        make_team_vec_env,
+        snapshot_policy,
+    )
+
+    options = {"plays": True, "max_cycles": 200}
+    game = TeamGame("game-1v1", lambda rng: StandingTeam(), options)
+    obs_space = game.observation_space
+    assert game.action_space.shape == (len(PLAY_ACTION_LABELS),)
+    game.close()
+    policy = ActorCriticPolicy(
+        obs_space, gym.spaces.Box(-1.0, 1.0, (6,), np.float32), lr_schedule=lambda _: 0.0
+    )
+    snapshot_policy(policy, tmp_path, 100)
+    pool = OpponentPool(tmp_path, SelfPlaySettings(scripted_share=0.0))
+    venv = make_team_vec_env("game-1v1", 1, options=options, pool=pool, kind="dummy")
+    try:
+        venv.reset()
+        view = venv.block.envs[0]
+        assert isinstance(view.opponent, PolicyTeam) and view.opponent.options["plays"]
+        for _ in range(5):
+            venv.step(np.tile([[0.0, 0.0, 0.0, -1.0, 1.0, 0.0]], (venv.num_envs, 1)))
+    finally:
+        venv.close()
+
+
+@needs_ode
+def test_a_team_with_plays_actions_plays_the_ball_on_serve():
+    """A team that acts with plays actions (here: always the ball straight at the goal) plays
+    through ``robocup-gym serve`` from its own perceptors: its plays become skill actions from
+    what the team sees, and the ball goes toward the other goal."""
+    import threading
+
+    from robocup_gym.protocol import trainer as trainer_cmds
+    from robocup_gym.protocol.framing import connect, send_frame
+    from robocup_gym.server.bench import start_server_process, stop_server_process
+    from robocup_gym.soccer.learnt import PolicyTeam
+    from robocup_gym.soccer.remote import ServerTeam
+
+    seen: list[np.ndarray] = []
+
+    def at_the_goal(x: np.ndarray) -> np.ndarray:
+        return np.tile([0.0, 0.0, 0.0, -1.0, 1.0, 0.0], (len(x), 1))
+
+    policy = PolicyTeam(at_the_goal, 1, "at-the-goal", {"plays": True})
+
+    class Watched:
+        """The policy team, noting where its team sees the ball at each decision."""
+
+        privileged = False  # observations without ground truth, as a learnt team's
+
+        def __call__(self, env, agents, obs=None):
+            seen.append(np.asarray(env.team_view(agents).ball, dtype=float).copy())
+            return policy(env, agents, obs)
+
+    team = Watched()
+
+    proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time", "--seed", "5")
+    teams: dict[str, ServerTeam] = {}
+    errors: list[BaseException] = []
+
+    def play(which, name: str) -> None:
+        try:
+            with ServerTeam(which, port=agent_port, name=name, players=2) as t:
+                teams[name] = t
+                t.play(seconds=25.0)
+        except BaseException as exc:  # reported on the test's thread
+            errors.append(exc)
+
+    threads = [
+        threading.Thread(target=play, args=(team, "A")),
+        threading.Thread(target=play, args=(StandingTeam(), "B")),
+    ]
+    try:
+        threads[0].start()
+        while "A" not in teams and not errors:
+            threading.Event().wait(0.05)
+        threads[1].start()
+        while len(teams) < 2 and not errors:
+            threading.Event().wait(0.05)
+        sock = connect("127.0.0.1", monitor_port)
+        send_frame(sock, trainer_cmds.play_mode("PlayOn"))  # no kick-off rules: play at once
+        sock.close()
+        for t in threads:
+            t.join(120.0)
+    finally:
+        stop_server_process(proc)
+    assert not errors, errors
+    assert teams["A"].side == "left"
+    # the ball pushed toward the right team's goal (+x); how far varies with the players'
+    # estimates of where they are (0.4-9 m in 25 s: the in-process test measures the play)
+    farthest = max(b[0] for b in seen)
+    assert farthest - seen[0][0] > 0.3, seen
+
+
+@needs_ode
+def test_the_ball_play_benchmark_reports_travel_and_direction(run_benchmark):
+    res, lines = run_benchmark("ball_play.py", "--episodes", 1, "--seconds", 4)
+    assert res["episodes"] == 3 and len(lines) == 3  # one start, three directions
+    assert set(res) >= {"ball_travel_median_m", "direction_error_deg_median", "on_course_rate"}
+    assert 0.0 <= res["moved_rate"] <= 1.0 and 0.0 <= res["on_course_rate"] <= 1.0
