@@ -21,6 +21,8 @@ import statistics
 
 import numpy as np
 
+from robocup_gym.sim.field import FIELD_HALF_LENGTH
+from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.soccer.scripted import StandingTeam
 from robocup_gym.soccer.team_view import TeamView
 
@@ -39,7 +41,7 @@ def episode(seed: int, direction: float, seconds: float) -> tuple[float, float]:
         at = world.torso_position(game.env.game.index(game.mine[0]))[:2]
         world.place_ball(tuple(at - 0.5 * at / max(float(np.hypot(*at)), 1e-6)))
         start = world.ball_position()[:2].copy()
-        steps = round(seconds / (game.env.config.skill_cycles * 0.02))
+        steps = round(seconds / (game.env.config.skill_cycles * CYCLE_S))
         for _ in range(steps):
             _, _, terminated, truncated, _ = game.step(
                 np.array([[0.0, 0.0, 0.0, -1.0, 1.0, direction]])
@@ -47,7 +49,7 @@ def episode(seed: int, direction: float, seconds: float) -> tuple[float, float]:
             if terminated or truncated:
                 break
         moved = world.ball_position()[:2] - start
-        goal_x = 15.0 if game.side == "left" else -15.0
+        goal_x = FIELD_HALF_LENGTH if game.side == "left" else -FIELD_HALF_LENGTH
     finally:
         game.close()
     asked = math.atan2(-start[1], goal_x - start[0]) + math.pi * direction
