@@ -8,6 +8,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -114,3 +115,21 @@ def real_rcssserver3d() -> str:
         if f.read(2) == b"#!":
             pytest.skip(f"{binary} is a script, not a real rcssserver3d")
     return binary
+
+
+@pytest.fixture(scope="session")
+def process_ends():
+    """``process_ends(pid, within=10.0)``: whether process ``pid`` is gone within ``within``
+    seconds (polled every 50 ms)."""
+
+    def ends(pid: int, within: float = 10.0) -> bool:
+        deadline = time.monotonic() + within
+        while time.monotonic() < deadline:
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                return True
+            time.sleep(0.05)
+        return False
+
+    return ends

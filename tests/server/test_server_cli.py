@@ -7,7 +7,6 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 
 import pytest
 
@@ -91,7 +90,7 @@ def test_without_libode_serve_says_so_in_one_line_and_names_the_other_engine(tmp
 @pytest.mark.skipif(
     not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's"
 )
-def test_a_started_server_ends_with_its_parent():
+def test_a_started_server_ends_with_its_parent(process_ends):
     """``start_server_process`` (matches on ``serve``, the benchmarks): a parent that dies
     without stopping its server does not leave it running."""
     code = (
@@ -103,12 +102,6 @@ def test_a_started_server_ends_with_its_parent():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     pid = int(out.stdout.split()[-1])
-    deadline = time.monotonic() + 10.0
-    while time.monotonic() < deadline:
-        try:
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            return
-        time.sleep(0.05)
-    os.kill(pid, signal.SIGKILL)
-    raise AssertionError(f"the server {pid} outlived its parent")
+    if not process_ends(pid):
+        os.kill(pid, signal.SIGKILL)
+        raise AssertionError(f"the server {pid} outlived its parent")

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -123,20 +122,11 @@ def test_commands_act_and_bad_ones_are_named():
         LeagueWorld([("T1", "A", 1), ("T1", "A", 1)])  # the same number twice
 
 
-def test_the_server_process_is_ended_and_its_folder_removed():
-    import os
-
+def test_the_server_process_is_ended_and_its_folder_removed(process_ends):
     server = RcssServerMJProcess()
     pid, folder = server.pid, server.folder
     assert server.running and Path(folder).is_dir()
     server.close()
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline:
-        try:
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            break
-        time.sleep(0.05)
-    else:
+    if not process_ends(pid):
         pytest.fail("the rcssservermj process is still running")
     assert not Path(folder).exists()
