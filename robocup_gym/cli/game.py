@@ -11,13 +11,7 @@ from typing import Annotated, Any
 import typer
 
 from robocup_gym.cli.app import app
-from robocup_gym.cli.common import (
-    _console,
-    _fail,
-    _parse_assignments,
-    _robot_types,
-    _usage_error,
-)
+from robocup_gym.cli.common import _console, _fail, _parse_assignments, _robot_types, _usage_error
 
 
 # ------------------------------------------------------------------------------ agent

@@ -47,9 +47,7 @@ from robocup_gym.server.agent import AgentState
 from robocup_gym.server.agent_messages import AgentMessages
 from robocup_gym.server.monitor import MonitorStream, RobotView
 from robocup_gym.server.trainer_commands import TrainerCommands
-from robocup_gym.server.wire import (
-    Connection,
-)
+from robocup_gym.server.wire import Connection
 from robocup_gym.server.worldhost import WorldHost
 from robocup_gym.sim import ENGINES, SimulationDivergedError
 from robocup_gym.sim.memory import tune_allocator

@@ -8,13 +8,8 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass
 
-from robocup_gym.sim.field import (
-    FIELD_HALF_LENGTH,
-    FIELD_HALF_WIDTH,
-)
-from robocup_gym.sim.fouls import (
-    AGENT_RADIUS,
-)
+from robocup_gym.sim.field import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH
+from robocup_gym.sim.fouls import AGENT_RADIUS
 
 MAX_PLAYERS = 11
 

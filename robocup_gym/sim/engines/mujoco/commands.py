@@ -14,9 +14,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from robocup_gym.sim import physics as phys
-from robocup_gym.sim.engines.mujoco.motors import (
-    _clip,
-)
+from robocup_gym.sim.engines.mujoco.motors import _clip
 from robocup_gym.sim.engines.mujoco.robot import RobotState
 from robocup_gym.sim.pose import joint_index
 from robocup_gym.types import AgentCommand

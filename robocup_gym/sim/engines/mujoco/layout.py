@@ -13,17 +13,9 @@ import numpy as np
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
-from robocup_gym.sim.engines.mujoco.motors import (
-    _SATURATED,
-    CREEP_WINDOW_RAD,
-    DIVERGED_QVEL_SQ,
-)
+from robocup_gym.sim.engines.mujoco.motors import _SATURATED, CREEP_WINDOW_RAD, DIVERGED_QVEL_SQ
 from robocup_gym.sim.engines.mujoco.robot import RobotState
-from robocup_gym.sim.engines.mujoco.scene import (
-    FRP_GEOMS,
-    RobotSlot,
-    frp_sensor_name,
-)
+from robocup_gym.sim.engines.mujoco.scene import FRP_GEOMS, RobotSlot, frp_sensor_name
 from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.sim.vision import PLAYER_PARTS
 

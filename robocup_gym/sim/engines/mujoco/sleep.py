@@ -6,9 +6,7 @@ wakes it (reference §7.1, §8.3).
 
 from __future__ import annotations
 
-from robocup_gym.sim.engines.mujoco.motors import (
-    _any,
-)
+from robocup_gym.sim.engines.mujoco.motors import _any
 
 AUTO_DISABLE_SPEED = 0.01
 """ODE's default auto-disable thresholds (linear m/s, angular rad/s) that SimSpark keeps: a body

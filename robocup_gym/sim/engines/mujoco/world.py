@@ -33,9 +33,7 @@ from robocup_gym.sim import compiled as compiled_step
 from robocup_gym.sim import physics as phys
 from robocup_gym.sim.engines.mujoco.commands import WorldCommands
 from robocup_gym.sim.engines.mujoco.layout import WorldLayout
-from robocup_gym.sim.engines.mujoco.motors import (
-    OdeRowsNumpy,
-)
+from robocup_gym.sim.engines.mujoco.motors import OdeRowsNumpy
 from robocup_gym.sim.engines.mujoco.readings import WorldReadings
 from robocup_gym.sim.engines.mujoco.robot import RobotState
 from robocup_gym.sim.engines.mujoco.scene import (
