@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from robocup_gym.envs.observations import in_heading_frame, turn_to_deg
-from robocup_gym.sim.field import FIELD_HALF_LENGTH
 from robocup_gym.soccer.skills import (
     MAX_FORWARD_MPS,
     MAX_SIDEWAYS_MPS,
@@ -157,9 +156,8 @@ class BallPlay:
     ) -> dict[str, np.ndarray]:
         """The skill actions of the ``plays`` ``actions`` (:data:`PLAY_ACTION_LABELS`) of the
         team that ``view`` shows (its side, ball, positions and headings)."""
-        attack = 1.0 if view.side == "left" else -1.0
         ball = np.asarray(view.ball, dtype=float)[:2]
-        to_goal = math.atan2(-ball[1], attack * FIELD_HALF_LENGTH - ball[0])
+        to_goal = math.atan2(-ball[1], view.goal[0] - ball[0])  # the goal's middle is at y = 0
         out: dict[str, np.ndarray] = {}
         checked = {  # every action checked before any is played
             agent: checked_action(agent, action, PLAY_ACTION_LABELS, PLAY_ACTION_WHAT)

@@ -72,6 +72,11 @@ class TeamView:
     """The other team's players' (x, y), one row each (those known: on a server, where they
     were last seen)."""
 
+    @property
+    def goal(self) -> np.ndarray:
+        """The middle of the goal the team attacks, (x, y)."""
+        return np.array([(1.0 if self.side == "left" else -1.0) * FIELD_HALF_LENGTH, 0.0])
+
 
 def _past_opponents(ball: np.ndarray, to_goal: np.ndarray, opponents: np.ndarray) -> np.ndarray:
     """Where to dribble the ball: toward the goal (``to_goal``, a unit vector), or, with an
@@ -118,8 +123,7 @@ class ScriptedTeam:
             return {}
         view = env.team_view(agents)
         ball, positions, headings, keepers = view.ball, view.positions, view.headings, view.keepers
-        attack = 1.0 if view.side == "left" else -1.0
-        goal = np.array([attack * FIELD_HALF_LENGTH, 0.0])
+        goal = view.goal
         own_goal = -goal
         field_players = [a for a in agents if a not in keepers]
         chaser = min(
