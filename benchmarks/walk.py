@@ -1,11 +1,12 @@
 """How well does a policy walk? Forward speed, falls, and sideways and turn tracking.
 
-Runs a trained Walk run's policy (``robocup-gym train walk`` folder) deterministically on the
-default engine for ``--episodes`` episodes per command, each as long as the run's episodes
-(10 s by default), with the command held fixed:
+Runs a trained Walk or Run policy (``robocup-gym train walk`` or ``run`` folder)
+deterministically on the default engine for ``--episodes`` episodes per command, each as long
+as the run's episodes (10 s by default), with the command held fixed:
 
-* forward 0.5 m/s (the target; the reference team walks 0.81 m/s on rcssserver3d): mean forward
-  speed over the episode (displacement along the start heading / time) and the falls;
+* forward ``--forward`` m/s (default 0.5 on Walk, 1.5 on Run; the reference team walks 0.81 m/s
+  on rcssserver3d): mean forward speed over the episode (displacement along the start heading /
+  time) and the falls;
 * sideways 0.3 m/s to the left: mean error of the leftward speed;
 * turning 30 deg/s: mean error of the turn rate.
 
@@ -15,6 +16,9 @@ baseline, and a smoke test without a trained run). ``--robot-type N`` runs anoth
 JSON object (``forward_speed_mps``, ``falls``, ``sideways_error_mps``, ``turn_error_deg_s``, …).
 
     python benchmarks/walk.py runs/walk-ppo-<time> --episodes 20
+    python benchmarks/walk.py pretrained:run --episodes 20     # forward 1.5 m/s
+
+``meets_target`` in the JSON: at least the commanded forward speed, no falls.
 """
 
 from __future__ import annotations
@@ -84,16 +88,36 @@ def main(argv: list[str] | None = None) -> dict:
     from robocup_gym.train.evaluate import add_benchmark_options, benchmark_policy_and_env
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_benchmark_options(parser, "Walk", episodes=20)
+    add_benchmark_options(parser, "Walk or Run", episodes=20)
+    parser.add_argument(
+        "--task",
+        choices=("walk", "run"),
+        default="walk",
+        help="the task a 'zero' policy runs (a run folder or a shipped policy brings its own)",
+    )
+    parser.add_argument(
+        "--forward",
+        type=float,
+        default=None,
+        help="the forward command, m/s (default 0.5 on Walk, 1.5 on Run)",
+    )
     args = parser.parse_args(argv)
-    env, act = benchmark_policy_and_env(args, "RobocupGym/Walk-v0")
+    env_id = "RobocupGym/Run-v0" if args.task == "run" else "RobocupGym/Walk-v0"
+    env, act = benchmark_policy_and_env(args, env_id)
+    forward = args.forward
+    if forward is None:
+        forward = 1.5 if type(env.unwrapped).__name__ == "Run" else 0.5
+    if not (math.isfinite(forward) and forward > 0.0):
+        env.close()
+        raise SystemExit(f"--forward must be a speed above 0 m/s, got {forward}")
+    commands = dict(COMMANDS, forward=(forward, 0.0, 0.0))
     out: dict = {
         "policy": args.policy,
         "episodes_per_command": args.episodes,
         "robot_type": env.unwrapped.config.robot_type,
     }
     try:
-        for name, command in COMMANDS.items():
+        for name, command in commands.items():
             res = run(env, act, command, args.episodes, args.seed)
             out[name] = res
             print(
@@ -107,7 +131,8 @@ def main(argv: list[str] | None = None) -> dict:
     out["falls"] = out["forward"]["falls"]
     out["sideways_error_mps"] = abs(out["sideways"]["left_speed_mps"] - COMMANDS["sideways"][1])
     out["turn_error_deg_s"] = abs(out["turn"]["turn_rate_deg_s"] - COMMANDS["turn"][2])
-    out["meets_target"] = out["forward_speed_mps"] >= 0.5 and out["falls"] == 0
+    out["forward_command_mps"] = forward
+    out["meets_target"] = out["forward_speed_mps"] >= forward and out["falls"] == 0
     print(json.dumps(out))
     return out
 

@@ -21,6 +21,7 @@ def test_registry_lists_the_tasks():
         "RobocupGym/SimpleKick-v0",
         "RobocupGym/VelocityKick-v0",
         "RobocupGym/Walk-v0",
+        "RobocupGym/Run-v0",
         "RobocupGym/GetUp-v0",
         "RobocupGym/GetUp-v1",
         "RobocupGym/TargetKick-v0",

@@ -4,6 +4,7 @@
 from robocup_gym.envs.tasks.dribble import Dribble, DribbleConfig
 from robocup_gym.envs.tasks.getup import GetUp, GetUpConfig
 from robocup_gym.envs.tasks.long_kick import LongKick, LongKickConfig
+from robocup_gym.envs.tasks.run import Run, RunConfig
 from robocup_gym.envs.tasks.simple_kick import SimpleKick, SimpleKickConfig
 from robocup_gym.envs.tasks.target_kick import TargetKick, TargetKickConfig
 from robocup_gym.envs.tasks.velocity_kick import VelocityKick, VelocityKickConfig
@@ -16,6 +17,8 @@ __all__ = [
     "GetUpConfig",
     "LongKick",
     "LongKickConfig",
+    "Run",
+    "RunConfig",
     "SimpleKick",
     "SimpleKickConfig",
     "TargetKick",

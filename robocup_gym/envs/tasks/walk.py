@@ -118,6 +118,8 @@ class WalkConfig(EnvConfig):
     tracking_sigma: float = 0.1
     """Width of the tracking kernels exp(−error² / σ), (m/s)² and (rad/s)² (MuJoCo Playground:
     0.25; at 0.25 standing still pays much of what walking does, and the policy stands)."""
+    tracking_turn_sigma: float | None = None
+    """Width of the turn tracking kernel, (rad/s)²; ``None``: ``tracking_sigma``."""
     w_tracking_linear: float = 1.5
     """Weight of exp(−|v_xy − command_xy|² / σ) per step."""
     w_tracking_turn: float = 0.8
@@ -156,6 +158,9 @@ class WalkConfig(EnvConfig):
             raise EnvConfigError("standing_command_prob must be in [0, 1]")
         if not (math.isfinite(self.tracking_sigma) and self.tracking_sigma > 0):
             raise EnvConfigError("tracking_sigma must be > 0")
+        turn_sigma = self.tracking_turn_sigma
+        if turn_sigma is not None and not (math.isfinite(turn_sigma) and turn_sigma > 0):
+            raise EnvConfigError(f"tracking_turn_sigma must be > 0 or None, got {turn_sigma!r}")
         if not (math.isfinite(self.gait_frequency_hz) and 0.0 < self.gait_frequency_hz <= 10.0):
             raise EnvConfigError(
                 f"gait_frequency_hz must be in (0, 10] Hz, got {self.gait_frequency_hz!r}"
@@ -301,6 +306,7 @@ def walk_reward_terms(
     """
     c = config
     lin_err = float((velocity[0] - command[0]) ** 2 + (velocity[1] - command[1]) ** 2)
+    turn_sigma = c.tracking_sigma if c.tracking_turn_sigma is None else c.tracking_turn_sigma
     turn_err = float((turn_rate - math.radians(command[2])) ** 2)
     moving = asks_to_move(command)
     target = (
@@ -318,7 +324,7 @@ def walk_reward_terms(
         feet_phase = sum(down != up for down, up in zip(feet_down, swing, strict=True)) / 2.0
     return {
         "tracking_linear": c.w_tracking_linear * math.exp(-lin_err / c.tracking_sigma),
-        "tracking_turn": c.w_tracking_turn * math.exp(-turn_err / c.tracking_sigma),
+        "tracking_turn": c.w_tracking_turn * math.exp(-turn_err / turn_sigma),
         "upright": c.w_upright * float(up_z),
         "feet_phase": c.w_feet_phase * feet_phase,
         "feet_air_time": c.w_feet_air_time * air,
@@ -349,7 +355,7 @@ class Walk(BaseEnv):
     term                  default w    value
     ====================  ===========  ==========================================================
     ``tracking_linear``   1.5          exp(−|v_xy − cmd_xy|² / σ), heading frame, σ = 0.1
-    ``tracking_turn``     0.8          exp(−(ω_z − cmd_ω)² / σ), rad/s
+    ``tracking_turn``     0.8          exp(−(ω_z − cmd_ω)² / σ_turn), rad/s, σ_turn = σ
     ``upright``           0.3          world z of the torso's up axis
     ``feet_phase``        0.5          share of feet in contact as the gait clock asks
     ``feet_air_time``     1.0          Σ (air time − swing share / f) of feet touching down

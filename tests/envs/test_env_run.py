@@ -1,0 +1,153 @@
+"""Run: Walk's task at running speeds, over a faster reference gait and a taller stance."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import robocup_gym.envs  # noqa: F401 (registers the tasks)
+from robocup_gym.envs import EnvConfigError, Run, RunConfig, Walk, WalkConfig
+from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG
+from robocup_gym.envs.tasks.run import RUN_POSE_DEG, RUN_POSE_OFFSETS_DEG
+from robocup_gym.sim.engines.ode import available
+
+needs_ode = pytest.mark.skipif(not available(), reason="no libode")
+
+
+@pytest.mark.parametrize("robot_type", range(5))
+def test_check_env_for_every_type(robot_type):
+    env = gym.make("RobocupGym/Run-v0", robot_type=robot_type)
+    check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def test_run_is_a_task_of_the_cli_with_walks_training_settings():
+    from robocup_gym.train.config import TASK_ALGO_DEFAULTS
+    from robocup_gym.train.tasks import resolve_task
+
+    assert resolve_task("run") == "RobocupGym/Run-v0"
+    assert (
+        TASK_ALGO_DEFAULTS[("RobocupGym/Run-v0", "ppo")]
+        == TASK_ALGO_DEFAULTS[("RobocupGym/Walk-v0", "ppo")]
+    )
+
+
+def test_every_default_that_differs_from_walks_is_in_the_docstring_table():
+    """Run says only what differs from Walk, and its table names each of those options."""
+    walk, run = WalkConfig(), RunConfig()
+    differ = [
+        f.name
+        for f in dataclasses.fields(RunConfig)
+        if getattr(walk, f.name) != getattr(run, f.name)
+    ]
+    assert "gait_frequency_hz" in differ and "joint_start_deg" in differ
+    for name in differ:
+        assert f"``{name}``" in (Run.__doc__ or ""), name
+    assert run.gait_frequency_hz > walk.gait_frequency_hz
+    assert run.forward_speed_range[1] >= 1.5  # commands at the running target
+
+
+def test_the_run_stance_is_the_paper_pose_with_its_leg_offsets():
+    for side in "LR":
+        for joint, offset in RUN_POSE_OFFSETS_DEG.items():
+            name = side + joint
+            assert RUN_POSE_DEG[name] == pytest.approx(PAPER_STANDING_POSE_DEG[name] + offset)
+    untouched = set(PAPER_STANDING_POSE_DEG) - {s + j for s in "LR" for j in RUN_POSE_OFFSETS_DEG}
+    assert all(RUN_POSE_DEG[n] == PAPER_STANDING_POSE_DEG[n] for n in untouched)
+    env = Run(command_change_steps=0)
+    env.reset(seed=0, options={"velocity_command": (0.0, 0.0, 0.0)})
+    names = env.robot_model.perceptor_names
+    knee = env.joint_angles_deg[names.index("llj4")]  # LKneePitch
+    assert knee == pytest.approx(RUN_POSE_DEG["LKneePitch"], abs=0.01)  # starts in its stance
+    env.close()
+
+
+def test_run_options_are_validated_as_walks():
+    with pytest.raises(EnvConfigError, match="gait_frequency_hz"):
+        RunConfig(gait_frequency_hz=0.0).validate()
+    with pytest.raises(EnvConfigError, match="forward_speed_range"):
+        RunConfig(forward_speed_range=(1.5, 0.5)).validate()
+    for bad in (0.0, -0.1, float("nan")):
+        with pytest.raises(EnvConfigError, match="tracking_turn_sigma"):
+            RunConfig(tracking_turn_sigma=bad).validate()
+
+
+def test_veering_costs_run_more_of_the_turn_term_than_walks_kernel_width_would():
+    """Run's turn kernel is its own (σ 0.1), narrower than its linear one (σ 0.4); Walk's
+    turn kernel is its linear one unless told otherwise."""
+    from robocup_gym.envs.tasks.walk import walk_reward_terms
+
+    veer = math.radians(17.0)  # rad/s while the command asks to run straight
+
+    def turn_term(config):
+        return walk_reward_terms(
+            config,
+            velocity=np.array([1.5, 0.0, 0.0]),
+            turn_rate=veer,
+            command=np.array([1.5, 0.0, 0.0]),
+            up_z=1.0,
+            touchdown_air_times=[],
+            action=np.zeros(4),
+            last_action=np.zeros(4),
+            joint_speeds=np.zeros(4),
+            fallen=False,
+        )["tracking_turn"]
+
+    run = RunConfig()
+    assert turn_term(run) == pytest.approx(0.8 * math.exp(-(veer**2) / 0.1))
+    loose = dataclasses.replace(run, tracking_turn_sigma=None)
+    assert turn_term(loose) == pytest.approx(0.8 * math.exp(-(veer**2) / 0.4))
+    assert turn_term(WalkConfig(tracking_sigma=0.3)) == pytest.approx(
+        0.8 * math.exp(-(veer**2) / 0.3)
+    )
+
+
+@needs_ode
+def test_zero_actions_run_faster_than_walks_reference_gait():
+    """The residual policy's starting point: told 1.5 m/s, Run's reference gait alone (zero
+    actions) covers ~0.75 m/s over 3 s on ODE, Walk's (capped at its largest stride) ~0.5."""
+
+    def speed(cls) -> float:
+        env = cls(command_change_steps=0)
+        try:
+            env.reset(seed=0, options={"velocity_command": (1.5, 0.0, 0.0)})
+            start = env.torso_pos.copy()
+            for _ in range(150):
+                assert not env.step(np.zeros(env.action_space.shape))[2]
+            return float(env.torso_pos[0] - start[0]) / 3.0
+        finally:
+            env.close()
+
+    run, walk = speed(Run), speed(Walk)
+    assert run > 0.65 and walk < 0.6 and run > walk + 0.15
+
+
+@needs_ode
+def test_the_walk_benchmark_runs_run_at_its_own_forward_command(run_benchmark):
+    """``benchmarks/walk.py zero --task run``: Run's gait alone, forward at Run's default
+    command (1.5 m/s): it moves forward, short of the command (and falls now and then: the
+    policy over it learns balance)."""
+    res, lines = run_benchmark("walk.py", "zero", "--task", "run", "--episodes", 1, timeout=300)
+    assert res["forward_command_mps"] == 1.5
+    assert any("command (1.5, 0.0, 0.0)" in line for line in lines)
+    assert 0.3 < res["forward_speed_mps"] < 1.5 and res["meets_target"] is False
+
+
+def test_the_walk_benchmark_rejects_a_forward_command_that_is_no_speed():
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "walk.py"
+    proc = subprocess.run(
+        [sys.executable, str(script), "zero", "--forward", "nan", "--episodes", "1"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode != 0 and "--forward must be a speed above 0 m/s" in proc.stderr
