@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import gymnasium as gym
@@ -53,6 +54,23 @@ def _terms(config: WalkConfig | None = None, **kw):
         fallen=False,
     )
     return walk_reward_terms(config or WalkConfig(), **{**base, **kw})
+
+
+def test_veering_costs_run_more_of_the_turn_term_than_walks_kernel_would():
+    """Run's turn kernel is its own (σ 0.1, weight 2), narrower than its linear one (σ 0.4);
+    Walk's turn kernel is its linear one unless told otherwise."""
+    from robocup_gym.envs import RunConfig
+
+    veer = math.radians(17.0)  # rad/s while the command asks to run straight
+
+    def turn_term(config):
+        return _terms(config, turn_rate=veer, command=np.array([1.5, 0.0, 0.0]))["tracking_turn"]
+
+    assert turn_term(RunConfig()) == pytest.approx(2.0 * math.exp(-(veer**2) / 0.1))
+    loose = dataclasses.replace(RunConfig(), tracking_turn_sigma=None)
+    assert turn_term(loose) == pytest.approx(2.0 * math.exp(-(veer**2) / 0.4))
+    walk = WalkConfig(tracking_sigma=0.3)
+    assert turn_term(walk) == pytest.approx(0.8 * math.exp(-(veer**2) / 0.3))
 
 
 def test_walking_at_the_command_earns_the_tracking_reward():

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import gymnasium as gym
 import numpy as np
@@ -75,36 +74,6 @@ def test_run_options_are_validated_as_walks():
     for bad in (0.0, -0.1, float("nan")):
         with pytest.raises(EnvConfigError, match="tracking_turn_sigma"):
             RunConfig(tracking_turn_sigma=bad).validate()
-
-
-def test_veering_costs_run_more_of_the_turn_term_than_walks_kernel_width_would():
-    """Run's turn kernel is its own (σ 0.1), narrower than its linear one (σ 0.4); Walk's
-    turn kernel is its linear one unless told otherwise."""
-    from robocup_gym.envs.tasks.walk import walk_reward_terms
-
-    veer = math.radians(17.0)  # rad/s while the command asks to run straight
-
-    def turn_term(config):
-        return walk_reward_terms(
-            config,
-            velocity=np.array([1.5, 0.0, 0.0]),
-            turn_rate=veer,
-            command=np.array([1.5, 0.0, 0.0]),
-            up_z=1.0,
-            touchdown_air_times=[],
-            action=np.zeros(4),
-            last_action=np.zeros(4),
-            joint_speeds=np.zeros(4),
-            fallen=False,
-        )["tracking_turn"]
-
-    run = RunConfig()
-    assert turn_term(run) == pytest.approx(0.8 * math.exp(-(veer**2) / 0.1))
-    loose = dataclasses.replace(run, tracking_turn_sigma=None)
-    assert turn_term(loose) == pytest.approx(0.8 * math.exp(-(veer**2) / 0.4))
-    assert turn_term(WalkConfig(tracking_sigma=0.3)) == pytest.approx(
-        0.8 * math.exp(-(veer**2) / 0.3)
-    )
 
 
 @needs_ode
