@@ -181,7 +181,7 @@ def test_task_names():
     assert task_name("RobocupGym/VelocityKick-v0") == "velocity-kick"
     with pytest.raises(
         ValueError,
-        match="known tasks: dribble, get-up, long-kick, simple-kick, target-kick, velocity-kick, "
-        "walk",
+        match="known tasks: dribble, get-up, long-kick, run, simple-kick, target-kick, "
+        "velocity-kick, walk",
     ):
         resolve_task("penalty-kick")
