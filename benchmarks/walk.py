@@ -85,6 +85,7 @@ def _wrap(a: float) -> float:
 
 
 def main(argv: list[str] | None = None) -> dict:
+    from robocup_gym.envs import Run
     from robocup_gym.train.evaluate import add_benchmark_options, benchmark_policy_and_env
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -102,14 +103,13 @@ def main(argv: list[str] | None = None) -> dict:
         help="the forward command, m/s (default 0.5 on Walk, 1.5 on Run)",
     )
     args = parser.parse_args(argv)
+    forward = args.forward
+    if forward is not None and not (math.isfinite(forward) and forward > 0.0):
+        raise SystemExit(f"--forward must be a speed above 0 m/s, got {forward}")
     env_id = "RobocupGym/Run-v0" if args.task == "run" else "RobocupGym/Walk-v0"
     env, act = benchmark_policy_and_env(args, env_id)
-    forward = args.forward
     if forward is None:
-        forward = 1.5 if type(env.unwrapped).__name__ == "Run" else 0.5
-    if not (math.isfinite(forward) and forward > 0.0):
-        env.close()
-        raise SystemExit(f"--forward must be a speed above 0 m/s, got {forward}")
+        forward = 1.5 if isinstance(env.unwrapped, Run) else 0.5
     commands = dict(COMMANDS, forward=(forward, 0.0, 0.0))
     out: dict = {
         "policy": args.policy,

@@ -24,7 +24,7 @@ ENGINES = [
 
 
 @pytest.mark.parametrize("robot_type", range(5))
-@pytest.mark.parametrize("task", ["RobocupGym/Walk-v0", "RobocupGym/GetUp-v0"])
+@pytest.mark.parametrize("task", ["RobocupGym/Walk-v0", "RobocupGym/Run-v0", "RobocupGym/GetUp-v0"])
 def test_check_env_for_every_type(task, robot_type):
     env = gym.make(task, robot_type=robot_type)
     check_env(env.unwrapped, skip_render_check=True)

@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 
-import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
 
 import robocup_gym.envs  # noqa: F401 (registers the tasks)
 from robocup_gym.envs import EnvConfigError, Run, RunConfig, Walk, WalkConfig
@@ -16,13 +14,6 @@ from robocup_gym.envs.tasks.run import RUN_POSE_DEG, RUN_POSE_OFFSETS_DEG
 from robocup_gym.sim.engines.ode import available
 
 needs_ode = pytest.mark.skipif(not available(), reason="no libode")
-
-
-@pytest.mark.parametrize("robot_type", range(5))
-def test_check_env_for_every_type(robot_type):
-    env = gym.make("RobocupGym/Run-v0", robot_type=robot_type)
-    check_env(env.unwrapped, skip_render_check=True)
-    env.close()
 
 
 def test_run_is_a_task_of_the_cli_with_walks_training_settings():

@@ -8,15 +8,14 @@ from typing import Any
 from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG
 from robocup_gym.envs.tasks.walk import Walk, WalkConfig
 
-__all__ = ["RUN_POSE_DEG", "Run", "RunConfig"]
+__all__ = ["RUN_POSE_DEG", "RUN_POSE_OFFSETS_DEG", "Run", "RunConfig"]
 
 
 def _run_pose() -> dict[str, float]:
     pose = dict(PAPER_STANDING_POSE_DEG)
     for side in "LR":
-        pose[f"{side}HipPitch"] += RUN_POSE_OFFSETS_DEG["HipPitch"]
-        pose[f"{side}KneePitch"] += RUN_POSE_OFFSETS_DEG["KneePitch"]
-        pose[f"{side}AnklePitch"] += RUN_POSE_OFFSETS_DEG["AnklePitch"]
+        for joint, offset in RUN_POSE_OFFSETS_DEG.items():
+            pose[side + joint] += offset
     return pose
 
 
