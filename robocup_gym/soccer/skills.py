@@ -245,9 +245,10 @@ class SkillSet:
         walk, getup: Names of the shipped policies that walk and get up.
         self_collisions: Whether the world runs rcssserver3d's self-collision rule (a real
             server and ``serve`` always do). Then the get-up plays ``GetUp-v1``'s scripts
-            alone, which keep clear of the rule: the shipped get-up's corrections were learnt
-            over the scripts without it (from the front, with the rule, it gets up from 32 of
-            64 lying poses, ``GetUp-v1``'s script alone from 62; docs/results.md).
+            alone, which keep clear of the rule; without it, the shipped get-up (a policy over
+            the same scripts). From a game's falls (random headings, joints off by 10°) under
+            the rule the scripts alone got up more often and sooner than the policy over them
+            (46 and 43 of 60; docs/results.md).
         walk_faces_x: The walk sees each player as if it faced +x (:func:`facing_x`): it was
             trained facing +x and observes its torso's orientation in the world frame; facing
             −x it walks askew, hardly turns clockwise and falls walking sideways.

@@ -68,10 +68,14 @@ def test_a_player_facing_the_other_way_walks_and_turns_as_told(module):
     for _ in range(25):  # 5 s at 0.5 m/s forward, along -x
         env.step({"left_1": np.array([0.625, 0.0, 0.0, 0.0])})
     moved = w.torso_position(0) - start
+    assert env.skills.modes() == ["walk"]
+    env.reset(seed=0)  # placed mid-stride, the robot falls
+    env.game.referee.set_play_mode("PlayOn")
     w.place_robot(0, 5.0, 0.0, heading_deg=180.0)
     for _ in range(25):  # 5 s turning clockwise at 30 deg/s
         env.step({"left_1": np.array([0.0, 0.0, -1.0, 0.0])})
     turned = -turn_to_deg(heading_frame(w.torso_quat(0)), np.pi)  # from facing -x, deg
+    assert env.skills.modes() == ["walk"]
     env.close()
     if module is game_v1:
         assert moved[0] < -2.4 and abs(moved[1]) < 0.5, moved
@@ -99,7 +103,7 @@ def test_a_player_kicks_a_ball_in_front_of_its_right_foot(solo):
 @pytest.mark.parametrize("self_collisions", [False, True], ids=["no rule", "self-collision rule"])
 def test_a_fallen_player_gets_up_by_itself(self_collisions):
     """With the self-collision rule (a real server's, ``serve``'s) the get-up plays GetUp-v1's
-    scripts alone; without it, the shipped get-up policy."""
+    scripts alone; without it, the shipped get-up policy over the same scripts."""
     solo = game_v1.parallel_env(
         actions="skills",
         left_types=(0,),
@@ -121,7 +125,7 @@ def test_a_fallen_player_gets_up_by_itself(self_collisions):
     assert "get-up" in modes
     assert min(heights) < 0.15 and heights[-1] > 0.3, heights
     assert modes[-1] == "walk"
-    assert solo.skills.players[0].getup.env.config.self_collisions is self_collisions
+    assert solo.skills.players[0].getup.env.config.self_collisions  # GetUp-v1's scripts
     solo.close()
 
 
