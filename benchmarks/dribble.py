@@ -10,7 +10,8 @@ target):
 * losses: times the ball went more than 1 m from the torso, per 10 s;
 * falls, and whether the ball reached the target.
 
-``--robot-type N`` runs another Nao type; ``--backend rcssserver3d`` runs on a real server.
+``--robot-type N`` runs another Nao type; ``--backend rcssserver3d`` runs on a real server,
+``--backend serve`` on a ``robocup-gym serve`` of its own.
 Prints one line per target and, last, one JSON object (``ball_speed_to_target_mps``,
 ``losses_per_10s``, ``falls``, ``goal_rate``, ``meets_target``: speed ≥ 0.6 m/s).
 

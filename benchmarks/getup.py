@@ -13,8 +13,9 @@ from one of the run's ``lying_poses`` drops per side (tilt and joints varied ±1
 ``--lying-poses N`` another number), or with ``--pose-from N`` from pose N + k (``--pose-from
 32``: poses a run trained on up to 32 never met); ``--robot-type N`` another Nao type
 (``--script-robot-type N``: under another type's scripted get-up), ``--backend rcssserver3d`` a
-real server. A policy meant for one side (``start_side`` ``front`` or ``back`` in its options)
-is measured on that side only. Prints one line per side and, as the last line, one JSON object
+real server, ``--backend serve`` a ``robocup-gym serve`` of its own (reached as a real server
+is). A policy meant for one side (``start_side`` ``front`` or ``back`` in its options) is
+measured on that side only. Prints one line per side and, as the last line, one JSON object
 (``success_rate``, ``cycles_to_up_median``, per side the same).
 
     python benchmarks/getup.py runs/get-up-ppo-<time> --episodes 20

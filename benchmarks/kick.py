@@ -14,9 +14,10 @@ each episode:
 * the time from the start to the ball's first movement (> 0.1 m/s).
 
 ``--robot-type N`` runs another Nao type; ``--backend rcssserver3d`` runs on a real server
-(``RCSSSERVER3D`` names its binary). Prints one line per command and, last, one JSON object
-(``distance_error_median``, ``direction_error_deg_median``, ``stand_after_kick_rate``,
-``ball_distance_median_m``, ``contact_time_s_median``, …).
+(``RCSSSERVER3D`` names its binary), ``--backend serve`` on a ``robocup-gym serve`` of its own.
+Prints one line per command and, last, one JSON object (``distance_error_median``,
+``direction_error_deg_median``, ``stand_after_kick_rate``, ``ball_distance_median_m``,
+``contact_time_s_median``, …).
 
     python benchmarks/kick.py runs/target-kick-ppo-<time> --episodes 5
 """

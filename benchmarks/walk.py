@@ -12,8 +12,9 @@ as the run's episodes (10 s by default), with the command held fixed:
 
 ``pretrained:NAME`` runs a shipped policy; ``zero`` runs a policy that sends zero actions (a
 baseline, and a smoke test without a trained run). ``--robot-type N`` runs another Nao type,
-``--backend rcssserver3d`` a real server. Prints one line per command and, as the last line, one
-JSON object (``forward_speed_mps``, ``falls``, ``sideways_error_mps``, ``turn_error_deg_s``, …).
+``--backend rcssserver3d`` a real server (``serve``: a ``robocup-gym serve`` of its own). Prints one
+line per command and, as the last line, one JSON object (``forward_speed_mps``, ``falls``,
+``sideways_error_mps``, ``turn_error_deg_s``, …).
 
     python benchmarks/walk.py runs/walk-ppo-<time> --episodes 20
     python benchmarks/walk.py pretrained:run --episodes 20     # forward 1.5 m/s

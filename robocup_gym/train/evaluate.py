@@ -62,7 +62,7 @@ def add_benchmark_options(parser, task: str, episodes: int) -> None:
     """The options every skill benchmark (``benchmarks/walk.py``, ``getup.py``, ``kick.py``,
     ``dribble.py``) takes, on an ``argparse`` parser: the policy (a ``task`` run folder,
     ``pretrained:NAME`` or ``zero``), ``--episodes`` (default ``episodes``), ``--seed``,
-    ``--backend`` (also ``--engine``: ode, mujoco or rcssserver3d), ``--robot-type`` and
+    ``--backend`` (also ``--engine``: ode, mujoco, rcssserver3d or serve), ``--robot-type`` and
     ``--self-collisions``."""
     parser.add_argument(
         "policy",
@@ -75,10 +75,11 @@ def add_benchmark_options(parser, task: str, episodes: int) -> None:
         "--backend",
         "--engine",
         dest="backend",
-        choices=("ode", "mujoco", "rcssserver3d"),
+        choices=("ode", "mujoco", "rcssserver3d", "serve"),
         default=None,
-        help="the simulator: ode, mujoco or rcssserver3d (a real server, RCSSSERVER3D names "
-        "its binary); default: the run's own (ode for 'zero')",
+        help="the simulator: ode, mujoco, rcssserver3d (a real server, RCSSSERVER3D names "
+        "its binary) or serve (robocup-gym serve on ODE, started for the benchmark, reached "
+        "as a real server is); default: the run's own (ode for 'zero')",
     )
     parser.add_argument(
         "--robot-type",
@@ -108,7 +109,38 @@ def benchmark_policy_and_env(args, env_id: str, env_overrides: dict[str, Any] | 
         extra["robot_type"] = args.robot_type
     if getattr(args, "self_collisions", False):
         extra["self_collisions"] = True
-    return policy_and_env(args.policy, env_id, args.backend, extra)
+    if args.backend != "serve":
+        return policy_and_env(args.policy, env_id, args.backend, extra)
+    return _on_serve(args.policy, env_id, extra)
+
+
+def _on_serve(policy: str, env_id: str, extra: dict[str, Any]):
+    """:func:`policy_and_env` on a ``robocup-gym serve`` (ODE, sync mode, real time off) started
+    on free loopback ports and reached through the real-server backend in connect mode; closing
+    the environment stops the server (which also ends with this process)."""
+    from robocup_gym.server.bench import start_server_process, stop_server_process
+
+    proc, agent_port, monitor_port = start_server_process(
+        "--sync", "--no-real-time", "--engine", "ode"
+    )
+    ports = {"host": "127.0.0.1", "agent_port": agent_port, "monitor_port": monitor_port}
+    try:
+        env, act = policy_and_env(
+            policy, env_id, "rcssserver3d", {**extra, "backend_options": ports}
+        )
+    except BaseException:
+        stop_server_process(proc)
+        raise
+    close = env.close
+
+    def close_env_and_server() -> None:
+        try:
+            close()
+        finally:
+            stop_server_process(proc)
+
+    env.close = close_env_and_server
+    return env, act
 
 
 # ---------------------------------------------------------------------------------- video

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -592,11 +594,50 @@ def test_the_locomotion_benchmarks_print_json_last(script, run_benchmark):
         assert res["pose_from"] == 20 and res["robot_type"] == 0
 
 
+def _child_commands() -> list[str]:
+    """The command lines of this process's children (Linux)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+            if ppid == os.getpid():
+                out.append((stat.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode())
+        except (OSError, ValueError, IndexError):
+            continue  # a process that ended meanwhile
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc (Linux)")
+def test_a_benchmark_on_serve_starts_its_server_and_stops_it_when_closed():
+    """``--backend serve`` (every skill benchmark): a ``robocup-gym serve`` of its own, reached
+    as a real server is (lying poses placed through the trainer), gone once the environment is
+    closed; GetUp-v1's script gets up from the back there as in-process."""
+    import argparse
+
+    from robocup_gym.train.evaluate import benchmark_policy_and_env
+
+    args = argparse.Namespace(
+        policy="zero", episodes=1, backend="serve", robot_type=None, self_collisions=True
+    )
+    env, act = benchmark_policy_and_env(args, "RobocupGym/GetUp-v0")
+    try:
+        assert env.unwrapped.backend.name == "rcssserver3d"
+        assert any("robocup_gym.server" in c for c in _child_commands())
+        obs, _ = env.reset(seed=0, options={"start_side": "back", "lying_pose": 0})
+        done, info = False, {}
+        while not done:
+            obs, _, terminated, truncated, info = env.step(act(obs))
+            done = terminated or truncated
+        assert info["success"] and info["steps_to_up"] <= 80, info.get("steps_to_up")
+    finally:
+        env.close()
+    assert not any("robocup_gym.server" in c for c in _child_commands())
+
+
 def test_the_walk_benchmark_measures_turning_counter_clockwise_positive():
     """``benchmarks/walk.py`` compares its turn rate with the command's (CCW positive), so a torso
     turned from heading 10° to 40° must read +30°, and across ±180° the short way."""
     import importlib.util
-    from pathlib import Path
 
     from robocup_gym.sim.pose import heading_to_quat
 
