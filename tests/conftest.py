@@ -118,6 +118,25 @@ def real_rcssserver3d() -> str:
 
 
 @pytest.fixture(scope="session")
+def child_pids():
+    """``child_pids(pid)``: the PIDs of process ``pid``'s children (read from ``/proc``: Linux)."""
+
+    def children(pid: int) -> list[int]:
+        out = []
+        for d in Path("/proc").iterdir():
+            if d.name.isdigit():
+                try:
+                    stat = (d / "stat").read_text()
+                except OSError:
+                    continue  # a process that ended meanwhile
+                if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                    out.append(int(d.name))
+        return out
+
+    return children
+
+
+@pytest.fixture(scope="session")
 def process_ends():
     """``process_ends(pid, within=10.0)``: whether process ``pid`` is gone within ``within``
     seconds (polled every 50 ms)."""

@@ -594,21 +594,8 @@ def test_the_locomotion_benchmarks_print_json_last(script, run_benchmark):
         assert res["pose_from"] == 20 and res["robot_type"] == 0
 
 
-def _child_commands() -> list[str]:
-    """The command lines of this process's children (Linux)."""
-    out = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
-            if ppid == os.getpid():
-                out.append((stat.parent / "cmdline").read_bytes().replace(b"\0", b" ").decode())
-        except (OSError, ValueError, IndexError):
-            continue  # a process that ended meanwhile
-    return out
-
-
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc (Linux)")
-def test_a_benchmark_on_serve_starts_its_server_and_stops_it_when_closed():
+def test_a_benchmark_on_serve_starts_its_server_and_stops_it_when_closed(child_pids):
     """``--backend serve`` (every skill benchmark): a ``robocup-gym serve`` of its own, reached
     as a real server is (lying poses placed through the trainer), gone once the environment is
     closed; GetUp-v1's script gets up from the back there as in-process."""
@@ -616,13 +603,24 @@ def test_a_benchmark_on_serve_starts_its_server_and_stops_it_when_closed():
 
     from robocup_gym.train.evaluate import benchmark_policy_and_env
 
+    def servers() -> list[int]:
+        """This process's children running ``robocup-gym serve``."""
+        out = []
+        for pid in child_pids(os.getpid()):
+            try:
+                if b"robocup_gym.server" in Path(f"/proc/{pid}/cmdline").read_bytes():
+                    out.append(pid)
+            except OSError:
+                continue  # ended meanwhile
+        return out
+
     args = argparse.Namespace(
         policy="zero", episodes=1, backend="serve", robot_type=None, self_collisions=True
     )
     env, act = benchmark_policy_and_env(args, "RobocupGym/GetUp-v0")
     try:
         assert env.unwrapped.backend.name == "rcssserver3d"
-        assert any("robocup_gym.server" in c for c in _child_commands())
+        assert servers()
         obs, _ = env.reset(seed=0, options={"start_side": "back", "lying_pose": 0})
         done, info = False, {}
         while not done:
@@ -631,7 +629,7 @@ def test_a_benchmark_on_serve_starts_its_server_and_stops_it_when_closed():
         assert info["success"] and info["steps_to_up"] <= 80, info.get("steps_to_up")
     finally:
         env.close()
-    assert not any("robocup_gym.server" in c for c in _child_commands())
+    assert not servers()
 
 
 def test_the_walk_benchmark_measures_turning_counter_clockwise_positive():

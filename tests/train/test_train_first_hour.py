@@ -155,22 +155,9 @@ def test_a_run_says_how_long_it_takes_and_shows_each_evaluation(tmp_path):
     assert "left ~" in text and "elapsed" in text  # the plain progress lines of a log
 
 
-def _children(pid: int) -> list[int]:
-    out = []
-    for d in Path("/proc").iterdir():
-        if d.name.isdigit():
-            try:
-                stat = (d / "stat").read_text()
-            except OSError:
-                continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
-                out.append(int(d.name))
-    return out
-
-
 @pytest.mark.skipif(not hasattr(signal, "SIGTERM") or sys.platform != "linux", reason="Linux")
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGHUP"])
-def test_sigterm_and_sighup_save_the_run_and_say_where(tmp_path, sig):
+def test_sigterm_and_sighup_save_the_run_and_say_where(tmp_path, sig, child_pids):
     """A job scheduler's SIGTERM (or a closed terminal's SIGHUP) saves like Ctrl-C: the model,
     a message saying where and how to continue, exit status 128 + signal, no worker left."""
     cmd = [
@@ -205,7 +192,7 @@ def test_sigterm_and_sighup_save_the_run_and_say_where(tmp_path, sig):
             if "velocity-kick: 0/100,000,000 steps" in line or time.monotonic() > deadline:
                 break
         time.sleep(2.0)  # a few rollouts
-        workers = _children(proc.pid)
+        workers = child_pids(proc.pid)
         proc.send_signal(getattr(signal, sig))
         out, _ = proc.communicate(timeout=60)
     finally:
