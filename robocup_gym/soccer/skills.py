@@ -246,7 +246,7 @@ class SkillSet:
         self_collisions: Whether the world runs rcssserver3d's self-collision rule (a real
             server and ``serve`` always do). Then the get-up plays ``GetUp-v1``'s scripts
             alone, which keep clear of the rule; without it, the shipped get-up (a policy over
-            the same scripts). From a game's falls (random headings, joints off by 10°) under
+            the same scripts). From a game's falls (random headings, joints drawn with σ 10°) under
             the rule the scripts alone got up more often and sooner than the policy over them
             (46 and 43 of 60; docs/results.md).
         walk_faces_x: The walk sees each player as if it faced +x (:func:`facing_x`): it was
