@@ -2,7 +2,8 @@
 
 Runs a kick policy deterministically (a run folder of ``robocup-gym train target-kick``,
 ``long-kick`` or ``velocity-kick``; ``pretrained:NAME``; or ``zero``, zero actions: the
-reference kick alone, on TargetKick) for ``--episodes`` episodes per command. A TargetKick
+reference kick alone on TargetKick, or with ``--task long-kick`` the long kick alone on
+LongKick-v1) for ``--episodes`` episodes per command. A TargetKick
 policy gets every command of a grid (distances 2, 4, 6, 8, 10 m × directions −30°, 0°, +30° of
 its heading); the other kicks have no command and are scored against the robot's heading. For
 each episode:
@@ -77,8 +78,16 @@ def main(argv: list[str] | None = None) -> dict:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_benchmark_options(parser, "kick", episodes=5)
+    parser.add_argument(
+        "--task",
+        choices=("target-kick", "long-kick"),
+        default="target-kick",
+        help="the task a 'zero' policy runs: TargetKick-v0 (the reference kick) or LongKick-v1 "
+        "(the long kick); a run folder or a shipped policy brings its own",
+    )
     args = parser.parse_args(argv)
-    env, act = benchmark_policy_and_env(args, "RobocupGym/TargetKick-v0")
+    env_id = "RobocupGym/LongKick-v1" if args.task == "long-kick" else "RobocupGym/TargetKick-v0"
+    env, act = benchmark_policy_and_env(args, env_id)
     u = env.unwrapped
     commanded = "kick_target" in u.config.observations and u.config.randomise_kick_target
     commands = [(d, a) for d in DISTANCES_M for a in DIRECTIONS_DEG] if commanded else [None]

@@ -4,7 +4,7 @@ click's own), the console, the options every command reads alike (``--engine``/`
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NoReturn
 
 import typer
 
@@ -52,7 +52,7 @@ def _robot_types(types: str | None) -> list[int] | None:
         _fail(f"--types expects numbers like 0,1,2, got {types!r}")
 
 
-def _fail(message: str, code: int = 1):
+def _fail(message: str, code: int = 1) -> NoReturn:
     from rich.console import Console
     from rich.markup import escape
 
@@ -110,13 +110,10 @@ def _placement(ray: bool | None, ray_address: str | None, n_workers: int | None)
 
 def _parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
     """``["a=1", "b=[1, 2]"]`` → ``{"a": 1, "b": [1, 2]}`` (values read as YAML; ``3e-4`` is a
-    number)."""
-    from robocup_gym.train.config import load_yaml
+    number); a malformed item ends the command with its message."""
+    from robocup_gym.train.config import parse_assignments
 
-    out: dict[str, Any] = {}
-    for item in items or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            _fail(f"{what} expects KEY=VALUE, got {item!r}")
-        out[key.strip()] = load_yaml(value)
-    return out
+    try:
+        return parse_assignments(items, what)
+    except ValueError as exc:
+        _fail(str(exc))

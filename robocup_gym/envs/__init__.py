@@ -41,6 +41,7 @@ from robocup_gym.envs.tasks import (
     Walk,
     WalkConfig,
 )
+from robocup_gym.envs.tasks.long_kick import LONG_KICK_BALL_START_POS, LONG_KICK_KEYFRAMES
 
 __all__ = [
     "COMPONENTS",
@@ -82,11 +83,18 @@ _ENTRY_POINTS = {
     "RobocupGym/GetUp-v1": "robocup_gym.envs.tasks.getup:GetUp",
     "RobocupGym/TargetKick-v0": "robocup_gym.envs.tasks.target_kick:TargetKick",
     "RobocupGym/LongKick-v0": "robocup_gym.envs.tasks.long_kick:LongKick",
+    "RobocupGym/LongKick-v1": "robocup_gym.envs.tasks.long_kick:LongKick",
     "RobocupGym/Dribble-v0": "robocup_gym.envs.tasks.dribble:Dribble",
 }
 REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 """Every Gymnasium id this package registers."""
-_ID_OPTIONS: dict[str, dict] = {"RobocupGym/GetUp-v1": {"self_collisions": True}}
+_ID_OPTIONS: dict[str, dict] = {
+    "RobocupGym/GetUp-v1": {"self_collisions": True},
+    "RobocupGym/LongKick-v1": {
+        "kick_keyframes": LONG_KICK_KEYFRAMES,
+        "ball_start_pos": LONG_KICK_BALL_START_POS,
+    },
+}
 """The options a version sets over its class's defaults (its docstring's version history)."""
 
 

@@ -99,6 +99,7 @@ TASK_ALGO_DEFAULTS: dict[tuple[str, str], dict[str, Any]] = {
     ("RobocupGym/Dribble-v0", "ppo"): _RESIDUAL_PPO,
     ("RobocupGym/TargetKick-v0", "ppo"): _KICK_RESIDUAL_PPO,
     ("RobocupGym/LongKick-v0", "ppo"): _KICK_RESIDUAL_PPO,
+    ("RobocupGym/LongKick-v1", "ppo"): _KICK_RESIDUAL_PPO,
     ("RobocupGym/GetUp-v0", "ppo"): _GETUP_PPO,
     ("RobocupGym/GetUp-v1", "ppo"): _GETUP_PPO,
 }
@@ -149,6 +150,22 @@ def load_yaml(text: str) -> Any:
     import yaml
 
     return yaml.load(text, Loader=_yaml_loader())  # a SafeLoader subclass: safe
+
+
+def parse_assignments(items: list[str] | None, what: str) -> dict[str, Any]:
+    """``["a=1", "b=[1, 2]"]`` → ``{"a": 1, "b": [1, 2]}`` (values read with :func:`load_yaml`;
+    ``3e-4`` is a number).
+
+    Raises:
+        ValueError: an item without ``=`` or with an empty key (the message names ``what``).
+    """
+    out: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"{what} expects KEY=VALUE, got {item!r}")
+        out[key.strip()] = load_yaml(value)
+    return out
 
 
 def algo_defaults(algo: str) -> dict[str, Any]:

@@ -93,18 +93,32 @@ def add_benchmark_options(parser, task: str, episodes: int) -> None:
         help="run rcssserver3d's self-collision rule in-process (EnvConfig.self_collisions; a "
         "real server always applies it)",
     )
+    parser.add_argument(
+        "--env",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="an environment option over the policy's own (repeatable; values read as YAML), "
+        "e.g. --env joint_start_noise_deg=0.5",
+    )
 
 
 def benchmark_policy_and_env(args, env_id: str, env_overrides: dict[str, Any] | None = None):
     """:func:`policy_and_env` for the options of :func:`add_benchmark_options` (``env_id`` for
-    ``zero``), ``--robot-type`` among the overrides.
+    ``zero``), ``--env`` and ``--robot-type`` among the overrides.
 
     Raises:
-        SystemExit: ``--episodes`` below 1 (named).
+        SystemExit: ``--episodes`` below 1, or an ``--env`` without ``=`` (named).
     """
+    from robocup_gym.train.config import parse_assignments
+
     if args.episodes < 1:
         raise SystemExit(f"--episodes must be at least 1, got {args.episodes}")
     extra = dict(env_overrides or {})
+    try:
+        extra.update(parse_assignments(getattr(args, "env", None), "--env"))
+    except ValueError as exc:
+        raise SystemExit(str(exc)) from None
     if args.robot_type is not None:
         extra["robot_type"] = args.robot_type
     if getattr(args, "self_collisions", False):

@@ -26,6 +26,7 @@ def test_registry_lists_the_tasks():
         "RobocupGym/GetUp-v1",
         "RobocupGym/TargetKick-v0",
         "RobocupGym/LongKick-v0",
+        "RobocupGym/LongKick-v1",
         "RobocupGym/Dribble-v0",
     }
     for env_id in rg_envs.REGISTERED_IDS:

@@ -1,17 +1,19 @@
 """The reference kick the kicking tasks' actions correct: it kicks and stays up on every Nao
 type, and only plays where it can."""
 
+import gymnasium
 import numpy as np
 import pytest
 
 from robocup_gym.envs import EnvConfigError, LongKick, TargetKick
 from robocup_gym.envs.actions import ActionMapper
 from robocup_gym.envs.config import ActionMode
+from robocup_gym.envs.tasks.long_kick import LONG_KICK_BALL_START_POS, LONG_KICK_KEYFRAMES
 from robocup_gym.envs.tasks.reference_kick import (
     REFERENCE_KICK_KEYFRAMES,
     reference_kick_deg,
 )
-from robocup_gym.envs.tasks.target_kick import TargetKickConfig
+from robocup_gym.envs.tasks.target_kick import TargetKickConfig, kick_outcome
 from robocup_gym.robot.nao import nao_model
 
 
@@ -36,6 +38,10 @@ def test_offsets_by_name_reach_their_action_slots():
     assert mapper.target_offset_deg.tolist() == [0.0, 10.0, -40.0]
 
 
+MIN_LONG_KICK_M = {0: 8.5, 1: 8.5, 2: 8.5, 3: 8.5, 4: 7.0}
+"""Measured (no start noise): 9.69, 9.64, 9.71, 9.36 and 7.94 m for Nao types 0-4."""
+
+
 def _play(env, seed):
     env.reset(seed=seed)
     zero = np.zeros(env.action_space.shape)
@@ -56,6 +62,24 @@ def test_zero_actions_kick_and_stay_up_on_every_nao_type(robot_type):
         assert info["kick_distance_m"] > 1.5 and info["direction_error_deg"] < 25.0
         assert 20 <= info["contact_step"] <= 40  # the swing through the ball at 0.5-0.56 s
         assert reward > 0.3
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("robot_type", [0, 1, 2, 3, 4])
+def test_long_kick_v1_kicks_far_and_stays_up_on_every_nao_type(robot_type):
+    """``LongKick-v1`` plays the long kick: zero actions move the ball several times as far as
+    the reference kick, about straight ahead, and the robot stands after the 1 s wait."""
+    env = gymnasium.make("RobocupGym/LongKick-v1", robot_type=robot_type)
+    try:
+        assert env.unwrapped.config.kick_keyframes == LONG_KICK_KEYFRAMES
+        assert env.unwrapped.config.ball_start_pos[:2] == LONG_KICK_BALL_START_POS
+        _, info = _play(env, seed=robot_type)
+        u = env.unwrapped
+        kick = kick_outcome(u.ball_spawn_pos, u.ball_pos, u.ball_vel, 0.0, np.array([1.0, 0.0]))
+        assert not info["fallen"] and "fall" not in info["reward_terms"]
+        assert kick["kick_distance_m"] > MIN_LONG_KICK_M[robot_type]
+        assert kick["direction_error_deg"] < 5.0
     finally:
         env.close()
 

@@ -4,6 +4,9 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -24,7 +27,7 @@ def test_the_cli_knows_the_skills():
 
     tasks = registered_tasks()
     assert tasks["target-kick"] == "RobocupGym/TargetKick-v0"
-    assert tasks["long-kick"] == "RobocupGym/LongKick-v0"
+    assert tasks["long-kick"] == "RobocupGym/LongKick-v1"
     assert tasks["dribble"] == "RobocupGym/Dribble-v0"
 
 
@@ -230,6 +233,32 @@ def test_the_kick_benchmark_prints_json_last(run_benchmark):
     straight = [r for r in res["per_command"] if r["command"][1] == 0.0]
     assert max(r["direction_error_deg_median"] for r in straight) < 10.0
     assert [r["command"] for r in res["per_command"]][:2] == [[2.0, -30.0], [2.0, 0.0]]
+
+
+def test_the_kick_benchmark_plays_the_long_kick(run_benchmark):
+    res, lines = run_benchmark("kick.py", "zero", "--task", "long-kick", "--episodes", 2)
+    assert res["task"] == "LongKick" and res["episodes"] == 2 and len(lines) == 1
+    assert "distance_error_median" not in res  # no command: scored along the heading
+    assert res["ball_distance_median_m"] > 8.5 and res["stand_after_kick_rate"] == 1.0
+    assert res["direction_error_deg_median"] < 5.0
+    # --env sets the environment's options: noisy starts kick to other spots
+    noisy, _ = run_benchmark(
+        "kick.py", "zero", "--task", "long-kick", "--episodes", 2, "--env", "ball_spawn_noise=0.02"
+    )
+    assert noisy["ball_distance_median_m"] != res["ball_distance_median_m"]
+    assert noisy["ball_distance_median_m"] > 5.0
+
+
+def test_a_benchmark_refuses_a_malformed_env_option():
+    proc = subprocess.run(
+        [sys.executable, "benchmarks/kick.py", "zero", "--env", "ball_spawn_noise"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=Path(__file__).resolve().parents[2],
+    )
+    assert proc.returncode != 0
+    assert "--env expects KEY=VALUE, got 'ball_spawn_noise'" in proc.stderr
 
 
 def test_the_dribble_benchmark_prints_json_last(run_benchmark):

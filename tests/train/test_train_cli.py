@@ -722,3 +722,16 @@ def test_every_train_config_field_is_an_option_of_train(tmp_path):
     (run,) = list(out.iterdir())
     cfg = TrainConfig.load(run / "config.yaml")
     assert (cfg.eval_episodes, cfg.torch_threads, cfg.checkpoint_every_s) == (3, 2, 0.0)
+
+
+def test_train_refuses_a_malformed_assignment(tmp_path):
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    for option in ("--hp", "--env"):
+        args = ["train", "velocity-kick", "--out", str(tmp_path), option, "learning_rate"]
+        bad = CliRunner().invoke(app, args)
+        assert bad.exit_code == 1
+        assert f"{option} expects KEY=VALUE, got 'learning_rate'" in bad.output
+    assert not any(tmp_path.iterdir())  # nothing started

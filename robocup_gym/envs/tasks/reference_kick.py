@@ -11,19 +11,25 @@ lengthen it.
 
 from __future__ import annotations
 
+import itertools
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, ActionMode, EnvConfig, EnvConfigError
+from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim.physics import CYCLE_S
 
 __all__ = [
     "KICK_BALL_START_POS",
     "REFERENCE_KICK_KEYFRAMES",
+    "Keyframes",
     "ReferenceKickConfig",
     "ReferenceKickTask",
+    "kick_table",
     "reference_kick_deg",
 ]
 
@@ -43,21 +49,40 @@ over the start pose); linear between keyframes, 0 for a joint a keyframe leaves 
 the last. Effectors: ``rle3``/``rle4``/``rle5`` the right hip pitch, knee and ankle pitch,
 ``lle2``/``rle2`` the hip rolls, ``lle6``/``rle6`` the ankle rolls."""
 
-_NAMES = sorted({n for _, k in REFERENCE_KICK_KEYFRAMES for n in k})
-_TIMES = np.array([t for t, _ in REFERENCE_KICK_KEYFRAMES])
-_VALUES = np.array([[k.get(n, 0.0) for n in _NAMES] for _, k in REFERENCE_KICK_KEYFRAMES])
-
 KICK_BALL_START_POS = (-0.84, -0.055)
 """Where the kicking tasks place the ball (x, y, m): 0.16 m + the ball's radius ahead of the
 right foot of a robot at the default start (4 cm closer than the paper's kicks: the reference
 swing reaches it on every Nao type)."""
 
+Keyframes = tuple[tuple[float, dict[str, float]], ...]
+"""A kick as (time from the episode's start in s, offsets in deg by Nao effector name) rows."""
 
-def reference_kick_deg(t_s: float) -> dict[str, float]:
-    """The reference kick's target-angle offsets (deg, by Nao effector name) ``t_s`` seconds
-    into the episode (:data:`REFERENCE_KICK_KEYFRAMES`, interpolated)."""
-    row = [float(np.interp(t_s, _TIMES, _VALUES[:, k])) for k in range(len(_NAMES))]
-    return dict(zip(_NAMES, row, strict=True))
+
+def kick_table(keyframes: Keyframes) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
+    """``keyframes`` as arrays: (effector names, keyframe times in s, offsets in deg with a row
+    per keyframe and a column per name, 0 where a keyframe leaves a joint out)."""
+    names = tuple(sorted({n for _, k in keyframes for n in k}))
+    times = np.array([t for t, _ in keyframes], dtype=float)
+    values = np.array([[k.get(n, 0.0) for n in names] for _, k in keyframes], dtype=float)
+    return names, times, values
+
+
+def _offsets(table: tuple[tuple[str, ...], np.ndarray, np.ndarray], t_s: float) -> dict[str, float]:
+    names, times, values = table
+    return {n: float(np.interp(t_s, times, values[:, k])) for k, n in enumerate(names)}
+
+
+_REFERENCE_TABLE = kick_table(REFERENCE_KICK_KEYFRAMES)
+
+
+def reference_kick_deg(
+    t_s: float, keyframes: Keyframes = REFERENCE_KICK_KEYFRAMES
+) -> dict[str, float]:
+    """A kick's target-angle offsets (deg, by Nao effector name) ``t_s`` seconds into the
+    episode: ``keyframes`` (default :data:`REFERENCE_KICK_KEYFRAMES`) interpolated linearly,
+    0 for a joint a keyframe leaves out and after the last."""
+    table = _REFERENCE_TABLE if keyframes is REFERENCE_KICK_KEYFRAMES else kick_table(keyframes)
+    return _offsets(table, t_s)
 
 
 @dataclass
@@ -75,9 +100,41 @@ class ReferenceKickConfig(EnvConfig):
     joint_start_deg: Any = field(default_factory=lambda: dict(PAPER_STANDING_POSE_DEG))
     """The crouched pose the kick starts from (the paper's standing pose), deg by name."""
     ball_start_pos: tuple[float, float, float] | tuple[float, float] = KICK_BALL_START_POS
+    kick_keyframes: Keyframes = REFERENCE_KICK_KEYFRAMES
+    """The kick played under the actions, as :data:`REFERENCE_KICK_KEYFRAMES` is written: (time
+    in s, offsets in deg by Nao effector name) rows, times increasing."""
 
     def validate(self) -> None:
         super().validate()
+        rows = list(self.kick_keyframes or ())
+        if not all(
+            isinstance(row, tuple | list)
+            and len(row) == 2
+            and isinstance(row[0], int | float)
+            and isinstance(row[1], Mapping)
+            for row in rows
+        ):
+            raise EnvConfigError(
+                "kick_keyframes must be (time s, {effector: offset deg}) rows, got "
+                f"{self.kick_keyframes!r}"
+            )
+        times = [float(row[0]) for row in rows]
+        if (
+            not times
+            or any(not math.isfinite(t) for t in times)
+            or any(b <= a for a, b in itertools.pairwise(times))
+        ):
+            raise EnvConfigError(
+                f"kick_keyframes must be (time s, offsets) rows with increasing finite times, "
+                f"got times {times!r}"
+            )
+        names = set(nao_model(0).effector_names)
+        for _, offsets in rows:
+            unknown = sorted(set(offsets) - names)
+            if unknown:
+                raise EnvConfigError(f"kick_keyframes: unknown Nao effectors {unknown}")
+            if not all(math.isfinite(v) for v in offsets.values()):
+                raise EnvConfigError(f"kick_keyframes: offsets must be finite, got {offsets!r}")
         if self.reference_kick and self.robot != "nao":
             raise EnvConfigError(
                 f"reference_kick is a motion of the Nao, not the {self.robot}; pass "
@@ -95,11 +152,15 @@ class ReferenceKickTask:
     ``class TargetKick(ReferenceKickTask, BaseEnv)``)."""
 
     config: ReferenceKickConfig
+    _kick: tuple[Keyframes, tuple[tuple[str, ...], np.ndarray, np.ndarray]] | None = None
 
     def _before_action(self) -> None:
         super()._before_action()  # type: ignore[misc]
         if self.config.reference_kick:
-            self._actions.set_offsets(reference_kick_deg(self.episode_step * CYCLE_S))  # type: ignore[attr-defined]
+            keyframes = self.config.kick_keyframes
+            if self._kick is None or self._kick[0] is not keyframes:
+                self._kick = (keyframes, kick_table(keyframes))
+            self._actions.set_offsets(_offsets(self._kick[1], self.episode_step * CYCLE_S))  # type: ignore[attr-defined]
 
     @classmethod
     def league_defaults(cls, robot: str) -> dict[str, Any]:
