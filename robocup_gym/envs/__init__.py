@@ -41,7 +41,11 @@ from robocup_gym.envs.tasks import (
     Walk,
     WalkConfig,
 )
-from robocup_gym.envs.tasks.long_kick import LONG_KICK_BALL_START_POS, LONG_KICK_KEYFRAMES
+from robocup_gym.envs.tasks.long_kick import (
+    LONG_KICK_BALL_START_POS,
+    LONG_KICK_KEYFRAMES,
+    LONG_KICK_KEYFRAMES_BY_TYPE,
+)
 
 __all__ = [
     "COMPONENTS",
@@ -92,6 +96,7 @@ _ID_OPTIONS: dict[str, dict] = {
     "RobocupGym/GetUp-v1": {"self_collisions": True},
     "RobocupGym/LongKick-v1": {
         "kick_keyframes": LONG_KICK_KEYFRAMES,
+        "kick_keyframes_by_type": LONG_KICK_KEYFRAMES_BY_TYPE,
         "ball_start_pos": LONG_KICK_BALL_START_POS,
     },
 }

@@ -8,7 +8,11 @@ import pytest
 from robocup_gym.envs import EnvConfigError, LongKick, TargetKick
 from robocup_gym.envs.actions import ActionMapper
 from robocup_gym.envs.config import ActionMode
-from robocup_gym.envs.tasks.long_kick import LONG_KICK_BALL_START_POS, LONG_KICK_KEYFRAMES
+from robocup_gym.envs.tasks.long_kick import (
+    LONG_KICK_BALL_START_POS,
+    LONG_KICK_KEYFRAMES,
+    LONG_KICK_KEYFRAMES_TYPE_4,
+)
 from robocup_gym.envs.tasks.reference_kick import (
     REFERENCE_KICK_KEYFRAMES,
     reference_kick_deg,
@@ -38,8 +42,8 @@ def test_offsets_by_name_reach_their_action_slots():
     assert mapper.target_offset_deg.tolist() == [0.0, 10.0, -40.0]
 
 
-MIN_LONG_KICK_M = {0: 8.5, 1: 8.5, 2: 8.5, 3: 8.5, 4: 7.0}
-"""Measured (no start noise): 9.69, 9.64, 9.71, 9.36 and 7.94 m for Nao types 0-4."""
+MIN_LONG_KICK_M = 8.5
+"""Measured (no start noise): 9.69, 9.64, 9.71, 9.36 and 9.96 m for Nao types 0-4."""
 
 
 def _play(env, seed):
@@ -74,11 +78,13 @@ def test_long_kick_v1_kicks_far_and_stays_up_on_every_nao_type(robot_type):
     try:
         assert env.unwrapped.config.kick_keyframes == LONG_KICK_KEYFRAMES
         assert env.unwrapped.config.ball_start_pos[:2] == LONG_KICK_BALL_START_POS
+        own = LONG_KICK_KEYFRAMES_TYPE_4 if robot_type == 4 else LONG_KICK_KEYFRAMES
+        assert env.unwrapped.kick_keyframes() == own
         _, info = _play(env, seed=robot_type)
         u = env.unwrapped
         kick = kick_outcome(u.ball_spawn_pos, u.ball_pos, u.ball_vel, 0.0, np.array([1.0, 0.0]))
         assert not info["fallen"] and "fall" not in info["reward_terms"]
-        assert kick["kick_distance_m"] > MIN_LONG_KICK_M[robot_type]
+        assert kick["kick_distance_m"] > MIN_LONG_KICK_M
         assert kick["direction_error_deg"] < 5.0
     finally:
         env.close()

@@ -7,7 +7,14 @@ from dataclasses import dataclass
 from robocup_gym.envs.tasks.reference_kick import Keyframes, ReferenceKickConfig, ReferenceKickTask
 from robocup_gym.envs.tasks.velocity_kick import VelocityKick, VelocityKickConfig
 
-__all__ = ["LONG_KICK_BALL_START_POS", "LONG_KICK_KEYFRAMES", "LongKick", "LongKickConfig"]
+__all__ = [
+    "LONG_KICK_BALL_START_POS",
+    "LONG_KICK_KEYFRAMES",
+    "LONG_KICK_KEYFRAMES_BY_TYPE",
+    "LONG_KICK_KEYFRAMES_TYPE_4",
+    "LongKick",
+    "LongKickConfig",
+]
 
 LONG_KICK_KEYFRAMES: Keyframes = (
     (0.0, {}),
@@ -74,8 +81,73 @@ at 0.93 s. Found by CMA-ES on the default engine, open loop, from the reference 
 with the ball's spot (:data:`LONG_KICK_BALL_START_POS`): the score was the ball's forward
 travel to where it comes to rest, less 1.5 × its sideways error, 6 m off for a robot down 1 s
 later, averaged over the Nao types 0–4 with 0.5° of start-angle noise and 1 cm of ball spawn
-noise, and type 0 without noise. Alone (zero actions) it moves the ball ~9.7 m on type 0 and
-the robot stands (``tests/envs/test_reference_kick.py``)."""
+noise, and type 0 without noise. Alone (zero actions) it moves the ball ~9.7 m on type 0
+(9.4–9.7 m on types 0–3) and the robot stands (``tests/envs/test_reference_kick.py``)."""
+
+LONG_KICK_KEYFRAMES_TYPE_4: Keyframes = (
+    (0.0, {}),
+    (
+        0.5529,
+        {"lle2": 0.37, "lle3": 2.65, "lle5": 43.34, "lle6": -3.34, "rle2": 0.37, "rle6": -3.34},
+    ),
+    (
+        0.7262,
+        {
+            "lae1": -166.49,
+            "lle2": -8.94,
+            "lle3": -11.75,
+            "lle4": 16.48,
+            "lle5": -13.4,
+            "lle6": 9.6,
+            "rae1": 89.2,
+            "rle2": -6.55,
+            "rle3": 43.87,
+            "rle4": -74.32,
+            "rle5": -99.11,
+            "rle6": 9.6,
+        },
+    ),
+    (
+        0.7462,
+        {
+            "lae1": -13.81,
+            "lle2": 22.31,
+            "lle3": -34.0,
+            "lle4": -25.58,
+            "lle5": 22.63,
+            "lle6": 26.98,
+            "rae1": 11.36,
+            "rle2": -33.0,
+            "rle3": 87.15,
+            "rle4": 28.9,
+            "rle5": 45.27,
+            "rle6": 26.98,
+        },
+    ),
+    (
+        0.9565,
+        {
+            "lle2": -51.96,
+            "lle3": -27.3,
+            "lle5": 11.27,
+            "lle6": -7.81,
+            "rle2": -51.96,
+            "rle3": -50.42,
+            "rle4": -1.83,
+            "rle5": -14.55,
+            "rle6": -7.81,
+        },
+    ),
+    (0.9765, {}),
+)
+"""Nao type 4's own long kick (its toes change how the foot meets the ball): the same search
+from :data:`LONG_KICK_KEYFRAMES`, type 4 alone (without noise and twice with the noise above),
+the ball at :data:`LONG_KICK_BALL_START_POS`. Alone it moves the ball ~10 m on type 4, where
+:data:`LONG_KICK_KEYFRAMES` gives ~7.9 m."""
+
+LONG_KICK_KEYFRAMES_BY_TYPE: dict[int, Keyframes] = {4: LONG_KICK_KEYFRAMES_TYPE_4}
+"""The Nao types with a long kick of their own (``kick_keyframes_by_type`` of ``LongKick-v1``);
+the others play :data:`LONG_KICK_KEYFRAMES`."""
 
 LONG_KICK_BALL_START_POS = (-0.8151, -0.0673)
 """Where ``LongKick-v1`` places the ball (x, y, m): 2.5 cm further ahead and 1.2 cm further
@@ -128,9 +200,10 @@ class LongKick(ReferenceKickTask, VelocityKick):
     Version history:
 
     * v0: first release (robocup-gym 0.2.0).
-    * v1: plays the long kick (:data:`LONG_KICK_KEYFRAMES`, ``kick_keyframes``) instead of the
-      reference kick, with the ball at its spot (:data:`LONG_KICK_BALL_START_POS`): zero
-      actions move the ball ~9.7 m instead of ~2.7 m.
+    * v1: plays the long kick (:data:`LONG_KICK_KEYFRAMES`, ``kick_keyframes``; type 4 its own,
+      :data:`LONG_KICK_KEYFRAMES_BY_TYPE`) instead of the reference kick, with the ball at its
+      spot (:data:`LONG_KICK_BALL_START_POS`): zero actions move the ball ~9.4–10 m instead of
+      ~2.7 m.
     """
 
     config_class = LongKickConfig

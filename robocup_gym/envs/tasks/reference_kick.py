@@ -85,6 +85,39 @@ def reference_kick_deg(
     return _offsets(table, t_s)
 
 
+def _check_keyframes(keyframes: Keyframes) -> None:
+    """Raises :class:`EnvConfigError` unless ``keyframes`` are (time s, {effector: deg}) rows
+    with increasing finite times and finite offsets of Nao effectors."""
+    rows = list(keyframes or ())
+    if not all(
+        isinstance(row, tuple | list)
+        and len(row) == 2
+        and isinstance(row[0], int | float)
+        and isinstance(row[1], Mapping)
+        for row in rows
+    ):
+        raise EnvConfigError(
+            f"kick_keyframes must be (time s, {{effector: offset deg}}) rows, got {keyframes!r}"
+        )
+    times = [float(row[0]) for row in rows]
+    if (
+        not times
+        or any(not math.isfinite(t) for t in times)
+        or any(b <= a for a, b in itertools.pairwise(times))
+    ):
+        raise EnvConfigError(
+            "kick_keyframes must be (time s, offsets) rows with increasing finite times, "
+            f"got times {times!r}"
+        )
+    names = set(nao_model(0).effector_names)
+    for _, offsets in rows:
+        unknown = sorted(set(offsets) - names)
+        if unknown:
+            raise EnvConfigError(f"kick_keyframes: unknown Nao effectors {unknown}")
+        if not all(math.isfinite(v) for v in offsets.values()):
+            raise EnvConfigError(f"kick_keyframes: offsets must be finite, got {offsets!r}")
+
+
 @dataclass
 class ReferenceKickConfig(EnvConfig):
     """:class:`EnvConfig` with the reference kick's options and the defaults it needs."""
@@ -103,38 +136,21 @@ class ReferenceKickConfig(EnvConfig):
     kick_keyframes: Keyframes = REFERENCE_KICK_KEYFRAMES
     """The kick played under the actions, as :data:`REFERENCE_KICK_KEYFRAMES` is written: (time
     in s, offsets in deg by Nao effector name) rows, times increasing."""
+    kick_keyframes_by_type: Mapping[int, Keyframes] | None = None
+    """Kicks of their own for some Nao types (type → keyframes, written as ``kick_keyframes``),
+    played instead of ``kick_keyframes`` by a robot of a type listed."""
 
     def validate(self) -> None:
         super().validate()
-        rows = list(self.kick_keyframes or ())
-        if not all(
-            isinstance(row, tuple | list)
-            and len(row) == 2
-            and isinstance(row[0], int | float)
-            and isinstance(row[1], Mapping)
-            for row in rows
+        by_type = self.kick_keyframes_by_type or {}
+        if not isinstance(by_type, Mapping) or not all(
+            str(k).isdigit() and int(k) <= 4 for k in by_type
         ):
             raise EnvConfigError(
-                "kick_keyframes must be (time s, {effector: offset deg}) rows, got "
-                f"{self.kick_keyframes!r}"
+                f"kick_keyframes_by_type must map Nao types 0-4 to keyframes, got {by_type!r}"
             )
-        times = [float(row[0]) for row in rows]
-        if (
-            not times
-            or any(not math.isfinite(t) for t in times)
-            or any(b <= a for a, b in itertools.pairwise(times))
-        ):
-            raise EnvConfigError(
-                f"kick_keyframes must be (time s, offsets) rows with increasing finite times, "
-                f"got times {times!r}"
-            )
-        names = set(nao_model(0).effector_names)
-        for _, offsets in rows:
-            unknown = sorted(set(offsets) - names)
-            if unknown:
-                raise EnvConfigError(f"kick_keyframes: unknown Nao effectors {unknown}")
-            if not all(math.isfinite(v) for v in offsets.values()):
-                raise EnvConfigError(f"kick_keyframes: offsets must be finite, got {offsets!r}")
+        for keyframes in (self.kick_keyframes, *by_type.values()):
+            _check_keyframes(keyframes)
         if self.reference_kick and self.robot != "nao":
             raise EnvConfigError(
                 f"reference_kick is a motion of the Nao, not the {self.robot}; pass "
@@ -154,10 +170,19 @@ class ReferenceKickTask:
     config: ReferenceKickConfig
     _kick: tuple[Keyframes, tuple[tuple[str, ...], np.ndarray, np.ndarray]] | None = None
 
+    def kick_keyframes(self) -> Keyframes:
+        """The kick this robot plays: its type's in ``kick_keyframes_by_type``, else
+        ``kick_keyframes``."""
+        c = self.config
+        for key, keyframes in (c.kick_keyframes_by_type or {}).items():
+            if int(key) == c.robot_type:
+                return keyframes
+        return c.kick_keyframes
+
     def _before_action(self) -> None:
         super()._before_action()  # type: ignore[misc]
         if self.config.reference_kick:
-            keyframes = self.config.kick_keyframes
+            keyframes = self.kick_keyframes()
             if self._kick is None or self._kick[0] is not keyframes:
                 self._kick = (keyframes, kick_table(keyframes))
             self._actions.set_offsets(_offsets(self._kick[1], self.episode_step * CYCLE_S))  # type: ignore[attr-defined]
