@@ -537,14 +537,23 @@ class EnvConfig:
             if isinstance(v, enum.Enum):
                 v = v.value
             elif isinstance(v, Mapping):
-                v = {
-                    str(k): (x if isinstance(x, int | float | str | bool) else repr(x))
-                    for k, x in v.items()
-                }
+                v = {str(k): _jsonable(x) for k, x in v.items()}
             elif isinstance(v, tuple):
-                v = list(v)
+                v = _jsonable(v)
             out[f.name] = v
         return out
+
+
+def _jsonable(value: Any) -> Any:
+    """``value`` with tuples as lists and mappings' keys as strings, all the way down; an object
+    JSON cannot hold (a backend's options, say) as its ``repr``."""
+    if value is None or isinstance(value, int | float | str | bool):
+        return value
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(x) for k, x in value.items()}
+    if isinstance(value, tuple | list):
+        return [_jsonable(x) for x in value]
+    return repr(value)
 
 
 def resolve_joints(model: NaoModel, names: Sequence[str], what: str) -> np.ndarray:

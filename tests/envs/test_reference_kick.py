@@ -109,3 +109,23 @@ def test_the_reference_kick_refuses_what_it_cannot_play():
     # the league's robots take their own defaults: no reference kick
     assert TargetKick.league_defaults("T1")["reference_kick"] is False
     TargetKickConfig(action_mode="velocity", reference_kick=False)  # the paper's way: allowed
+
+
+def test_long_kick_v1_options_survive_json():
+    """An exported policy's description records the options as JSON (``EnvConfig.to_dict``):
+    the kicks come back as numbers, and a robot built from them plays its type's kick."""
+    import json
+
+    env = gymnasium.make("RobocupGym/LongKick-v1", robot_type=4)
+    try:
+        recorded = json.loads(json.dumps(env.unwrapped.config.to_dict()))
+    finally:
+        env.close()
+    options = {k: recorded[k] for k in ("kick_keyframes", "kick_keyframes_by_type", "robot_type")}
+    again = LongKick(**options)
+    try:
+        as_lists = [[t, k] for t, k in LONG_KICK_KEYFRAMES_TYPE_4]
+        assert again.kick_keyframes() == as_lists
+        assert recorded["kick_keyframes"] == [[t, k] for t, k in LONG_KICK_KEYFRAMES]
+    finally:
+        again.close()
