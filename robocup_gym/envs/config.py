@@ -536,9 +536,7 @@ class EnvConfig:
             v = getattr(self, f.name)
             if isinstance(v, enum.Enum):
                 v = v.value
-            elif isinstance(v, Mapping):
-                v = {str(k): _jsonable(x) for k, x in v.items()}
-            elif isinstance(v, tuple):
+            elif isinstance(v, Mapping | tuple):
                 v = _jsonable(v)
             out[f.name] = v
         return out

@@ -72,17 +72,13 @@ def _offsets(table: tuple[tuple[str, ...], np.ndarray, np.ndarray], t_s: float) 
     return {n: float(np.interp(t_s, times, values[:, k])) for k, n in enumerate(names)}
 
 
-_REFERENCE_TABLE = kick_table(REFERENCE_KICK_KEYFRAMES)
-
-
 def reference_kick_deg(
     t_s: float, keyframes: Keyframes = REFERENCE_KICK_KEYFRAMES
 ) -> dict[str, float]:
     """A kick's target-angle offsets (deg, by Nao effector name) ``t_s`` seconds into the
     episode: ``keyframes`` (default :data:`REFERENCE_KICK_KEYFRAMES`) interpolated linearly,
     0 for a joint a keyframe leaves out and after the last."""
-    table = _REFERENCE_TABLE if keyframes is REFERENCE_KICK_KEYFRAMES else kick_table(keyframes)
-    return _offsets(table, t_s)
+    return _offsets(kick_table(keyframes), t_s)
 
 
 def _check_keyframes(keyframes: Keyframes) -> None:
@@ -151,6 +147,8 @@ class ReferenceKickConfig(EnvConfig):
             )
         for keyframes in (self.kick_keyframes, *by_type.values()):
             _check_keyframes(keyframes)
+        if by_type:  # keys as JSON writes them ("4") become types
+            self.kick_keyframes_by_type = {int(k): v for k, v in by_type.items()}
         if self.reference_kick and self.robot != "nao":
             raise EnvConfigError(
                 f"reference_kick is a motion of the Nao, not the {self.robot}; pass "
@@ -168,24 +166,23 @@ class ReferenceKickTask:
     ``class TargetKick(ReferenceKickTask, BaseEnv)``)."""
 
     config: ReferenceKickConfig
-    _kick: tuple[Keyframes, tuple[tuple[str, ...], np.ndarray, np.ndarray]] | None = None
 
     def kick_keyframes(self) -> Keyframes:
         """The kick this robot plays: its type's in ``kick_keyframes_by_type``, else
         ``kick_keyframes``."""
         c = self.config
-        for key, keyframes in (c.kick_keyframes_by_type or {}).items():
-            if int(key) == c.robot_type:
-                return keyframes
-        return c.kick_keyframes
+        return (c.kick_keyframes_by_type or {}).get(c.robot_type, c.kick_keyframes)
+
+    def _initial_state(self, options):
+        start = super()._initial_state(options)  # type: ignore[misc]
+        self._kick_table = kick_table(self.kick_keyframes())
+        """This episode's kick as arrays (:func:`kick_table`)."""
+        return start
 
     def _before_action(self) -> None:
         super()._before_action()  # type: ignore[misc]
         if self.config.reference_kick:
-            keyframes = self.kick_keyframes()
-            if self._kick is None or self._kick[0] is not keyframes:
-                self._kick = (keyframes, kick_table(keyframes))
-            self._actions.set_offsets(_offsets(self._kick[1], self.episode_step * CYCLE_S))  # type: ignore[attr-defined]
+            self._actions.set_offsets(_offsets(self._kick_table, self.episode_step * CYCLE_S))  # type: ignore[attr-defined]
 
     @classmethod
     def league_defaults(cls, robot: str) -> dict[str, Any]:
