@@ -111,6 +111,50 @@ def test_the_reference_kick_refuses_what_it_cannot_play():
     TargetKickConfig(action_mode="velocity", reference_kick=False)  # the paper's way: allowed
 
 
+def test_kick_keyframes_are_checked():
+    """Malformed kicks are refused, naming what is wrong."""
+    with pytest.raises(EnvConfigError, match=r"must be \(time s, \{effector"):
+        TargetKickConfig(kick_keyframes=((0.0,), (0.5, {"rle3": 10.0})))
+    with pytest.raises(EnvConfigError, match="increasing finite times"):
+        TargetKickConfig(kick_keyframes=((0.0, {}), (0.0, {"rle3": 10.0})))
+    with pytest.raises(EnvConfigError, match="increasing finite times"):
+        TargetKickConfig(kick_keyframes=((0.0, {}), (float("nan"), {"rle3": 10.0})))
+    with pytest.raises(EnvConfigError, match=r"unknown Nao effectors \['rle9'\]"):
+        TargetKickConfig(kick_keyframes=((0.0, {}), (0.5, {"rle9": 10.0})))
+    with pytest.raises(EnvConfigError, match="offsets must be finite"):
+        TargetKickConfig(kick_keyframes=((0.0, {}), (0.5, {"rle3": float("nan")})))
+    with pytest.raises(EnvConfigError, match="must map Nao types 0-4"):
+        TargetKickConfig(kick_keyframes_by_type={7: REFERENCE_KICK_KEYFRAMES})
+    with pytest.raises(EnvConfigError, match="unknown Nao effectors"):
+        TargetKickConfig(kick_keyframes_by_type={1: ((0.0, {"xx": 1.0}),)})
+
+
+def test_a_task_plays_the_keyframes_it_is_given_and_a_type_its_own():
+    """``kick_keyframes`` replaces the reference kick: a kick that only lifts the right knee
+    never reaches the ball. A type listed in ``kick_keyframes_by_type`` (keyed as JSON writes
+    it, too) plays its own; the others play ``kick_keyframes``."""
+    lift = ((0.0, {}), (0.3, {"rle4": -30.0}), (0.6, {}))
+    assert reference_kick_deg(0.3, lift) == {"rle4": -30.0}
+    env = LongKick(kick_keyframes=lift)
+    try:
+        _, info = _play(env, seed=0)
+        assert not info["fallen"]
+        assert np.linalg.norm(env.ball_pos[:2] - env.ball_spawn_pos[:2]) < 0.01
+    finally:
+        env.close()
+    by_type = {"1": lift, 3: LONG_KICK_KEYFRAMES}
+    own = LongKick(robot_type=1, kick_keyframes_by_type=by_type)
+    other = LongKick(robot_type=2, kick_keyframes_by_type=by_type)
+    try:
+        assert own.kick_keyframes() is lift
+        assert other.kick_keyframes() is REFERENCE_KICK_KEYFRAMES
+        _, info = _play(own, seed=0)
+        assert np.linalg.norm(own.ball_pos[:2] - own.ball_spawn_pos[:2]) < 0.01
+    finally:
+        own.close()
+        other.close()
+
+
 def test_long_kick_v1_options_survive_json():
     """An exported policy's description records the options as JSON (``EnvConfig.to_dict``):
     the kicks come back as numbers, and a robot built from them plays its type's kick."""
