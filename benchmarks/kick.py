@@ -2,11 +2,12 @@
 
 Runs a kick policy deterministically (a run folder of ``robocup-gym train target-kick``,
 ``long-kick`` or ``velocity-kick``; ``pretrained:NAME``; or ``zero``, zero actions: the
-reference kick alone on TargetKick, or with ``--task long-kick`` the long kick alone on
-LongKick-v1) for ``--episodes`` episodes per command. A TargetKick
-policy gets every command of a grid (distances 2, 4, 6, 8, 10 m × directions −30°, 0°, +30° of
-its heading); the other kicks have no command and are scored against the robot's heading. For
-each episode:
+kicks made for each command alone on TargetKick-v1, or with ``--task long-kick`` the long kick
+alone on LongKick-v1) for ``--episodes`` episodes per command. A TargetKick
+policy gets every command of a grid (distances 2, 3, 5, 7, 9 m × directions −45°, −30°, −15°,
+0°, 15°, 30°, 45° of its heading; most of them between the points of TargetKick-v1's grid of
+kicks); the other kicks have no command and are scored against the robot's heading. For each
+episode:
 
 * where the ball comes to rest, predicted from its position and velocity at the end of the
   episode's wait (``robocup_gym.sim.physics.ball_rest_point``; within 1 % of where it stops);
@@ -33,8 +34,8 @@ import numpy as np
 from robocup_gym.envs.tasks.target_kick import CONTACT_SPEED, kick_outcome
 from robocup_gym.sim.physics import CYCLE_S
 
-DISTANCES_M = (2.0, 4.0, 6.0, 8.0, 10.0)
-DIRECTIONS_DEG = (-30.0, 0.0, 30.0)
+DISTANCES_M = (2.0, 3.0, 5.0, 7.0, 9.0)
+DIRECTIONS_DEG = (-45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0)
 
 
 def episode(env, act, seed: int, command: tuple[float, float] | None) -> dict:
@@ -82,11 +83,11 @@ def main(argv: list[str] | None = None) -> dict:
         "--task",
         choices=("target-kick", "long-kick"),
         default="target-kick",
-        help="the task a 'zero' policy runs: TargetKick-v0 (the reference kick) or LongKick-v1 "
-        "(the long kick); a run folder or a shipped policy brings its own",
+        help="the task a 'zero' policy runs: TargetKick-v1 (the kick made for each command) or "
+        "LongKick-v1 (the long kick); a run folder or a shipped policy brings its own",
     )
     args = parser.parse_args(argv)
-    env_id = "RobocupGym/LongKick-v1" if args.task == "long-kick" else "RobocupGym/TargetKick-v0"
+    env_id = "RobocupGym/LongKick-v1" if args.task == "long-kick" else "RobocupGym/TargetKick-v1"
     env, act = benchmark_policy_and_env(args, env_id)
     u = env.unwrapped
     commanded = "kick_target" in u.config.observations and u.config.randomise_kick_target

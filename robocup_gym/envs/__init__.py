@@ -86,6 +86,7 @@ _ENTRY_POINTS = {
     "RobocupGym/GetUp-v0": "robocup_gym.envs.tasks.getup:GetUp",
     "RobocupGym/GetUp-v1": "robocup_gym.envs.tasks.getup:GetUp",
     "RobocupGym/TargetKick-v0": "robocup_gym.envs.tasks.target_kick:TargetKick",
+    "RobocupGym/TargetKick-v1": "robocup_gym.envs.tasks.target_kick:TargetKick",
     "RobocupGym/LongKick-v0": "robocup_gym.envs.tasks.long_kick:LongKick",
     "RobocupGym/LongKick-v1": "robocup_gym.envs.tasks.long_kick:LongKick",
     "RobocupGym/Dribble-v0": "robocup_gym.envs.tasks.dribble:Dribble",
@@ -94,6 +95,7 @@ REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 """Every Gymnasium id this package registers."""
 _ID_OPTIONS: dict[str, dict] = {
     "RobocupGym/GetUp-v1": {"self_collisions": True},
+    "RobocupGym/TargetKick-v1": {"kick_per_command": True, "ball_spawn_noise": 0.01},
     "RobocupGym/LongKick-v1": {
         "kick_keyframes": LONG_KICK_KEYFRAMES,
         "kick_keyframes_by_type": LONG_KICK_KEYFRAMES_BY_TYPE,

@@ -25,6 +25,7 @@ def test_registry_lists_the_tasks():
         "RobocupGym/GetUp-v0",
         "RobocupGym/GetUp-v1",
         "RobocupGym/TargetKick-v0",
+        "RobocupGym/TargetKick-v1",
         "RobocupGym/LongKick-v0",
         "RobocupGym/LongKick-v1",
         "RobocupGym/Dribble-v0",

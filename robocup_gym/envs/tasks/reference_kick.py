@@ -30,6 +30,7 @@ __all__ = [
     "ReferenceKickConfig",
     "ReferenceKickTask",
     "kick_table",
+    "mirror_keyframes",
     "reference_kick_deg",
 ]
 
@@ -79,6 +80,26 @@ def reference_kick_deg(
     episode: ``keyframes`` (default :data:`REFERENCE_KICK_KEYFRAMES`) interpolated linearly,
     0 for a joint a keyframe leaves out and after the last."""
     return _offsets(kick_table(keyframes), t_s)
+
+
+def mirror_keyframes(keyframes: Keyframes, robot_type: int = 0) -> Keyframes:
+    """``keyframes`` mirrored across the robot's sagittal plane: a right-foot kick becomes the
+    same kick with the left foot. Each joint's offset goes to its twin on the other side (a joint
+    without one keeps its own), its sign as :attr:`NaoModel.mirror_pairs` gives it (hip and
+    ankle rolls, shoulder rolls and the elbows change sign, the pitches and hip yaw-pitches do
+    not; the head's yaw does)."""
+    model = nao_model(robot_type)
+    names = [j.effector for j in model.joints]
+    twin = {}
+    for i, k, sign in model.mirror_pairs:
+        twin[names[i]], twin[names[k]] = (names[k], sign), (names[i], sign)
+    for j in model.joints:
+        if j.effector not in twin:  # on the plane itself: a yaw turns the other way
+            a = np.array(j.axis, dtype=float)
+            twin[j.effector] = (j.effector, float(np.round(-a @ (a * (-1.0, 1.0, 1.0)), 6)))
+    return tuple(
+        (t, {twin[n][0]: twin[n][1] * v for n, v in offsets.items()}) for t, offsets in keyframes
+    )
 
 
 def _check_keyframes(keyframes: Keyframes) -> None:
@@ -173,9 +194,14 @@ class ReferenceKickTask:
         c = self.config
         return (c.kick_keyframes_by_type or {}).get(c.robot_type, c.kick_keyframes)
 
+    def _episode_keyframes(self, start) -> Keyframes:
+        """The kick of the episode ``start`` begins (:meth:`kick_keyframes`; a task whose kick
+        depends on the episode's command overrides this)."""
+        return self.kick_keyframes()
+
     def _initial_state(self, options):
         start = super()._initial_state(options)  # type: ignore[misc]
-        self._kick_table = kick_table(self.kick_keyframes())
+        self._kick_table = kick_table(self._episode_keyframes(start))
         """This episode's kick as arrays (:func:`kick_table`)."""
         return start
 
