@@ -44,7 +44,7 @@ CONTACT_SPEED = 0.1
 
 COMMANDED_KICK_DISTANCES_M = (2.0, 4.0, 6.0, 8.0, 10.0)
 """The distances of the commanded kicks' grid (:func:`commanded_kick`), m."""
-COMMANDED_KICK_DIRECTIONS_DEG = (0.0, 22.5, 45.0)
+COMMANDED_KICK_DIRECTIONS_DEG = (0.0, 11.25, 22.5, 33.75, 45.0)
 """The directions of the commanded kicks' grid, deg from the robot's heading (CCW positive:
 to the left). Kicks to the right are their mirror images."""
 
