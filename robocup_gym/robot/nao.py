@@ -13,6 +13,7 @@ spec's joint table: ``he1 he2 lae1-4 lle1-6 rle1-6 rae1-4`` and, for type 4, ``l
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache, cached_property
 
@@ -21,6 +22,14 @@ import numpy as np
 from robocup_gym.robot.types import DEFAULT_MAX_SPEED, RobotType, robot_type
 
 Vec3 = tuple[float, float, float]
+
+
+def _mirror_sign(axis_from: Sequence[float], axis_to: Sequence[float]) -> float:
+    """The sign taking a rotation about ``axis_from`` to its mirror image about ``axis_to``
+    across the sagittal plane (x ↦ −x, torso frame): ``−axis_to · M axis_from`` with
+    ``M = diag(−1, 1, 1)``, rounded."""
+    mirrored = np.array(axis_from, dtype=float) * (-1.0, 1.0, 1.0)
+    return float(np.round(-np.dot(np.array(axis_to, dtype=float), mirrored), 6))
 
 
 @dataclass(frozen=True)
@@ -145,8 +154,7 @@ class NaoModel:
             if k is None:
                 continue
             right = self.joints[k]
-            a_left = np.array(j.axis, dtype=float) * (-1.0, 1.0, 1.0)
-            sign = float(np.round(-np.dot(np.array(right.axis, dtype=float), a_left), 6))
+            sign = _mirror_sign(j.axis, right.axis)
             if abs(abs(sign) - 1.0) > 1e-6:
                 raise ValueError(f"{j.effector}/{right.effector}: axes are not mirror images")
             lo, hi = sorted((sign * j.min_deg, sign * j.max_deg))
@@ -154,6 +162,18 @@ class NaoModel:
                 raise ValueError(f"{j.effector}/{right.effector}: ranges are not mirror images")
             out.append((i, k, sign))
         return tuple(out)
+
+    @cached_property
+    def mirror_effectors(self) -> dict[str, tuple[str, float]]:
+        """Every joint's mirror image across the sagittal plane, by effector name: ``(effector,
+        sign)``, its twin of :attr:`mirror_pairs` with that sign, or for a joint without one
+        (the head's) itself, with the sign the same rule gives its own axis (the yaw −1, the
+        pitch +1)."""
+        names = [j.effector for j in self.joints]
+        out = {j.effector: (j.effector, _mirror_sign(j.axis, j.axis)) for j in self.joints}
+        for i, k, sign in self.mirror_pairs:
+            out[names[i]], out[names[k]] = (names[k], sign), (names[i], sign)
+        return out
 
     @cached_property
     def ranges_deg(self) -> np.ndarray:

@@ -85,18 +85,10 @@ def reference_kick_deg(
 def mirror_keyframes(keyframes: Keyframes, robot_type: int = 0) -> Keyframes:
     """``keyframes`` mirrored across the robot's sagittal plane: a right-foot kick becomes the
     same kick with the left foot. Each joint's offset goes to its twin on the other side (a joint
-    without one keeps its own), its sign as :attr:`NaoModel.mirror_pairs` gives it (hip and
+    without one keeps its own), its sign as :attr:`NaoModel.mirror_effectors` gives it (hip and
     ankle rolls, shoulder rolls and the elbows change sign, the pitches and hip yaw-pitches do
     not; the head's yaw does)."""
-    model = nao_model(robot_type)
-    names = [j.effector for j in model.joints]
-    twin = {}
-    for i, k, sign in model.mirror_pairs:
-        twin[names[i]], twin[names[k]] = (names[k], sign), (names[i], sign)
-    for j in model.joints:
-        if j.effector not in twin:  # on the plane itself: a yaw turns the other way
-            a = np.array(j.axis, dtype=float)
-            twin[j.effector] = (j.effector, float(np.round(-a @ (a * (-1.0, 1.0, 1.0)), 6)))
+    twin = nao_model(robot_type).mirror_effectors
     return tuple(
         (t, {twin[n][0]: twin[n][1] * v for n, v in offsets.items()}) for t, offsets in keyframes
     )
