@@ -39,13 +39,17 @@ def replay(
     fouls: list | None = None,
 ) -> tuple[float, float]:
     """On a server: ``players`` standing players of one team (left) and a trainer that sends
-    each message of ``script`` (``(condition(game_time, cycle), message)``, in order, checked
-    from the team's own loop). Returns where the server's monitor stream shows the torso of
+    each message of ``script`` (``(condition(game_time, cycle, shown), message)``, in order,
+    checked from the team's own loop; ``shown`` maps each player's number to where the monitor
+    stream last showed its torso, world (x, y)). Returns where the stream shows the torso of
     player ``track`` at game time ``read_after``, world (x, y); ``fouls`` (a list) gets the
     ``(number, type, team, unum)`` of every ``foul`` the stream reports (team 1: left)."""
     trainer = connect("127.0.0.1", monitor_port, retry_s=10.0)
-    decoder, tracker = FrameDecoder(), MonitorTracker()
-    tracker.set_agent("left", track)
+    decoder = FrameDecoder()
+    trackers = {unum: MonitorTracker() for unum in range(1, players + 1)}
+    for unum, each in trackers.items():
+        each.set_agent("left", unum)
+    tracker, shown = trackers[track], {}
     script = list(script)
     seen: list = []
     try:
@@ -60,18 +64,22 @@ def replay(
                 cycles[0] += 1
                 while select.select([trainer], [], [], 0.0)[0] or decoder.pending:
                     frame = recv_frame(trainer, decoder, 5.0)
-                    tracker.feed(frame)
+                    for unum, each in trackers.items():
+                        each.feed(frame)
+                        snap = each.newest()
+                        if snap is not None and snap.torso is not None:
+                            shown[unum] = (float(snap.torso[0, 3]), float(snap.torso[1, 3]))
                     if fouls is not None:
                         text = (
                             frame.decode("ascii", "replace") if isinstance(frame, bytes) else frame
                         )
                         fouls.extend(tuple(map(int, m)) for m in _FOUL.findall(text))
-                    if tracker.need_full:
+                    if any(each.need_full for each in trackers.values()):
                         send_frame(trainer, trainer_cmds.reqfullstate())
                     snap = tracker.newest()
                     if snap is not None and snap.torso is not None:
                         seen.append((snap.game_time, snap.torso[:2, 3].copy()))
-                if script and script[0][0](p.game.game_time, cycles[0]):
+                if script and script[0][0](p.game.game_time, cycles[0], shown):
                     send_frame(trainer, script.pop(0)[1])
                 return p
 
@@ -90,6 +98,10 @@ def replay(
     return float(after[0][0]), float(after[0][1])
 
 
+def _near(shown: tuple[float, float] | None, xy: tuple[float, float], tol: float = 0.05) -> bool:
+    return shown is not None and abs(shown[0] - xy[0]) < tol and abs(shown[1] - xy[1]) < tol
+
+
 def illegal_defence_replay(
     agent_port: int, monitor_port: int, fouls: list | None = None
 ) -> tuple[float, float]:
@@ -99,12 +111,15 @@ def illegal_defence_replay(
 
     first = [(1, (-14.5, 0.0)), (2, (-14.0, 1.0)), (3, (-14.0, -1.0))]
     script = [
-        (lambda t, n: n == 60, trainer_cmds.play_mode("PlayOn")),
+        (lambda t, n, shown: n == 60, trainer_cmds.play_mode("PlayOn")),
         (
-            lambda t, n: t >= 0.5,
+            lambda t, n, shown: t >= 0.5,
             "".join(trainer_cmds.agent_move(u, "Left", (x, y, 0.4), -90.0) for u, (x, y) in first),
         ),
-        (lambda t, n: t >= 1.0, trainer_cmds.agent_move(4, "Left", (-13.5, 0.5, 0.4), -90.0)),
+        (
+            lambda t, n, shown: t >= 1.0,
+            trainer_cmds.agent_move(4, "Left", (-13.5, 0.5, 0.4), -90.0),
+        ),
     ]
     return replay(
         agent_port, monitor_port, players=5, track=4, script=script, read_after=1.1, fouls=fouls
@@ -115,19 +130,22 @@ def touching_replay(
     agent_port: int, monitor_port: int, fouls: list | None = None
 ) -> tuple[float, float]:
     """Four standing players of one team; a trainer puts the goalkeeper out of the way and
-    players 2 and 3 shoulder to shoulder (0.24 m apart), and three cycles later player 4 against
-    player 2 from the other side (later than the next cycle: a trainer's message can reach the
-    server a cycle late, and both moves in one cycle make a group that nobody joined last).
-    Where player 4 is 0.2 s later."""
+    players 2 and 3 shoulder to shoulder (0.24 m apart), and once the monitor stream shows them
+    there, player 4 against player 2 from the other side (not after a fixed count of cycles: a
+    trainer's message can reach the server cycles late under load, and both moves in one cycle
+    make a group that nobody joined last). Where player 4 is at 0.84 s of game time."""
 
     pair = [(1, (-10.0, 5.0)), (2, (-5.0, 0.0)), (3, (-5.0, 0.24))]
     script = [
-        (lambda t, n: n == 60, trainer_cmds.play_mode("PlayOn")),
+        (lambda t, n, shown: n == 60, trainer_cmds.play_mode("PlayOn")),
         (
-            lambda t, n: n == 85,
+            lambda t, n, shown: n == 85,
             "".join(trainer_cmds.agent_move(u, "Left", (x, y, 0.4), -90.0) for u, (x, y) in pair),
         ),
-        (lambda t, n: n == 88, trainer_cmds.agent_move(4, "Left", (-5.0, -0.24, 0.4), -90.0)),
+        (
+            lambda t, n, shown: all(_near(shown.get(u), xy) for u, xy in pair),
+            trainer_cmds.agent_move(4, "Left", (-5.0, -0.24, 0.4), -90.0),
+        ),
     ]
     return replay(
         agent_port, monitor_port, players=4, track=4, script=script, read_after=0.84, fouls=fouls

@@ -199,10 +199,10 @@ def test_touching_group_on_serve():
 
 def test_touching_group_on_a_real_server(real_rcssserver3d):
     """The same situation on a real rcssserver3d, where one is installed: the same decision,
-    the player that joined is moved away from the group. Where to differs: the real server
-    mostly finds the spot 0.4 m away taken and takes the next one its search offers (0.4 m
-    further in x or y), as its bounding boxes of the robots reach a few centimetres further
-    than the ones computed here (docs/results.md, *Referee*)."""
+    the player that joined is moved away from the group, in replays to the same spot as on
+    ``serve``; allowed too is the next spot of the real server's search (0.4 m further in x
+    or y), which it takes when its robots' bounding boxes, a few centimetres larger than the
+    ones computed here, find the first taken (docs/results.md, *Real server*)."""
     fouls: list = []
     x, y = _on_a_real_server(real_rcssserver3d, touching_replay, fouls)
     assert (1, 1, 4) in {f[1:] for f in fouls}
