@@ -5,7 +5,7 @@ Runs a kick policy deterministically (a run folder of ``robocup-gym train target
 kicks made for each command alone on TargetKick-v1, or with ``--task long-kick`` the long kick
 alone on LongKick-v1) for ``--episodes`` episodes per command. A TargetKick
 policy gets every command of a grid (distances 2, 3, 5, 7, 9 m × directions −45°, −30°, −15°,
-0°, 15°, 30°, 45° of its heading; most of them between the points of TargetKick-v1's grid of
+0°, 15°, 30°, 45° of its heading; most directions between the aims of TargetKick-v1's
 kicks); the other kicks have no command and are scored against the robot's heading. For each
 episode:
 

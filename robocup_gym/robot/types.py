@@ -64,6 +64,9 @@ ROBOT_TYPES: tuple[RobotType, ...] = (
     RobotType(4, "toes", toe_length=0.035517656),
 )
 
+TYPE_NUMBERS: tuple[int, ...] = tuple(t.index for t in ROBOT_TYPES)
+"""The Nao's robot type numbers, 0–4."""
+
 
 def robot_type(index: int) -> RobotType:
     """The :class:`RobotType` with number ``index`` (0–4).

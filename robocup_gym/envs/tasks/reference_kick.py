@@ -186,15 +186,11 @@ class ReferenceKickTask:
         c = self.config
         return (c.kick_keyframes_by_type or {}).get(c.robot_type, c.kick_keyframes)
 
-    def _episode_keyframes(self, start) -> Keyframes:
-        """The kick of the episode ``start`` begins (:meth:`kick_keyframes`; a task whose kick
-        depends on the episode's command overrides this)."""
-        return self.kick_keyframes()
-
     def _initial_state(self, options):
         start = super()._initial_state(options)  # type: ignore[misc]
-        self._kick_table = kick_table(self._episode_keyframes(start))
-        """This episode's kick as arrays (:func:`kick_table`)."""
+        self._kick_table = kick_table(self.kick_keyframes())
+        """This episode's kick as arrays (:func:`kick_table`; a task whose kick depends on the
+        episode's command sets its own)."""
         return start
 
     def _before_action(self) -> None:

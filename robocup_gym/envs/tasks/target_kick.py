@@ -2,33 +2,19 @@
 
 from __future__ import annotations
 
-import functools
-import json
 import math
 from dataclasses import dataclass
-from importlib import resources
 from typing import Any
 
 import numpy as np
 
 from robocup_gym.envs.base_env import BaseEnv
 from robocup_gym.envs.config import DEFAULT_OBSERVATIONS, EnvConfig, EnvConfigError
-from robocup_gym.envs.tasks.long_kick import (
-    LONG_KICK_BALL_START_POS,
-    LONG_KICK_KEYFRAMES,
-    LONG_KICK_KEYFRAMES_BY_TYPE,
-)
-from robocup_gym.envs.tasks.reference_kick import (
-    Keyframes,
-    ReferenceKickConfig,
-    ReferenceKickTask,
-    mirror_keyframes,
-)
+from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
+from robocup_gym.envs.tasks.reference_kick import ReferenceKickConfig, ReferenceKickTask, kick_table
 from robocup_gym.sim.physics import ball_rest_point
 
 __all__ = [
-    "COMMANDED_KICK_DIRECTIONS_DEG",
-    "COMMANDED_KICK_DISTANCES_M",
     "TARGET_KICK_OBSERVATIONS",
     "TargetKick",
     "TargetKickConfig",
@@ -41,81 +27,6 @@ TARGET_KICK_OBSERVATIONS = (*DEFAULT_OBSERVATIONS, "kick_target")
 
 CONTACT_SPEED = 0.1
 """The ball counts as kicked once it moves faster than this, m/s."""
-
-COMMANDED_KICK_DISTANCES_M = (2.0, 4.0, 6.0, 8.0, 10.0)
-"""The distances of the commanded kicks' grid (:func:`commanded_kick`), m."""
-COMMANDED_KICK_DIRECTIONS_DEG = (0.0, 11.25, 22.5, 33.75, 45.0)
-"""The directions of the commanded kicks' grid, deg from the robot's heading (CCW positive:
-to the left). Kicks to the right are their mirror images."""
-
-
-@functools.cache
-def _kick_grid() -> dict[tuple[float, float], tuple[Keyframes, tuple[float, float]]]:
-    """(distance m, direction deg) → (keyframes, ball spot x/y m) of every searched grid kick
-    (``robocup_gym/data/commanded_kicks.json``); (10 m, 0°) is the long kick."""
-    text = resources.files("robocup_gym.data").joinpath("commanded_kicks.json").read_text()
-    grid = {
-        (float(k["distance_m"]), float(k["direction_deg"])): (
-            tuple((float(t), dict(offsets)) for t, offsets in k["keyframes"]),
-            (float(k["ball_start_pos"][0]), float(k["ball_start_pos"][1])),
-        )
-        for k in json.loads(text)["kicks"]
-    }
-    grid[(10.0, 0.0)] = (LONG_KICK_KEYFRAMES, LONG_KICK_BALL_START_POS)
-    return grid
-
-
-def _nearest(grid: tuple[float, ...], v: float) -> float:
-    """The value of ``grid`` nearest ``v`` (the lower one on a tie)."""
-    return min(grid, key=lambda g: abs(g - v))
-
-
-def commanded_kick(
-    distance_m: float, direction_deg: float, robot_type: int = 0
-) -> tuple[Keyframes, tuple[float, float]]:
-    """The kick for a command and where the ball must lie for it.
-
-    The kick is the grid's nearest the command: a grid of right-foot kicks (distances
-    :data:`COMMANDED_KICK_DISTANCES_M` × directions :data:`COMMANDED_KICK_DIRECTIONS_DEG`,
-    straight ahead and to the left), each found by CMA-ES on the default engine from the long
-    kick (:data:`~robocup_gym.envs.tasks.long_kick.LONG_KICK_KEYFRAMES`, which is the grid's
-    10 m, 0° kick; type 4 plays its own there) or from a neighbour on the grid, over Nao types
-    0–4, clean and with 1 cm of ball spawn noise (some also with 0.5° of joint start noise). A
-    command to the right gets the mirror image of the kick
-    for the same angle to the left (:func:`~robocup_gym.envs.tasks.reference_kick.mirror_keyframes`:
-    the left foot kicks, the ball's spot mirrored too). Kicks between grid points are not
-    blended: a kick is sharp, and blends of two kicks (keyframes and ball spot alike) missed by
-    more than the nearest kick does and often floored the robot (``docs/results.md``).
-
-    Args:
-        distance_m: Commanded distance, m (the grid spans 2–10).
-        direction_deg: Commanded direction, deg from the robot's heading, CCW positive (±45).
-        robot_type: The Nao type (0–4).
-
-    Returns:
-        (keyframes, (x, y)): the kick as ``kick_keyframes`` are written (time s, offsets deg by
-        effector) and the ball's spot, m, world frame, for a robot at the default start
-        (:attr:`EnvConfig.robot_start_pos`, heading 0).
-
-    Raises:
-        ValueError: for a distance or direction that is not a finite number.
-    """
-    if not (math.isfinite(distance_m) and math.isfinite(direction_deg)):
-        raise ValueError(
-            f"a kick command must be a finite distance (m) and direction (deg), got "
-            f"({distance_m!r}, {direction_deg!r})"
-        )
-    if direction_deg < 0.0:
-        keyframes, (x, y) = commanded_kick(distance_m, -direction_deg, robot_type)
-        return mirror_keyframes(keyframes, robot_type), (x, 2.0 * EnvConfig.robot_start_pos[1] - y)
-    key = (
-        _nearest(COMMANDED_KICK_DISTANCES_M, float(distance_m)),
-        _nearest(COMMANDED_KICK_DIRECTIONS_DEG, float(direction_deg)),
-    )
-    keyframes, spot = _kick_grid()[key]
-    if key == (10.0, 0.0):
-        keyframes = LONG_KICK_KEYFRAMES_BY_TYPE.get(robot_type, keyframes)
-    return keyframes, spot
 
 
 @dataclass
@@ -214,9 +125,9 @@ class TargetKick(ReferenceKickTask, BaseEnv):
     actions are target angles added to a reference kick (:mod:`.reference_kick`: lean onto the
     left foot, swing the right through the ball, back to the stance), which alone moves the
     ball about 2.7 m straight ahead and stays up. With ``kick_per_command`` (``TargetKick-v1``)
-    the kick is the one made for the episode's command instead (:func:`commanded_kick`: a grid
-    of searched kicks, the nearest), the ball at its spot: zero actions kick toward the
-    command.
+    the kick is the one chosen for the episode's command instead (:func:`commanded_kick`: of a
+    library of searched kicks, the one whose measured landings miss the command least), the
+    ball at its spot: zero actions kick to the command.
 
     Paid once, after the episode and ``wait_steps`` more cycles with the joints stopped, from
     where the ball will come to rest (its position and velocity then,
@@ -265,32 +176,27 @@ class TargetKick(ReferenceKickTask, BaseEnv):
     contact_step: int | None = None
     """The first step of the episode on which the ball moved faster than 0.1 m/s."""
 
-    _kick_spot: tuple[float, float] = (0.0, 0.0)
-
     @property
     def _plays_commanded_kick(self) -> bool:
         return self.config.kick_per_command and self.config.reference_kick
 
-    def _episode_keyframes(self, start) -> Keyframes:
-        if not self._plays_commanded_kick:
-            return super()._episode_keyframes(start)
-        keyframes, self._kick_spot = commanded_kick(*start.kick_target, self.config.robot_type)
-        return keyframes
-
     def _initial_state(self, options):
         start = super()._initial_state(options)
         self.contact_step = None
-        c = self.config
-        if self._plays_commanded_kick and "ball_pos" not in options:
+        if not self._plays_commanded_kick:
+            return start
+        keyframes, spot = commanded_kick(*start.kick_target, self.config.robot_type)
+        self._kick_table = kick_table(keyframes)
+        if "ball_pos" not in options:
             # the spot is measured from a robot at the default start; this one's start and the
             # drawn spawn noise carry over
-            ahead = np.subtract(self._kick_spot, EnvConfig.robot_start_pos)
+            ahead = np.subtract(spot, EnvConfig.robot_start_pos)
             h = math.radians(start.pose.heading_deg)
             rotated = (
                 ahead[0] * math.cos(h) - ahead[1] * math.sin(h),
                 ahead[0] * math.sin(h) + ahead[1] * math.cos(h),
             )
-            noise = start.ball_pos[:2] - c.ball_start[:2]
+            noise = start.ball_pos[:2] - self.config.ball_start[:2]
             start.ball_pos[:2] = np.add((start.pose.x, start.pose.y), rotated) + noise
         return start
 
