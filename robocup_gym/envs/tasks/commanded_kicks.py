@@ -46,8 +46,9 @@ _FALL_COST = 25.0
 """Added times the share of landings after which the robot was down."""
 LANDING_EPISODES = 8
 """Kicks measured per kick and Nao type."""
-LANDING_BALL_SPAWN_NOISE = 0.01
-"""The ball's offset from its spot when the landings are measured, m (TargetKick-v1's)."""
+MEASURED_ON = "RobocupGym/TargetKick-v1"
+"""The environment whose settings the landings are measured on (its ball spawn noise among
+them), with the kick under test instead of the command's."""
 _LANDING_SEED = 10_000
 _LANDINGS_FILE = "commanded_kick_landings.json"
 
@@ -200,15 +201,15 @@ def measure_landings(
     """Play ``kick`` with zero actions on TargetKick-v1's settings (1 cm of ball spawn noise)
     ``episodes`` times, seeded from 10000 on: (distance m, direction deg, down 1 s later) rows,
     as :func:`kick_landings` holds them."""
-    from robocup_gym.envs.tasks.target_kick import TargetKick
+    import gymnasium
 
-    env = TargetKick(
+    env = gymnasium.make(
+        MEASURED_ON,
         robot_type=robot_type,
         kick_per_command=False,
         kick_keyframes=kick.keyframes_for(robot_type),
         ball_start_pos=kick.ball_spot,
-        ball_spawn_noise=LANDING_BALL_SPAWN_NOISE,
-    )
+    ).unwrapped
     zero = np.zeros(env.action_space.shape, dtype=np.float32)
     rows = []
     try:
@@ -246,7 +247,7 @@ def write_landings(path: Path | None = None) -> Path:
             "settings, ODE. Written by python benchmarks/kick_landings.py --write."
         ),
         "episodes": LANDING_EPISODES,
-        "ball_spawn_noise_m": LANDING_BALL_SPAWN_NOISE,
+        "measured_on": MEASURED_ON,
         "landings": landings,
     }
     out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
