@@ -22,6 +22,7 @@ import numpy as np
 
 from robocup_gym.protocol.constants import PLAY_MODES
 from robocup_gym.robot.nao import NaoModel, nao_model
+from robocup_gym.robot.types import TYPE_NUMBERS
 from robocup_gym.sim.field import FIELD_LENGTH, FIELD_WIDTH
 from robocup_gym.sim.physics import BALL_REST_Z
 
@@ -419,7 +420,7 @@ class EnvConfig:
         need(
             isinstance(self.robot_type, int | np.integer)
             and not isinstance(self.robot_type, bool)
-            and self.robot_type in (0, 1, 2, 3, 4),
+            and self.robot_type in TYPE_NUMBERS,
             f"robot_type must be one of the integers 0, 1, 2, 3, 4, got {self.robot_type!r}",
         )
         for name, pos in (

@@ -74,7 +74,7 @@ def robot_type(index: int) -> RobotType:
     Raises:
         ValueError: for a number outside 0–4.
     """
-    if isinstance(index, bool) or not isinstance(index, int | float) or index not in range(5):
+    if isinstance(index, bool) or not isinstance(index, int | float) or index not in TYPE_NUMBERS:
         raise ValueError(f"robot type must be one of 0, 1, 2, 3, 4, got {index!r}")
     return ROBOT_TYPES[int(index)]
 
