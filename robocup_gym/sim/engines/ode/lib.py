@@ -157,7 +157,9 @@ _SIGNATURES: dict[str, tuple] = {
     "dGeomGetBody": (dID, [dID]),
     "dGeomDestroy": (None, [dID]),
     "dCollide": (ctypes.c_int, [dID, dID, ctypes.c_int, ctypes.POINTER(ContactGeom), ctypes.c_int]),
-    # island threading (measured by benchmarks/ode_threads.py; not used by the world: see there)
+    # each world's own single-threaded step scheduler (OdeWorld); island threading is measured
+    # by benchmarks/ode_threads.py and not used by the world (see there)
+    "dThreadingAllocateSelfThreadedImplementation": (dID, []),
     "dThreadingAllocateMultiThreadedImplementation": (dID, []),
     "dThreadingAllocateThreadPool": (dID, [ctypes.c_uint, ctypes.c_size_t, ctypes.c_uint, dID]),
     "dThreadingThreadPoolServeMultiThreadedImplementation": (None, [dID, dID]),

@@ -120,6 +120,16 @@ class OdeWorld(OdeMotors, OdeContacts, OdeReadings, Senses):
         ``dWorldStep``) in each step; ``benchmarks/throughput.py`` compares it with the whole
         step. ``None``: not measured."""
         self._world = lib.dWorldCreate()
+        # Its own step scheduler: without one every world shares ODE's global self-threaded
+        # implementation, whose job lists are not locked, and worlds stepped at the same time in
+        # different threads (ctypes releases the GIL inside dWorldStep) corrupt them and abort
+        # the process. The scheduler runs the same jobs in the same order: results are unchanged.
+        self._threading = lib.dThreadingAllocateSelfThreadedImplementation()
+        if not self._threading:
+            raise MemoryError("ODE could not allocate a step scheduler for a new world")
+        lib.dWorldSetStepThreadingImplementation(
+            self._world, lib.dThreadingImplementationGetFunctions(self._threading), self._threading
+        )
         lib.dWorldSetGravity(self._world, 0.0, 0.0, -phys.GRAVITY)
         lib.dWorldSetERP(self._world, WORLD_ERP)
         lib.dWorldSetCFM(self._world, WORLD_CFM)
@@ -568,6 +578,8 @@ class OdeWorld(OdeMotors, OdeContacts, OdeReadings, Senses):
         for g in geoms + [g for r in self.robots for g in r.geoms]:
             lib.dGeomDestroy(g)
         lib.dWorldDestroy(self._world)
+        if self._threading:
+            lib.dThreadingFreeImplementation(self._threading)
         self._world = None
 
     def __del__(self) -> None:
