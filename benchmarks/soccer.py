@@ -10,7 +10,8 @@ world alone on the same robots, measured in the same run.
   skills running (random walk commands) and every player observing (vision every third cycle);
 * ``game_11v11_joint_cycles_per_s``: the same with joint-level actions every cycle;
 * ``physics_22_robots_cycles_per_s``: the same world stepped alone (no perception, no rules);
-* ``game_vs_physics``: the skill game's cycles over the physics'.
+* ``game_vs_physics``: the skill game's cycles over the physics', the two measured in
+  alternating rounds of 50 cycles (a change of the machine's speed during the run hits both).
 
 One core (the environments are single-process). ``--quick`` measures fewer cycles.
 
@@ -63,6 +64,39 @@ def physics_per_s(env, cycles: int) -> float:
     return cycles / (time.perf_counter() - t0)
 
 
+def game_and_physics_per_s(game_env, physics_env, rounds: int, steps: int) -> tuple[float, float]:
+    """Cycles per second of ``game_env`` (skill actions: ``steps`` steps of 10 cycles per round,
+    random walk commands) and of ``physics_env``'s world stepped alone (as
+    :func:`physics_per_s`, as many cycles per round), measured in alternating rounds: a change
+    of the machine's speed during the run (other work, clock scaling) slows both alike, so
+    their ratio holds."""
+    rng = np.random.default_rng(0)
+    game_env.reset(seed=0)
+    world = physics_env.game.world
+    physics_env.reset(seed=0)
+    motion = np.random.default_rng(1)
+    for p in physics_env.game.players:
+        world.command(p.index, 0.2 * motion.uniform(-1, 1, len(world.robots[p.index].model.joints)))
+    game_s = physics_s = 0.0
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            if not game_env.agents:
+                game_env.reset()
+            acts = {a: rng.uniform(-1, 1, game_env.action_space(a).shape) for a in game_env.agents}
+            for a in acts.values():
+                a[3] = -1.0  # walk (kicks make robots fall: get-ups would dominate the figure)
+            game_env.step(acts)
+        t1 = time.perf_counter()
+        for _ in range(steps * 10):
+            world.step()
+        t2 = time.perf_counter()
+        game_s += t1 - t0
+        physics_s += t2 - t1
+    cycles = rounds * steps * 10
+    return cycles / game_s, cycles / physics_s
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer cycles")
@@ -79,11 +113,12 @@ def main(argv: list[str] | None = None) -> dict:
         decisions = _steps_per_s(env, n // 10) * 4  # four agents decide each step
         out["game_2v2_skill_steps_per_s"] = round(decisions, 1)
     eleven = {"left_types": MIXED, "right_types": MIXED, "max_cycles": 100_000}
-    with game_v1.parallel_env(engine=args.engine, actions="skills", **eleven) as env:
-        out["game_11v11_cycles_per_s"] = round(_steps_per_s(env, n // 20) * 10, 1)
     with game_v1.parallel_env(engine=args.engine, **eleven) as env:
         out["game_11v11_joint_cycles_per_s"] = round(_steps_per_s(env, n // 2), 1)
-        out["physics_22_robots_cycles_per_s"] = round(physics_per_s(env, n // 2), 1)
+        with game_v1.parallel_env(engine=args.engine, actions="skills", **eleven) as skills:
+            game, physics = game_and_physics_per_s(skills, env, rounds=n // 100, steps=5)
+    out["game_11v11_cycles_per_s"] = round(game, 1)
+    out["physics_22_robots_cycles_per_s"] = round(physics, 1)
     out["game_vs_physics"] = round(
         out["game_11v11_cycles_per_s"] / out["physics_22_robots_cycles_per_s"], 3
     )

@@ -133,7 +133,10 @@ class ActionMapper:
             target = _targets(self, action[0::2])
             limit = (action[1::2] + 1.0) * (0.5 * self.max_speed)
         err = np.radians(target - joint_angles_deg[self.joints])
-        return np.clip(self.gain * err, -limit, limit)
+        v = self.gain * err  # clipped to ±limit (np.clip's values, cheaper on small arrays)
+        np.maximum(v, -limit, out=v)
+        np.minimum(v, limit, out=v)
+        return v
 
     def command(self, action: np.ndarray, joint_angles_deg: np.ndarray) -> np.ndarray:
         """Full canonical-order velocity command (rad/s); a fresh array each call."""
@@ -300,4 +303,7 @@ def _targets(mapper, a: np.ndarray) -> np.ndarray:
     """Target angles (deg) of a mapper's target window for action values ``a``, shifted by its
     ``target_offset_deg`` and clipped to the joints' ranges."""
     target = mapper.angle_mid + a * mapper.angle_half + mapper.target_offset_deg
-    return np.clip(target, *mapper._limits)
+    lo, hi = mapper._limits  # np.clip's values, cheaper on small arrays
+    np.maximum(target, lo, out=target)
+    np.minimum(target, hi, out=target)
+    return target

@@ -569,15 +569,23 @@ class SimServer(AgentMessages, TrainerCommands):
         # percepts for the next cycle
         world = self.world
         host = self.world_host
+        receivers = []
         for a in self.agents:
             a.synced = False
             if not a.has_robot or a.killed or not a.conn.alive:
                 continue
             i = host.index(a.key)
-            if i is None:
-                continue
+            if i is not None:
+                receivers.append((a, i))
+        try:  # every robot's perception at once (their visions computed together)
+            perceptions = world.perceive_all([i for _, i in receivers], ground_truth=False)
+        except Exception:
+            log.exception("percepts could not be built together; building them one by one")
+            perceptions = None
+        for k, (a, i) in enumerate(receivers):
             try:
-                text = format_perception(world.perceive(i, ground_truth=False), self.decimals)
+                p = world.perceive(i, ground_truth=False) if perceptions is None else perceptions[k]
+                text = format_perception(p, self.decimals)
             except Exception:
                 log.exception("%r: percept could not be built", a.conn)
                 continue

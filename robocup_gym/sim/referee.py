@@ -567,20 +567,26 @@ class Referee(RobotFouls):
                 self._move_x(p, FREE_KICK_MOVE)
 
     def _kickoff_clear(self, kicker: str) -> None:
+        if not self.players:
+            return
         w = self.host.world
+        # every robot's parts at once (a move below changes only the moved robot's parts)
+        xy = w.every_body_frame()[0][:, :2]
+        starts = np.cumsum([0] + [len(r.model.bodies) for r in w.robots[:-1]])
+        lo_all = np.minimum.reduceat(xy[:, 0], starts)
+        hi_all = np.maximum.reduceat(xy[:, 0], starts)
+        in_circle_all = np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS
+        any_in = np.logical_or.reduceat(in_circle_all, starts)
+        all_in = np.logical_and.reduceat(in_circle_all, starts)
         for p in self.players:
-            xy = w.body_frames(p.index)[0][:, :2]
-            lo, hi = float(xy[:, 0].min()), float(xy[:, 0].max())
+            i = p.index
             own = -1.0 if p.side == "left" else 1.0
-            into_other = hi > 0 if p.side == "left" else lo < 0
+            into_other = hi_all[i] > 0 if p.side == "left" else lo_all[i] < 0
             if p.side != kicker:
-                in_circle = bool(np.any(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
-                if into_other or in_circle:
+                if into_other or any_in[i]:
                     self._move_x(p, own * FREE_KICK_MOVE)
-            elif into_other:
-                inside = bool(np.all(np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS))
-                if not inside:
-                    self._move_x(p, own * FREE_KICK_MOVE)
+            elif into_other and not all_in[i]:
+                self._move_x(p, own * FREE_KICK_MOVE)
 
     def _teleport(self, p: Player, pos) -> None:
         """A referee's move of ``p`` (it counts for the charging rule's grace)."""

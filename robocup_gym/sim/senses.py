@@ -40,8 +40,8 @@ import numpy as np
 from robocup_gym.sim.referee import BEAM_MODES, PAUSED_MODES
 from robocup_gym.sim.referee_fouls import FOULS_PAUSED_MODES
 from robocup_gym.sim.self_collision import SelfCollisions
-from robocup_gym.sim.vision import CALIBRATION_ERROR_M, see
-from robocup_gym.types import GameState, HeardMessage, Perception
+from robocup_gym.sim.vision import CALIBRATION_ERROR_M, Observer, see, see_many
+from robocup_gym.types import GameState, HeardMessage, Perception, Vision
 
 __all__ = ["HEARING_RANGE_M", "PAUSED_MODES", "SAY_MAX_CHARS", "AgentState", "Senses"]
 
@@ -253,14 +253,31 @@ class Senses:
         self, indices: Sequence[int], *, ground_truth: bool = True
     ) -> list[Perception]:
         """:meth:`perceive` of each robot in ``indices``, in that order (the same perceptions,
-        noise included, as calling it robot after robot), with what every robot's vision
-        needs computed once: where every player's visible parts are."""
+        noise included, as calling it robot after robot), with the visions of every robot that
+        sees in this cycle computed together (:func:`~robocup_gym.sim.vision.see_many`)."""
         interval = self.vision_config.interval
-        sees = any(
-            (c := self.robot(i).perception_counter) % interval == 0 and c > 0 for i in indices
-        )
-        players = self._seen_players() if sees else None
-        return [self.perceive(i, ground_truth=ground_truth, _players=players) for i in indices]
+        seeing = [
+            i for i in indices if (c := self.robot(i).perception_counter) % interval == 0 and c > 0
+        ]
+        visions = {}
+        if seeing:
+            observers = []
+            for i in seeing:
+                head_pos, head_rot = self._head_pose(i)
+                r = self.robot(i)
+                observers.append(Observer(head_pos, head_rot, r.calibration, r.team == "right"))
+            seen = see_many(
+                observers,
+                ball_pos=self.ball_position(),
+                players=self._seen_players(),
+                rng=self.rng,
+                config=self.vision_config,
+            )
+            visions = dict(zip(seeing, seen, strict=True))
+        return [
+            self.perceive(i, vision=i in visions, ground_truth=ground_truth, _vision=visions.get(i))
+            for i in indices
+        ]
 
     def perceive(
         self,
@@ -268,7 +285,7 @@ class Senses:
         *,
         vision: bool | None = None,
         ground_truth: bool = True,
-        _players: list | None = None,
+        _vision: Vision | None = None,
     ) -> Perception:
         """Robot ``index``'s perception of the current state, as rcssserver3d would send it.
 
@@ -292,7 +309,7 @@ class Senses:
             vision = (
                 r.perception_counter % self.vision_config.interval == 0 and r.perception_counter > 0
             )
-        vis = self.vision(index, _players) if vision else None
+        vis = (_vision if _vision is not None else self.vision(index)) if vision else None
         heard = r.heard
         r.heard = []
         for k in r.hear_capacity:
@@ -318,10 +335,10 @@ class Senses:
             if o.team_name is not None and o.unum is not None
         ]
 
-    def vision(self, index: int = 0, _players: list | None = None):
+    def vision(self, index: int = 0):
         """The ``See`` percept of robot ``index`` for the current state (ignores the interval)."""
         r = self.robot(index)
-        players = self._seen_players() if _players is None else _players
+        players = self._seen_players()
         head_pos, head_rot = self._head_pose(index)
         return see(
             head_pos=head_pos,

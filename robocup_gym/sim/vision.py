@@ -7,6 +7,7 @@ robot's left, vertical positive up.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 
@@ -189,41 +190,110 @@ def see(
         config: Vision settings.
         mirror: True for a right-team observer (ground-truth extensions are team-mirrored).
     """
+    observer = Observer(head_pos, head_rot, calibration, mirror)
+    return see_many([observer], ball_pos=ball_pos, players=players, rng=rng, config=config)[0]
+
+
+@dataclass(frozen=True)
+class Observer:
+    """One robot that sees: its head's centre (world, m) and rotation matrix (columns = head
+    x/y/z axes in world), its calibration offset (m) and whether it plays on the right."""
+
+    head_pos: np.ndarray
+    head_rot: np.ndarray
+    calibration: np.ndarray
+    mirror: bool = False
+
+
+def see_many(
+    observers: Sequence[Observer],
+    *,
+    ball_pos: np.ndarray,
+    players: list[tuple[str, int, np.ndarray]],
+    rng: np.random.Generator,
+    config: VisionConfig,
+) -> list[Vision]:
+    """The ``See`` percepts of several robots of one world in one cycle: the same percepts,
+    noise included, as :func:`see` for each observer in turn (the noise is drawn from ``rng``
+    in the same order), with the geometry of all of them computed at once."""
     half = float(int(config.view_cone_deg) // 2)
     noise = config.noise
-    cal = calibration if noise else _ZERO3
+    n_obs = len(observers)
+    if not n_obs:
+        return []
     n_obj = len(_OBJECTS)
     n_parts = len(PLAYER_PARTS)
+    n_players = len(players)
     # every point in one array: landmarks and ball, each player's parts, line end points
     pieces = [_OBJECTS[:-1], ball_pos.reshape(1, 3)]
     pieces += [parts for _, _, parts in players]
     if config.lines:
         pieces.append(_LINE_ENDS)
-    rel = to_head_frame(np.concatenate(pieces), head_pos, head_rot)
-    rel += cal
-    n_pts = n_obj + n_parts * len(players)
+    points = np.concatenate(pieces)
+    n_all = len(points)
+    rel = np.empty((n_obs, n_all, 3))
+    for k, o in enumerate(observers):
+        rel[k] = to_head_frame(points, o.head_pos, o.head_rot)
+        rel[k] += o.calibration if noise else _ZERO3
+    n_pts = n_obj + n_parts * n_players
+    n_line_ends = n_all - n_pts
+    inside = None
     if config.lines:
-        inside, clipped = _clip_segments(rel[n_pts:].reshape(-1, 2, 3), half)
-        rel[n_pts:] = clipped.reshape(-1, 3)
+        inside, clipped = _clip_segments(rel[:, n_pts:].reshape(-1, 2, 3), half)
+        rel[:, n_pts:] = clipped.reshape(n_obs, n_line_ends, 3)
+        inside = inside.reshape(n_obs, -1)
     # one polar conversion and one visibility test for everything (element-wise operations)
-    pol_all = polar(rel)
-    vis_all = _visible(pol_all, half)
-
+    pol_all = polar(rel.reshape(-1, 3)).reshape(n_obs, n_all, 3)
+    vis_all = _visible(pol_all.reshape(-1, 3), half).reshape(n_obs, n_all)
     # which players are seen (any part), and which lines (both ends inside the cone, slightly
     # widened: clipped ends lie on its border)
-    pvis_all = vis_all[n_obj:n_pts].reshape(len(players), n_parts)
-    seen = np.flatnonzero(pvis_all.any(axis=1))
+    pvis_all = vis_all[:, n_obj:n_pts].reshape(n_obs, n_players, n_parts)
+    seen_any = pvis_all.any(axis=2)
     keep = None
     if config.lines:
-        lvis = _visible(pol_all[n_pts:], half + 1e-6).reshape(-1, 2).all(axis=1)
-        keep = inside & lvis
-    n_lines = 0 if keep is None else int(keep.sum())
+        lvis = _visible(pol_all[:, n_pts:].reshape(-1, 3), half + 1e-6)
+        keep = inside & lvis.reshape(n_obs, -1, 2).all(axis=2)
+    # the noise of everything seen, per observer in turn, drawn at once: per observer one draw
+    # per group (the objects, each seen player, the lines), the same numbers group by group
+    n_seen = seen_any.sum(axis=1)
+    n_lines = np.zeros(n_obs, dtype=int) if keep is None else keep.sum(axis=1)
+    sizes = 3 * (n_obj + n_parts * n_seen + 2 * n_lines)
+    z = rng.standard_normal(int(sizes.sum())) if noise else np.zeros(0)
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).tolist()
+    return [
+        _assemble(
+            o,
+            pol_all[k],
+            vis_all[k],
+            pvis_all[k],
+            np.flatnonzero(seen_any[k]),
+            None if keep is None else keep[k],
+            z[offsets[k] : offsets[k + 1]] if noise else z,
+            ball_pos,
+            players,
+            config,
+        )
+        for k, o in enumerate(observers)
+    ]
 
-    # the noise of everything seen, drawn at once in the order of one draw per group (the
-    # objects, each seen player, the lines): the same numbers as group by group
-    z = np.zeros(0)
-    if noise:
-        z = rng.standard_normal(3 * (n_obj + n_parts * len(seen) + 2 * n_lines))
+
+def _assemble(
+    o: Observer,
+    pol_all: np.ndarray,
+    vis_all: np.ndarray,
+    pvis_all: np.ndarray,
+    seen: np.ndarray,
+    keep: np.ndarray | None,
+    z: np.ndarray,
+    ball_pos: np.ndarray,
+    players: list[tuple[str, int, np.ndarray]],
+    config: VisionConfig,
+) -> Vision:
+    """One observer's percept from its share of :func:`see_many`'s arrays and its noise ``z``."""
+    noise = config.noise
+    n_obj = len(_OBJECTS)
+    n_parts = len(PLAYER_PARTS)
+    n_pts = n_obj + n_parts * len(players)
     names = _OBJECT_NAMES
     pol = pol_all[:n_obj]
     used = 0
@@ -249,7 +319,7 @@ def see(
         seen_players.append(SeenPlayer(team, unum, visible))
 
     lines = np.zeros((0, 2, 3))
-    if n_lines:
+    if keep is not None and keep.any():
         lines = pol_all[n_pts:].reshape(-1, 2, 3)[keep]
         if noise:
             flat, used = _noisy_from(lines.reshape(-1, 3), z, used)
@@ -257,6 +327,7 @@ def see(
 
     vision = Vision(objects=objects, players=seen_players, lines=lines)
     if config.ground_truth:
+        head_pos, head_rot, mirror = o.head_pos, o.head_rot, o.mirror
         s = -1.0 if mirror else 1.0
         vision.my_pos = head_pos * np.array([s, s, 1.0])
         fwd = head_rot[:, 1]

@@ -20,13 +20,13 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from robocup_gym.backends.base import Backend, EpisodeSetup
-from robocup_gym.envs.observations import heading_frame, in_heading_frame, up_z
+from robocup_gym.envs.observations import heading_frame, up_z
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.fidelity import load_data
 from robocup_gym.sim.rotations import quat_multiply, yaw_quat
@@ -122,27 +122,30 @@ def facing_x(p: Perception) -> Perception:
     gt = p.ground_truth
     if gt is None:
         return p
-    heading = heading_frame(gt.torso_quat)
+    c, s = heading = heading_frame(gt.torso_quat)
+    names = [n for n in _TURNED if getattr(gt, n) is not None]
+    v = np.array([getattr(gt, n) for n in names], dtype=float)
+    out = v.copy()  # each (x, y) as in_heading_frame turns it: (c x + s y, c y - s x)
+    out[:, 0] = c * v[:, 0] + s * v[:, 1]
+    out[:, 1] = c * v[:, 1] - s * v[:, 0]
+    turned = _shallow_copy(gt)
+    for n, row in zip(names, out, strict=True):
+        setattr(turned, n, row)
+    turned.torso_quat = quat_multiply(yaw_quat(-math.atan2(heading[1], heading[0])), gt.torso_quat)
+    seen = _shallow_copy(p)
+    seen.ground_truth = turned
+    return seen
 
-    def turned(v: np.ndarray | None) -> np.ndarray | None:
-        if v is None:
-            return None
-        out = np.array(v, dtype=float, copy=True)
-        out[0], out[1] = in_heading_frame(heading, v[0], v[1])
-        return out
 
-    return replace(
-        p,
-        ground_truth=replace(
-            gt,
-            ball_pos=turned(gt.ball_pos),
-            ball_vel=turned(gt.ball_vel),
-            torso_pos=turned(gt.torso_pos),
-            torso_quat=quat_multiply(yaw_quat(-math.atan2(heading[1], heading[0])), gt.torso_quat),
-            torso_vel=turned(gt.torso_vel),
-            torso_ang_vel=turned(gt.torso_ang_vel),
-        ),
-    )
+def _shallow_copy(obj: Any) -> Any:
+    """``copy.copy`` of a plain object (its attributes in ``__dict__``), without its cost."""
+    new = object.__new__(type(obj))
+    new.__dict__.update(obj.__dict__)
+    return new
+
+
+_TURNED = ("ball_pos", "ball_vel", "torso_pos", "torso_vel", "torso_ang_vel")
+"""The ground truth's world-frame vectors that :func:`facing_x` turns."""
 
 
 class PlayerBackend(Backend):

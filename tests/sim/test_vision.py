@@ -13,8 +13,10 @@ from robocup_gym.sim.vision import (
     HORIZONTAL_NOISE_DEG,
     PLAYER_PARTS,
     VERTICAL_NOISE_DEG,
+    Observer,
     VisionConfig,
     see,
+    see_many,
 )
 
 
@@ -91,3 +93,59 @@ def test_the_noise_is_drawn_group_by_group_in_simspark_s_order(seed):
 
     expected_lines = _noisy(exact.lines.reshape(-1, 3), rng).reshape(-1, 2, 3)
     np.testing.assert_allclose(noisy.lines, expected_lines, rtol=0, atol=1e-12)
+
+
+def _same_vision(a, b) -> None:
+    assert list(a.objects) == list(b.objects)
+    for name in a.objects:
+        np.testing.assert_allclose(a.objects[name], b.objects[name], rtol=0, atol=1e-12)
+    assert [(p.team, p.unum, list(p.parts)) for p in a.players] == [
+        (p.team, p.unum, list(p.parts)) for p in b.players
+    ]
+    for p, q in zip(a.players, b.players, strict=True):
+        for k in p.parts:
+            np.testing.assert_allclose(p.parts[k], q.parts[k], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.lines, b.lines, rtol=0, atol=1e-12)
+    assert (a.my_pos is None) == (b.my_pos is None) and a.my_orientation_deg == b.my_orientation_deg
+
+
+@pytest.mark.parametrize(
+    "config",
+    [
+        VisionConfig(),
+        VisionConfig(noise=False, ground_truth=True),
+        VisionConfig(view_cone_deg=360.0, lines=False),
+    ],
+)
+def test_several_observers_see_as_each_alone_with_the_same_noise(config):
+    """A game's players see together (one computation): the same percepts and the same noise
+    numbers, in the same order, as each observer seeing after the other."""
+    scenes = [_scene(seed) for seed in range(6)]
+    players, ball = scenes[0]["players"], scenes[0]["ball_pos"]
+    rng = np.random.default_rng(3)
+    observers = []
+    for k, scene in enumerate(scenes):
+        head = scene["head_pos"] + np.array([k * 2.0, k - 3.0, 0.0])
+        observers.append(
+            Observer(head, scene["head_rot"], rng.uniform(-0.005, 0.005, 3), k % 2 == 1)
+        )
+    one_by_one, together = np.random.default_rng(7), np.random.default_rng(7)
+    alone = [
+        see(
+            head_pos=o.head_pos,
+            head_rot=o.head_rot,
+            ball_pos=ball,
+            players=players,
+            calibration=o.calibration,
+            rng=one_by_one,
+            config=config,
+            mirror=o.mirror,
+        )
+        for o in observers
+    ]
+    seen = see_many(observers, ball_pos=ball, players=players, rng=together, config=config)
+    assert sum(len(v.players) for v in seen) > 10 and any(len(v.objects) > 2 for v in seen)
+    for a, b in zip(alone, seen, strict=True):
+        _same_vision(a, b)
+    assert one_by_one.standard_normal() == together.standard_normal()  # as many numbers drawn
+    assert see_many([], ball_pos=ball, players=players, rng=together, config=config) == []

@@ -439,7 +439,7 @@ class Walk(BaseEnv):
             # time constant of one cycle: no step starts, stops or changes all at once
             rate = min(1.0, CYCLE_S * c.gait_frequency_hz)
             level = 1.0 if asks_to_move(self.velocity_command) else 0.0
-            self._gait_level += float(np.clip(level - self._gait_level, -rate, rate))
+            self._gait_level += min(rate, max(-rate, float(level - self._gait_level)))
             self._gait_command += (self.velocity_command - self._gait_command) * rate
             lead = c.gait_lead_s * c.gait_frequency_hz  # in cycles
             phase = (self._phase_acted + lead) % 1.0
