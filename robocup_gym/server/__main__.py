@@ -7,6 +7,7 @@ import logging
 import sys
 
 from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT
+from robocup_gym.robot.types import TYPE_NUMBERS
 from robocup_gym.server.server import PortInUseError, serve
 from robocup_gym.sim.engines.ode.lib import OdeUnavailableError
 
@@ -207,8 +208,8 @@ def build_parser(prog: str = "python -m robocup_gym.server") -> argparse.Argumen
     p.add_argument(
         "--robot-types",
         type=robot_type_list,
-        default=(0, 1, 2, 3, 4),
-        help="robot types agents may load, e.g. 0,4 (default 0,1,2,3,4)",
+        default=TYPE_NUMBERS,
+        help="robot types agents may load, e.g. 0,4 (default: every Nao type, 0,1,2,3,4)",
     )
     p.add_argument(
         "--config",

@@ -43,6 +43,7 @@ import numpy as np
 from robocup_gym.protocol.constants import DEFAULT_AGENT_PORT, DEFAULT_MONITOR_PORT
 from robocup_gym.protocol.framing import encode_frame
 from robocup_gym.protocol.perceptor_format import format_perception
+from robocup_gym.robot.types import TYPE_NUMBERS
 from robocup_gym.server.agent import AgentState
 from robocup_gym.server.agent_messages import AgentMessages
 from robocup_gym.server.monitor import MonitorStream, RobotView
@@ -125,7 +126,7 @@ class SimServer(AgentMessages, TrainerCommands):
         seed: int | None = None,
         physics: object | None = None,
         decimals: int = 2,
-        robot_types: Sequence[int] = (0, 1, 2, 3, 4),
+        robot_types: Sequence[int] = TYPE_NUMBERS,
         type_limits: bool = True,
         engine: str = "ode",
     ) -> None:

@@ -29,6 +29,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from robocup_gym.robot.types import TYPE_NUMBERS
 from robocup_gym.sim.field import (
     CENTRE_CIRCLE_RADIUS,
     FIELD_HALF_LENGTH,
@@ -196,7 +197,7 @@ class Referee(RobotFouls):
         *,
         rules: bool | Rules | Mapping[str, bool] = True,
         rng=None,
-        robot_types=(0, 1, 2, 3, 4),
+        robot_types=TYPE_NUMBERS,
         type_limits: bool = True,
         first_touch_plays_on: bool = True,
     ) -> None:

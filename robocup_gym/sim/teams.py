@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass
 
+from robocup_gym.robot.types import TYPE_NUMBERS
 from robocup_gym.sim.field import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH
 from robocup_gym.sim.fouls import AGENT_RADIUS
 
@@ -45,7 +46,7 @@ class TeamRegistry:
             robots of one type.
     """
 
-    def __init__(self, robot_types=(0, 1, 2, 3, 4), type_limits: bool = True) -> None:
+    def __init__(self, robot_types=TYPE_NUMBERS, type_limits: bool = True) -> None:
         self.robot_types = frozenset(int(t) for t in robot_types)
         self.type_limits = bool(type_limits)
         self.names: dict[str, str] = {}
