@@ -260,3 +260,21 @@ def test_environments_created_and_closed_keep_memory_flat():
             samples.append(_rss_mb())
     # the resident size as a user sees it (no trimming here): flat after the first worlds
     assert samples[-1] - samples[1] < 20.0, samples  # before: +0.3 MB per env, ~75 MB here
+
+
+def test_percepts_are_built_one_by_one_when_building_them_together_fails(
+    sync_server, warnings_of_the_server
+):
+    """A failure of the batched perception (every robot's percept in one ``perceive_all``) is
+    logged and the percepts are built robot by robot: every agent still gets each cycle's."""
+    from .conftest import run_agents
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("broken perceive_all")
+
+    sync_server.world.perceive_all = broken  # the world the server builds its percepts from
+    results = run_agents(sync_server, [("Both", 1, 0), ("Both", 2, 1)], steps=20)
+    assert all(len(r) == 22 for r in results)
+    assert all("(HJ (n raj1)" in r[-1] for r in results)
+    assert "percepts could not be built together" in warnings_of_the_server.text
+    assert "broken perceive_all" in warnings_of_the_server.text
