@@ -80,21 +80,6 @@ def _visible(pol: np.ndarray, half_cone: float) -> np.ndarray:
     )
 
 
-def _noisy_from(pol: np.ndarray, z: np.ndarray, used: int) -> tuple[np.ndarray, int]:
-    """``pol`` with SimSpark's noise, from the standard normal numbers ``z[used:]``; returns it
-    and how many numbers are used now. Per group of n points, 3n numbers: the same numbers in
-    the same order as three ``rng.normal(0.0, sigma, n)`` calls (distances, then horizontal,
-    then vertical angles), each ``0.0 + sigma * z`` as numpy computes them."""
-    n = len(pol)
-    zz = z[used : used + 3 * n].reshape(3, n) * _NOISE_SIGMA
-    zz += 0.0
-    out = pol.copy()
-    out[:, 0] += zz[0] * out[:, 0] / 100.0
-    out[:, 1] += zz[1]
-    out[:, 2] += zz[2]
-    return out, used + 3 * n
-
-
 def clip_segment(a: np.ndarray, b: np.ndarray, half_cone_deg: float) -> tuple | None:
     """Clip a head-frame segment to the view pyramid (near plane 0.1 m along +y, sides at
     ±half_cone). Returns the clipped end points or ``None`` if nothing is inside (Liang–Barsky)."""
@@ -256,19 +241,46 @@ def see_many(
     # the noise of everything seen, per observer in turn, drawn at once: per observer one draw
     # per group (the objects, each seen player, the lines), the same numbers group by group
     n_seen = seen_any.sum(axis=1)
-    n_lines = np.zeros(n_obs, dtype=int) if keep is None else keep.sum(axis=1)
+    n_lines = np.zeros(n_obs, dtype=np.intp) if keep is None else keep.sum(axis=1)
     sizes = 3 * (n_obj + n_parts * n_seen + 2 * n_lines)
-    z = rng.standard_normal(int(sizes.sum())) if noise else np.zeros(0)
-    offsets = np.concatenate([[0], np.cumsum(sizes)]).tolist()
+    starts = np.cumsum(sizes) - sizes  # each observer's first number
+    z = rng.standard_normal(int(sizes.sum())) if noise else None
+    # the objects (all of them are in the draw, seen or not)
+    obj = pol_all[:, :n_obj]
+    if z is not None:
+        obj = _add_noise(obj, z[starts[:, None] + _OBJECT_DRAW].reshape(n_obs, 3, n_obj))
+    # the seen players' parts, in observer order, one group of n_parts per player
+    sk, sj = np.nonzero(seen_any)
+    parts = pol_all[:, n_obj:n_pts].reshape(n_obs, n_players, n_parts, 3)[sk, sj]
+    first_seen = np.cumsum(n_seen) - n_seen
+    if z is not None and len(sk):
+        rank = np.arange(len(sk)) - np.repeat(first_seen, n_seen)
+        base = starts[sk] + 3 * n_obj + 3 * n_parts * rank
+        draw = z[base[:, None] + np.arange(3 * n_parts)].reshape(len(sk), 3, n_parts)
+        parts = _add_noise(parts, draw)
+    # the lines' end points, one group per observer (its 2 n_lines rows)
+    lines = np.zeros((0, 2, 3))
+    first_line = np.cumsum(n_lines) - n_lines
+    if keep is not None:
+        lk, ll = np.nonzero(keep)
+        lines = pol_all[:, n_pts:].reshape(n_obs, -1, 2, 3)[lk, ll]
+        if z is not None and len(lk):
+            rank = np.arange(len(lk)) - np.repeat(first_line, n_lines)
+            base = starts[lk] + 3 * n_obj + 3 * n_parts * n_seen[lk]
+            rows = 2 * n_lines[lk]  # the group's rows: number c of row r is base + c rows + r
+            r = 2 * rank[:, None] + np.arange(2)  # (lines, 2)
+            idx = base[:, None, None] + np.arange(3)[None, :, None] * rows[:, None, None]
+            draw = z[idx + r[:, None, :]]  # (lines, 3 components, 2 ends)
+            lines = _add_noise(lines, draw)
     return [
         _assemble(
             o,
-            pol_all[k],
-            vis_all[k],
+            obj[k],
+            vis_all[k, :n_obj],
+            parts[first_seen[k] : first_seen[k] + n_seen[k]],
+            sj[first_seen[k] : first_seen[k] + n_seen[k]],
             pvis_all[k],
-            np.flatnonzero(seen_any[k]),
-            None if keep is None else keep[k],
-            z[offsets[k] : offsets[k + 1]] if noise else z,
+            lines[first_line[k] : first_line[k] + n_lines[k]],
             ball_pos,
             players,
             config,
@@ -277,54 +289,42 @@ def see_many(
     ]
 
 
+_OBJECT_DRAW = np.arange(3 * len(_OBJECTS))
+
+
+def _add_noise(pol: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """``pol`` (..., n, 3) with SimSpark's noise from the standard normal numbers ``z``
+    (..., 3, n): per point, distance + σ_d z₀ × distance / 100, horizontal + σ_h z₁, vertical
+    + σ_v z₂, each ``0.0 + sigma * z`` as numpy computes ``normal(0.0, sigma)``."""
+    zz = z * _NOISE_SIGMA
+    zz += 0.0
+    out = pol.copy()
+    out[..., 0] += zz[..., 0, :] * out[..., 0] / 100.0
+    out[..., 1] += zz[..., 1, :]
+    out[..., 2] += zz[..., 2, :]
+    return out
+
+
 def _assemble(
     o: Observer,
-    pol_all: np.ndarray,
-    vis_all: np.ndarray,
-    pvis_all: np.ndarray,
+    objects_pol: np.ndarray,
+    objects_seen: np.ndarray,
+    parts_pol: np.ndarray,
     seen: np.ndarray,
-    keep: np.ndarray | None,
-    z: np.ndarray,
+    pvis_all: np.ndarray,
+    lines: np.ndarray,
     ball_pos: np.ndarray,
     players: list[tuple[str, int, np.ndarray]],
     config: VisionConfig,
 ) -> Vision:
-    """One observer's percept from its share of :func:`see_many`'s arrays and its noise ``z``."""
-    noise = config.noise
-    n_obj = len(_OBJECTS)
-    n_parts = len(PLAYER_PARTS)
-    n_pts = n_obj + n_parts * len(players)
+    """One observer's percept from its share of :func:`see_many`'s arrays (noise applied)."""
     names = _OBJECT_NAMES
-    pol = pol_all[:n_obj]
-    used = 0
-    if noise:
-        pol, used = _noisy_from(pol, z, used)
-    objects = {names[i]: pol[i] for i in np.flatnonzero(vis_all[:n_obj])}
-
-    # the seen players' parts: one noise group per player, all players at once
-    ppol = pol_all[n_obj:n_pts].reshape(len(players), n_parts, 3)[seen]
-    if noise and len(seen):
-        n = n_parts * len(seen)
-        zz = z[used : used + 3 * n].reshape(len(seen), 3, n_parts) * _NOISE_SIGMA
-        zz += 0.0
-        ppol = ppol.copy()
-        ppol[:, :, 0] += zz[:, 0] * ppol[:, :, 0] / 100.0
-        ppol[:, :, 1] += zz[:, 1]
-        ppol[:, :, 2] += zz[:, 2]
-        used += 3 * n
+    objects = {names[i]: objects_pol[i] for i in np.flatnonzero(objects_seen)}
     seen_players: list[SeenPlayer] = []
-    for j, parts, shown in zip(seen.tolist(), ppol, pvis_all[seen].tolist(), strict=True):
+    for j, pol, shown in zip(seen.tolist(), parts_pol, pvis_all[seen].tolist(), strict=True):
         team, unum, _ = players[j]
-        visible = {name: parts[i] for i, name in enumerate(PLAYER_PARTS) if shown[i]}
+        visible = {name: pol[i] for i, name in enumerate(PLAYER_PARTS) if shown[i]}
         seen_players.append(SeenPlayer(team, unum, visible))
-
-    lines = np.zeros((0, 2, 3))
-    if keep is not None and keep.any():
-        lines = pol_all[n_pts:].reshape(-1, 2, 3)[keep]
-        if noise:
-            flat, used = _noisy_from(lines.reshape(-1, 3), z, used)
-            lines = flat.reshape(-1, 2, 3)
-
     vision = Vision(objects=objects, players=seen_players, lines=lines)
     if config.ground_truth:
         head_pos, head_rot, mirror = o.head_pos, o.head_rot, o.mirror
