@@ -184,7 +184,11 @@ def test_illegal_defence_on_a_real_server_as_on_serve(real_rcssserver3d):
 
 def test_touching_group_on_serve():
     """The touching group replayed on ``robocup-gym serve``: the player that joined two
-    touching team-mates is moved 0.4 m away from the group's centre."""
+    touching team-mates is moved 0.4 m away from the group's centre, to (−5.0, −0.64), or to
+    the next spot of the free-spot search (0.4 m further in x) where that one is taken: the
+    pair, put down from 0.4 m a cycle or two before, is still landing when the third lands
+    against it, and in about one replay in 70 on a loaded machine one of its robots' boxes
+    reaches into the first spot."""
     from robocup_gym.server.bench import start_server_process, stop_server_process
 
     proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time")
@@ -193,8 +197,9 @@ def test_touching_group_on_serve():
         x, y = touching_replay(agent_port, monitor_port, fouls)
     finally:
         stop_server_process(proc)
-    assert x == pytest.approx(-5.0, abs=0.1) and y == pytest.approx(-0.64, abs=0.05)
     assert (1, 1, 4) in {f[1:] for f in fouls}  # the monitors see a touching foul of left #4
+    assert y == pytest.approx(-0.64, abs=0.05)
+    assert x == pytest.approx(-5.0, abs=0.1) or x == pytest.approx(-4.6, abs=0.1)
 
 
 def test_touching_group_on_a_real_server(real_rcssserver3d):
