@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.backends.base import Backend, EpisodeSetup
-from robocup_gym.envs.observations import heading_frame, up_z
+from robocup_gym.envs.observations import heading_frame, in_heading_frame, up_z
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.fidelity import load_data
 from robocup_gym.sim.rotations import quat_multiply, yaw_quat
@@ -122,12 +122,11 @@ def facing_x(p: Perception) -> Perception:
     gt = p.ground_truth
     if gt is None:
         return p
-    c, s = heading = heading_frame(gt.torso_quat)
+    heading = heading_frame(gt.torso_quat)
     names = [n for n in _TURNED if getattr(gt, n) is not None]
     v = np.array([getattr(gt, n) for n in names], dtype=float)
-    out = v.copy()  # each (x, y) as in_heading_frame turns it: (c x + s y, c y - s x)
-    out[:, 0] = c * v[:, 0] + s * v[:, 1]
-    out[:, 1] = c * v[:, 1] - s * v[:, 0]
+    out = v.copy()
+    out[:, 0], out[:, 1] = in_heading_frame(heading, v[:, 0], v[:, 1])  # all at once
     turned = _shallow_copy(gt)
     for n, row in zip(names, out, strict=True):
         setattr(turned, n, row)
