@@ -124,14 +124,26 @@ def kick_landings() -> dict[int, dict[str, np.ndarray]]:
     }
 
 
-def _cost(landings: np.ndarray, distance_m: float, direction_deg: float) -> float:
-    """The median miss of ``landings`` against a command, in units of the tolerances, and the
-    cost of its falls."""
-    d, a, down = landings.T
+@functools.cache
+def _kicks_for(robot_type: int) -> tuple[tuple[CommandedKick, ...], np.ndarray | None]:
+    """The library's kicks made for ``robot_type`` and their landings on it, stacked (kick,
+    landing, (distance, direction, down)), for :func:`choose_kick`; ``None`` landings for a
+    type the table does not have."""
+    by_kick = kick_landings().get(robot_type)
+    if by_kick is None:
+        return (), None
+    kicks = tuple(k for k in kick_library() if robot_type in k.robot_types)
+    return kicks, np.stack([by_kick[k.key] for k in kicks])
+
+
+def _cost(landings: np.ndarray, distance_m: float, direction_deg: float) -> np.ndarray:
+    """The median miss of ``landings`` (..., landing, 3) against a command, in units of the
+    tolerances, and the cost of its falls: one number per set of landings."""
+    d, a, down = landings[..., 0], landings[..., 1], landings[..., 2]
     miss = ((d - distance_m) / (distance_m * KICK_DISTANCE_TOLERANCE)) ** 2 + (
         (a - direction_deg) / KICK_DIRECTION_TOLERANCE_DEG
     ) ** 2
-    return float(np.median(miss) + _FALL_COST * np.mean(down))
+    return np.median(miss, axis=-1) + _FALL_COST * np.mean(down, axis=-1)
 
 
 def commanded_kick(
@@ -179,20 +191,15 @@ def choose_kick(
             f"a kick command must be a positive finite distance (m) and a finite direction "
             f"(deg), got ({distance_m!r}, {direction_deg!r})"
         )
-    landings = kick_landings().get(robot_type)
+    kicks, landings = _kicks_for(robot_type)
     if landings is None:
         raise ValueError(f"commanded kicks exist for Nao types {TYPE_NUMBERS}, not {robot_type!r}")
-    best: tuple[float, CommandedKick, bool, np.ndarray] | None = None
-    for kick in kick_library():
-        if robot_type not in kick.robot_types:
-            continue
-        for mirrored in (direction_deg < 0.0, direction_deg >= 0.0):
-            rows = landings[kick.key] * (1.0, -1.0 if mirrored else 1.0, 1.0)
-            cost = _cost(rows, distance_m, direction_deg)
-            if best is None or cost < best[0]:
-                best = (cost, kick, mirrored, rows)
-    assert best is not None
-    return best[1], best[2], best[3]
+    # every kick played both ways, the way the command's side favours first (ties go to it)
+    ways = (direction_deg < 0.0, direction_deg >= 0.0)
+    rows = np.stack([landings * (1.0, -1.0 if m else 1.0, 1.0) for m in ways], axis=1)
+    best = int(np.argmin(_cost(rows, distance_m, direction_deg)))  # the first of the least
+    kick, way = divmod(best, len(ways))
+    return kicks[kick], ways[way], rows[kick, way]
 
 
 def measure_landings(
@@ -252,4 +259,5 @@ def write_landings(path: Path | None = None) -> Path:
     }
     out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
     kick_landings.cache_clear()
+    _kicks_for.cache_clear()
     return out
