@@ -33,12 +33,10 @@ from robocup_gym.soccer import game_v1, penalty_v1
 MIXED = (0, 1, 2, 3, 4, 0, 1, 2, 3, 4, 0)
 
 
-def _steps_per_s(env, steps: int, seed: int = 0) -> float:
-    """Steps per second (one step: every agent acts), random actions (skills: walk commands)."""
-    rng = np.random.default_rng(seed)
-    env.reset(seed=seed)
+def _random_steps(env, rng: np.random.Generator, steps: int) -> None:
+    """``steps`` steps of ``env`` (one step: every agent acts) with random actions (skills:
+    walk commands), starting a new episode where one ended."""
     skills = env.skills is not None
-    t0 = time.perf_counter()
     for _ in range(steps):
         if not env.agents:
             env.reset()
@@ -47,17 +45,32 @@ def _steps_per_s(env, steps: int, seed: int = 0) -> float:
             for a in acts.values():
                 a[3] = -1.0  # walk (kicks make robots fall: get-ups would dominate the figure)
         env.step(acts)
+
+
+def _steps_per_s(env, steps: int, seed: int = 0) -> float:
+    """Steps per second (one step: every agent acts), random actions (skills: walk commands)."""
+    rng = np.random.default_rng(seed)
+    env.reset(seed=seed)
+    t0 = time.perf_counter()
+    _random_steps(env, rng, steps)
     return steps / (time.perf_counter() - t0)
+
+
+def _moving_world(env):
+    """``env``'s world after a reset, its robots given constant random joint speeds (they
+    move, as in the game), to be stepped alone."""
+    world = env.game.world
+    env.reset(seed=0)
+    rng = np.random.default_rng(1)
+    for p in env.game.players:
+        world.command(p.index, 0.2 * rng.uniform(-1, 1, len(world.robots[p.index].model.joints)))
+    return world
 
 
 def physics_per_s(env, cycles: int) -> float:
     """Cycles per second of ``env``'s world stepped alone (no perception, no rules), its robots
     moving (also used by ``team_games.py``)."""
-    world = env.game.world
-    env.reset(seed=0)
-    rng = np.random.default_rng(1)
-    for p in env.game.players:  # the robots move, as in the game
-        world.command(p.index, 0.2 * rng.uniform(-1, 1, len(world.robots[p.index].model.joints)))
+    world = _moving_world(env)
     t0 = time.perf_counter()
     for _ in range(cycles):
         world.step()
@@ -72,21 +85,11 @@ def game_and_physics_per_s(game_env, physics_env, rounds: int, steps: int) -> tu
     their ratio holds."""
     rng = np.random.default_rng(0)
     game_env.reset(seed=0)
-    world = physics_env.game.world
-    physics_env.reset(seed=0)
-    motion = np.random.default_rng(1)
-    for p in physics_env.game.players:
-        world.command(p.index, 0.2 * motion.uniform(-1, 1, len(world.robots[p.index].model.joints)))
+    world = _moving_world(physics_env)
     game_s = physics_s = 0.0
     for _ in range(rounds):
         t0 = time.perf_counter()
-        for _ in range(steps):
-            if not game_env.agents:
-                game_env.reset()
-            acts = {a: rng.uniform(-1, 1, game_env.action_space(a).shape) for a in game_env.agents}
-            for a in acts.values():
-                a[3] = -1.0  # walk (kicks make robots fall: get-ups would dominate the figure)
-            game_env.step(acts)
+        _random_steps(game_env, rng, steps)
         t1 = time.perf_counter()
         for _ in range(steps * 10):
             world.step()
