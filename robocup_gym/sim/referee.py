@@ -554,35 +554,39 @@ class Referee(RobotFouls):
         ):
             self.host.set_ball((float(xy[0]), float(xy[1]), BALL_RADIUS), (0.0, 0.0, 0.0))
 
-    def _body_x_extent(self, index: int) -> tuple[float, float]:
+    def _parts_extents(self) -> tuple[np.ndarray, ...]:
+        """Per robot of the world (by index), from all its parts at once: the smallest and the
+        largest x (m), whether any part and whether every part is inside the centre circle. A
+        move of one robot changes only that robot's entries."""
         w = self.host.world
-        xs = w.body_frames(index)[0][:, 0]
-        return float(xs.min()), float(xs.max())
+        xy = w.every_body_frame()[0][:, :2]
+        starts = np.cumsum([0] + [len(r.model.bodies) for r in w.robots[:-1]])
+        in_circle = np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS
+        return (
+            np.minimum.reduceat(xy[:, 0], starts),
+            np.maximum.reduceat(xy[:, 0], starts),
+            np.logical_or.reduceat(in_circle, starts),
+            np.logical_and.reduceat(in_circle, starts),
+        )
 
     def _keep_in_halves(self) -> None:
+        if not self.players:
+            return
+        lo, hi, _, _ = self._parts_extents()
         for p in self.players:
-            lo, hi = self._body_x_extent(p.index)
-            if p.side == "left" and hi > 0:
+            if p.side == "left" and hi[p.index] > 0:
                 self._move_x(p, -FREE_KICK_MOVE)
-            elif p.side == "right" and lo < 0:
+            elif p.side == "right" and lo[p.index] < 0:
                 self._move_x(p, FREE_KICK_MOVE)
 
     def _kickoff_clear(self, kicker: str) -> None:
         if not self.players:
             return
-        w = self.host.world
-        # every robot's parts at once (a move below changes only the moved robot's parts)
-        xy = w.every_body_frame()[0][:, :2]
-        starts = np.cumsum([0] + [len(r.model.bodies) for r in w.robots[:-1]])
-        lo_all = np.minimum.reduceat(xy[:, 0], starts)
-        hi_all = np.maximum.reduceat(xy[:, 0], starts)
-        in_circle_all = np.hypot(xy[:, 0], xy[:, 1]) < CENTRE_CIRCLE_RADIUS
-        any_in = np.logical_or.reduceat(in_circle_all, starts)
-        all_in = np.logical_and.reduceat(in_circle_all, starts)
+        lo, hi, any_in, all_in = self._parts_extents()
         for p in self.players:
             i = p.index
             own = -1.0 if p.side == "left" else 1.0
-            into_other = hi_all[i] > 0 if p.side == "left" else lo_all[i] < 0
+            into_other = hi[i] > 0 if p.side == "left" else lo[i] < 0
             if p.side != kicker:
                 if into_other or any_in[i]:
                     self._move_x(p, own * FREE_KICK_MOVE)
