@@ -22,7 +22,7 @@ import numpy as np
 
 from robocup_gym.protocol.constants import PLAY_MODES
 from robocup_gym.robot.nao import NaoModel, nao_model
-from robocup_gym.robot.types import TYPE_NUMBERS
+from robocup_gym.robot.types import is_type_number
 from robocup_gym.sim.field import FIELD_LENGTH, FIELD_WIDTH
 from robocup_gym.sim.physics import BALL_REST_Z
 
@@ -418,9 +418,7 @@ class EnvConfig:
             f"robot_start_pos must be (x, y) in m, got {self.robot_start_pos!r}",
         )
         need(
-            isinstance(self.robot_type, int | np.integer)
-            and not isinstance(self.robot_type, bool)
-            and self.robot_type in TYPE_NUMBERS,
+            is_type_number(self.robot_type),
             f"robot_type must be one of the integers 0, 1, 2, 3, 4, got {self.robot_type!r}",
         )
         for name, pos in (

@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 #: Max speed of every hinge except the ankle joints: 351.77 °/s in rad/s, computed in the rsg
 #: with π = 3.14159265.
 DEFAULT_MAX_SPEED = 3.14159265 * 351.77 / 180.0
@@ -66,6 +68,16 @@ ROBOT_TYPES: tuple[RobotType, ...] = (
 
 TYPE_NUMBERS: tuple[int, ...] = tuple(t.index for t in ROBOT_TYPES)
 """The Nao's robot type numbers, 0–4."""
+
+
+def is_type_number(value: object) -> bool:
+    """Whether ``value`` is a Nao type number: an integer (Python's or NumPy's, not a bool)
+    among :data:`TYPE_NUMBERS`."""
+    return (
+        isinstance(value, int | np.integer)
+        and not isinstance(value, bool)
+        and int(value) in TYPE_NUMBERS
+    )
 
 
 def robot_type(index: int) -> RobotType:

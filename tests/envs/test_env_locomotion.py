@@ -95,6 +95,31 @@ def test_walking_at_the_command_earns_the_tracking_reward():
     assert down["fall"] == -10.0 and down["alive"] == 0.0
 
 
+def test_progress_pays_the_speed_along_the_start_heading():
+    assert _terms()["progress"] == 0.0  # Walk: no weight
+    run = WalkConfig(w_progress=3.0)
+    assert _terms(run, progress=0.8)["progress"] == pytest.approx(2.4)
+    assert _terms(run, progress=-0.2)["progress"] == pytest.approx(-0.6)  # backwards costs
+    with pytest.raises(EnvConfigError, match="w_progress"):
+        WalkConfig(w_progress=float("nan")).validate()
+
+
+def test_progress_is_measured_along_the_heading_the_episode_started_with():
+    """The torso's velocity projected on its heading at the first step: turning away from it
+    earns less, whatever the heading is now."""
+    env = Walk(w_progress=1.0, command_change_steps=0)
+    env.reset(seed=0, options={"velocity_command": (0.5, 0.0, 0.0)})
+    env.step(np.zeros(env.action_space.shape))
+    c, s = env._start_heading
+    for _ in range(30):
+        info = env.step(np.zeros(env.action_space.shape))[4]
+        v = env.ground_truth.torso_vel
+        assert info["reward_terms"]["progress"] == pytest.approx(v[0] * c + v[1] * s)
+    env.reset(seed=1, options={"velocity_command": (0.5, 0.0, 0.0)})
+    assert env._start_heading is None  # read again in each episode
+    env.close()
+
+
 def test_feet_in_contact_as_the_gait_clock_asks_earn_the_phase_reward():
     w = WalkConfig().w_feet_phase
     # φ = 0.1: the left foot's swing (φ within 0.2 of 0.25), the right foot's stance
@@ -592,6 +617,26 @@ def test_the_locomotion_benchmarks_print_json_last(script, run_benchmark):
         assert res["front"]["cycles_to_up_median"] <= 80
         assert res["meets_target"] == (min(res[s]["success_rate"] for s in res["sides"]) >= 0.9)
         assert res["pose_from"] == 20 and res["robot_type"] == 0
+
+
+def test_the_walk_benchmark_measures_the_omnidirectional_targets(run_benchmark):
+    """``benchmarks/walk.py --tracking``: the reference gait alone (zero actions) falls short of
+    0.8 m/s, 0.4 m/s sideways and 60 deg/s (its largest amplitudes give ~0.55, ~0.3 and ~33),
+    so the target is not met; told to stand after 4 s it stands."""
+    res, _ = run_benchmark("walk.py", "zero", "--episodes", 1, "--tracking", timeout=300)
+    track = res["tracking"]
+    assert set(track) == {"forward", "sideways", "turn", "stop"}
+    assert 0.4 < track["forward"]["forward_speed_mps"] < 0.7
+    assert 20.0 < track["turn"]["turn_rate_deg_s"] < 45.0
+    assert track["turn"]["error_fraction"] == pytest.approx(
+        abs(track["turn"]["turn_rate_deg_s"] - 60.0) / 60.0
+    )
+    side = track["sideways"]
+    assert side["error_fraction"] == pytest.approx(
+        math.hypot(side["forward_speed_mps"], side["left_speed_mps"] - 0.4) / 0.4
+    )
+    assert res["tracking_error_fraction_max"] > 0.1 and res["stop_speed_mps"] < 0.05
+    assert res["meets_tracking_target"] is False
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc (Linux)")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from robocup_gym.robot.nao import nao_model, wire_perceptor_order
-from robocup_gym.robot.types import robot_type
+from robocup_gym.robot.types import is_type_number, robot_type
 from robocup_gym.sim.engines.mujoco.scene import RobotSlot, scene_xml
 
 SOLE = {0: 0.385, 1: 0.42164, 2: 0.385, 3: 0.440737, 4: 0.385}
@@ -61,6 +61,12 @@ def test_inertias_match_spec_table():
     assert m.body("torso").inertia == pytest.approx((4.300e-3, 4.300e-3, 2.029e-3), rel=1e-3)
     assert m.body("neck").inertia == pytest.approx((4.498e-5, 4.498e-5, 5.400e-6), rel=1e-3)
     assert m.body("rshank").inertia == pytest.approx((3.188e-4, 3.469e-4, 2.119e-4), rel=1e-3)
+
+
+def test_type_numbers_are_integers_0_to_4():
+    """The one check of a Nao type number (EnvConfig's robot_type, GetUp's script_robot_type)."""
+    assert all(is_type_number(t) for t in (0, 4, np.int64(2)))
+    assert not any(is_type_number(t) for t in (5, -1, 2.0, True, "1", None))
 
 
 def test_bad_type():

@@ -25,7 +25,7 @@ from robocup_gym.backends.base import RobotPose
 from robocup_gym.envs.base_env import BaseEnv
 from robocup_gym.envs.config import BALL_REST_Z, ActionMode, EnvConfig, EnvConfigError
 from robocup_gym.envs.observations import up_z
-from robocup_gym.robot.types import TYPE_NUMBERS
+from robocup_gym.robot.types import is_type_number
 from robocup_gym.sim.kinematics import resting_torso_height
 from robocup_gym.sim.rotations import axis_angle_quat, quat_multiply
 
@@ -290,9 +290,7 @@ class GetUpConfig(EnvConfig):
                 f"reference_reach_deg must be > 0 deg, got {self.reference_reach_deg!r}"
             )
         st = self.script_robot_type
-        if st is not None and not (
-            isinstance(st, int | np.integer) and not isinstance(st, bool) and st in TYPE_NUMBERS
-        ):  # as EnvConfig checks robot_type
+        if st is not None and not is_type_number(st):
             raise EnvConfigError(
                 f"script_robot_type must be one of the integers 0, 1, 2, 3, 4 or None, got {st!r}"
             )

@@ -124,6 +124,10 @@ class WalkConfig(EnvConfig):
     """Weight of exp(−|v_xy − command_xy|² / σ) per step."""
     w_tracking_turn: float = 0.8
     """Weight of exp(−(ω − command_ω)² / σ) per step (ω in rad/s)."""
+    w_progress: float = 0.0
+    """Weight of the torso's speed along the heading it started the episode with, m/s (the
+    distance covered that way: FC Portugal's running reward); 0 in Walk, which tracks the
+    command instead."""
     w_upright: float = 0.3
     """Weight of the torso's up axis z component (1 upright)."""
     w_feet_phase: float = 0.5
@@ -191,8 +195,9 @@ class WalkConfig(EnvConfig):
                 "reference_gait=False"
             )
         for name in (
-            "w_tracking_linear", "w_tracking_turn", "w_upright", "w_feet_phase", "w_feet_air_time",
-            "w_action_rate", "w_joint_speed", "w_vertical_speed", "w_alive", "fall_penalty",
+            "w_tracking_linear", "w_tracking_turn", "w_progress", "w_upright", "w_feet_phase",
+            "w_feet_air_time", "w_action_rate", "w_joint_speed", "w_vertical_speed", "w_alive",
+            "fall_penalty",
         ):  # fmt: skip
             if not math.isfinite(getattr(self, name)):
                 raise EnvConfigError(f"{name} must be finite, got {getattr(self, name)!r}")
@@ -288,6 +293,7 @@ def walk_reward_terms(
     fallen: bool,
     phase: float = 0.0,
     feet_down: tuple[bool, bool] | None = None,
+    progress: float = 0.0,
 ) -> dict[str, float]:
     """Walk's reward as named terms (already weighted), for one step.
 
@@ -303,6 +309,7 @@ def walk_reward_terms(
         phase: The gait clock's phase in [0, 1).
         feet_down: Whether the (left, right) foot touches the ground; ``None``: no
             ``feet_phase`` term (0).
+        progress: The torso's speed along its heading at the episode's start, m/s.
     """
     c = config
     lin_err = float((velocity[0] - command[0]) ** 2 + (velocity[1] - command[1]) ** 2)
@@ -325,6 +332,7 @@ def walk_reward_terms(
     return {
         "tracking_linear": c.w_tracking_linear * math.exp(-lin_err / c.tracking_sigma),
         "tracking_turn": c.w_tracking_turn * math.exp(-turn_err / turn_sigma),
+        "progress": c.w_progress * float(progress),
         "upright": c.w_upright * float(up_z),
         "feet_phase": c.w_feet_phase * feet_phase,
         "feet_air_time": c.w_feet_air_time * air,
@@ -356,6 +364,7 @@ class Walk(BaseEnv):
     ====================  ===========  ==========================================================
     ``tracking_linear``   1.5          exp(−|v_xy − cmd_xy|² / σ), heading frame, σ = 0.1
     ``tracking_turn``     0.8          exp(−(ω_z − cmd_ω)² / σ_turn), rad/s, σ_turn = σ
+    ``progress``          0            speed along the heading the episode started with, m/s
     ``upright``           0.3          world z of the torso's up axis
     ``feet_phase``        0.5          share of feet in contact as the gait clock asks
     ``feet_air_time``     1.0          Σ (air time − swing share / f) of feet touching down
@@ -405,6 +414,7 @@ class Walk(BaseEnv):
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
         self._forward = [0.0, 0.0, 0]  # sum of forward speeds, of |forward error|, steps
+        self._start_heading: tuple[float, float] | None = None  # read at the first step
         self.gait_clock = (float(self.np_random.uniform()), float(self.config.gait_frequency_hz))
         self._phase_acted = 0.0
         self._gait_level = 0.0
@@ -458,6 +468,9 @@ class Walk(BaseEnv):
         v = gt.torso_vel if gt.torso_vel is not None else np.zeros(3)
         w = gt.torso_ang_vel if gt.torso_ang_vel is not None else np.zeros(3)
         forward, left = in_heading_frame(heading_frame(gt.torso_quat), v[0], v[1])
+        if self._start_heading is None:
+            self._start_heading = heading_frame(gt.torso_quat)
+        progress = v[0] * self._start_heading[0] + v[1] * self._start_heading[1]
         velocity = np.array([forward, left, v[2]])
         upright = up_z(gt.torso_quat)
         touchdowns = []
@@ -490,6 +503,7 @@ class Walk(BaseEnv):
             fallen=self.fallen,
             phase=self._phase_acted,
             feet_down=(down[0], down[1]),
+            progress=float(progress),
         )
         self._prev_action = np.array(action, dtype=float)
         self._forward[0] += float(velocity[0])
