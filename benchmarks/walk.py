@@ -197,7 +197,7 @@ def main(argv: list[str] | None = None) -> dict:
     forward = args.forward
     if forward is not None and not (math.isfinite(forward) and forward > 0.0):
         raise SystemExit(f"--forward must be a speed above 0 m/s, got {forward}")
-    env_id = "RobocupGym/Run-v0" if args.task == "run" else "RobocupGym/Walk-v0"
+    env_id = "RobocupGym/Run-v1" if args.task == "run" else "RobocupGym/Walk-v0"
     env, act = benchmark_policy_and_env(args, env_id)
     if forward is None:
         forward = 1.5 if isinstance(env.unwrapped, Run) else 0.5

@@ -46,6 +46,7 @@ from robocup_gym.envs.tasks.long_kick import (
     LONG_KICK_KEYFRAMES,
     LONG_KICK_KEYFRAMES_BY_TYPE,
 )
+from robocup_gym.envs.tasks.run import SPRINT_OPTIONS
 
 __all__ = [
     "COMPONENTS",
@@ -83,6 +84,7 @@ _ENTRY_POINTS = {
     "RobocupGym/VelocityKick-v0": "robocup_gym.envs.tasks.velocity_kick:VelocityKick",
     "RobocupGym/Walk-v0": "robocup_gym.envs.tasks.walk:Walk",
     "RobocupGym/Run-v0": "robocup_gym.envs.tasks.run:Run",
+    "RobocupGym/Run-v1": "robocup_gym.envs.tasks.run:Run",
     "RobocupGym/GetUp-v0": "robocup_gym.envs.tasks.getup:GetUp",
     "RobocupGym/GetUp-v1": "robocup_gym.envs.tasks.getup:GetUp",
     "RobocupGym/TargetKick-v0": "robocup_gym.envs.tasks.target_kick:TargetKick",
@@ -95,6 +97,7 @@ REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 """Every Gymnasium id this package registers."""
 _ID_OPTIONS: dict[str, dict] = {
     "RobocupGym/GetUp-v1": {"self_collisions": True},
+    "RobocupGym/Run-v1": SPRINT_OPTIONS,
     "RobocupGym/TargetKick-v1": {"kick_per_command": True, "ball_spawn_noise": 0.01},
     "RobocupGym/LongKick-v1": {
         "kick_keyframes": LONG_KICK_KEYFRAMES,

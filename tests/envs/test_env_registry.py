@@ -22,6 +22,7 @@ def test_registry_lists_the_tasks():
         "RobocupGym/VelocityKick-v0",
         "RobocupGym/Walk-v0",
         "RobocupGym/Run-v0",
+        "RobocupGym/Run-v1",
         "RobocupGym/GetUp-v0",
         "RobocupGym/GetUp-v1",
         "RobocupGym/TargetKick-v0",

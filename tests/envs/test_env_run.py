@@ -20,11 +20,43 @@ def test_run_is_a_task_of_the_cli_with_walks_training_settings():
     from robocup_gym.train.config import TASK_ALGO_DEFAULTS
     from robocup_gym.train.tasks import resolve_task
 
-    assert resolve_task("run") == "RobocupGym/Run-v0"
-    assert (
-        TASK_ALGO_DEFAULTS[("RobocupGym/Run-v0", "ppo")]
-        == TASK_ALGO_DEFAULTS[("RobocupGym/Walk-v0", "ppo")]
-    )
+    assert resolve_task("run") == "RobocupGym/Run-v1"
+    for version in ("v0", "v1"):
+        assert (
+            TASK_ALGO_DEFAULTS[(f"RobocupGym/Run-{version}", "ppo")]
+            == TASK_ALGO_DEFAULTS[("RobocupGym/Walk-v0", "ppo")]
+        )
+
+
+@needs_ode
+def test_run_v1_pays_the_distance_run_along_its_start_heading():
+    """Run-v1 (:data:`SPRINT_OPTIONS`): always told 1.5 m/s straight ahead, paid 3 × the speed
+    along the start heading and nothing for tracking; v0 keeps Walk's tracking terms."""
+    import gymnasium as gym
+
+    from robocup_gym.envs.tasks.run import SPRINT_OPTIONS
+
+    env = gym.make("RobocupGym/Run-v1")
+    u = env.unwrapped
+    for key, value in SPRINT_OPTIONS.items():
+        assert getattr(u.config, key) == value, key
+    try:
+        for seed in range(2):
+            env.reset(seed=seed)
+            np.testing.assert_array_equal(u.velocity_command, [1.5, 0.0, 0.0])
+            start = u.torso_pos.copy()
+            progress = 0.0
+            for _ in range(100):
+                terms = env.step(np.zeros(env.action_space.shape))[4]["reward_terms"]
+                assert terms["tracking_linear"] == 0.0 and terms["tracking_turn"] == 0.0
+                progress += terms["progress"]
+            # 3 × the speed each 20 ms step: 150 × the distance run along the start heading
+            run = (u.torso_pos - start)[0]  # the robot starts facing +x
+            assert run > 0.5 and progress / 150.0 == pytest.approx(run, rel=0.05)
+    finally:
+        env.close()
+    v0 = gym.make("RobocupGym/Run-v0").unwrapped.config
+    assert v0.w_progress == 0.0 and v0.w_tracking_linear > 0.0
 
 
 def test_every_default_that_differs_from_walks_is_in_the_docstring_table():
