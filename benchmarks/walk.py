@@ -10,6 +10,9 @@ as the run's episodes (10 s by default), with the command held fixed:
 * sideways 0.3 m/s to the left: mean error of the leftward speed;
 * turning 30 deg/s: mean error of the turn rate.
 
+A task that only ever runs straight ahead (``Run-v1``: no sideways or turn commands) is
+measured forward alone.
+
 ``--tracking`` measures the omnidirectional walk's targets instead: forward 0.8 m/s,
 sideways 0.4 m/s, turning 60 deg/s (each within 10 % of the command: the planar velocity's
 error, drift included, over the commanded speed; the turn rate's over the commanded rate;
@@ -202,6 +205,13 @@ def main(argv: list[str] | None = None) -> dict:
     if forward is None:
         forward = 1.5 if isinstance(env.unwrapped, Run) else 0.5
     commands = dict(COMMANDS, forward=(forward, 0.0, 0.0))
+    config = env.unwrapped.config
+    sprint = tuple(config.sideways_speed_range) == (0.0, 0.0) and tuple(config.turn_rate_range) == (
+        0.0,
+        0.0,
+    )
+    if sprint:  # a task that only ever runs straight ahead (Run-v1): forward alone
+        commands = {"forward": commands["forward"]}
     out: dict = {
         "policy": args.policy,
         "episodes_per_command": args.episodes,
@@ -227,8 +237,9 @@ def main(argv: list[str] | None = None) -> dict:
         env.close()
     out["forward_speed_mps"] = out["forward"]["forward_speed_mps"]
     out["falls"] = out["forward"]["falls"]
-    out["sideways_error_mps"] = abs(out["sideways"]["left_speed_mps"] - COMMANDS["sideways"][1])
-    out["turn_error_deg_s"] = abs(out["turn"]["turn_rate_deg_s"] - COMMANDS["turn"][2])
+    if not sprint:
+        out["sideways_error_mps"] = abs(out["sideways"]["left_speed_mps"] - COMMANDS["sideways"][1])
+        out["turn_error_deg_s"] = abs(out["turn"]["turn_rate_deg_s"] - COMMANDS["turn"][2])
     out["forward_command_mps"] = forward
     out["meets_target"] = out["forward_speed_mps"] >= forward and out["falls"] == 0
     print(json.dumps(out))

@@ -123,10 +123,11 @@ def test_zero_actions_run_faster_than_walks_reference_gait():
 def test_the_walk_benchmark_runs_run_at_its_own_forward_command(run_benchmark):
     """``benchmarks/walk.py zero --task run``: Run's gait alone, forward at Run's default
     command (1.5 m/s): it moves forward, short of the command (and falls now and then: the
-    policy over it learns balance)."""
+    policy over it learns balance). Run-v1 only runs straight ahead: forward alone is measured."""
     res, lines = run_benchmark("walk.py", "zero", "--task", "run", "--episodes", 1, timeout=300)
     assert res["forward_command_mps"] == 1.5
     assert any("command (1.5, 0.0, 0.0)" in line for line in lines)
+    assert "sideways" not in res and "turn" not in res
     assert 0.3 < res["forward_speed_mps"] < 1.5 and res["meets_target"] is False
 
 

@@ -66,7 +66,7 @@ def test_the_get_up_lifts_the_robot_within_80_cycles(side):
 def test_a_shipped_policy_runs_in_the_environment_it_was_exported_with():
     """Every recorded option, not today's task defaults: a later change of a default must not
     change what a shipped policy sees or does."""
-    for name in ("get-up", "walk"):
+    for name in ("get-up", "walk", "run"):
         policy = pretrained_policy(name)
         meta = policy.metadata
         env = pretrained_env(policy, "mujoco")
@@ -176,6 +176,32 @@ def test_the_shipped_walk_runs_on_the_nao_with_toes():
         assert np.abs(u.perception.joint_angles_deg[toes]).max() < 5.0
     finally:
         env.close()
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
+def test_the_shipped_run_runs_straight_ahead_at_over_a_metre_a_second():
+    """The shipped Run policy on ODE (Nao type 0 and type 4, whose toes it leaves at rest): 4 s
+    from a standing start cover more than 4 m along the start heading, drifting left by less
+    than 0.4 × that, and it is still up; the walk's fastest is ~0.55 m/s."""
+    assert "run" in pretrained_names()
+    meta = describe("run")
+    assert meta["env_config"]["w_progress"] > 0.0 and meta["env_config"]["reference_gait"]
+    policy = pretrained_policy("run")
+    for robot_type, seeds in ((0, (0, 1)), (4, (0,))):
+        env = pretrained_env(policy, "ode", {"robot_type": robot_type})
+        u = env.unwrapped
+        try:
+            for seed in seeds:
+                obs, _ = env.reset(seed=seed)
+                start = u.torso_pos.copy()
+                for _ in range(200):
+                    obs, _, terminated, _, _ = env.step(policy(obs))
+                    assert not terminated, f"fell (type {robot_type}, seed {seed})"
+                moved = u.torso_pos - start  # the robot starts facing +x
+                # (it drifts to its left: ~0.3 m/s over 10 s runs)
+                assert moved[0] > 4.0 and abs(moved[1]) < 0.4 * moved[0], (robot_type, seed, moved)
+        finally:
+            env.close()
 
 
 def _yaw(env) -> float:
