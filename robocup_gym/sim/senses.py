@@ -40,7 +40,7 @@ import numpy as np
 from robocup_gym.sim.referee import BEAM_MODES, PAUSED_MODES
 from robocup_gym.sim.referee_fouls import FOULS_PAUSED_MODES
 from robocup_gym.sim.self_collision import SelfCollisions
-from robocup_gym.sim.vision import CALIBRATION_ERROR_M, Observer, see, see_many
+from robocup_gym.sim.vision import CALIBRATION_ERROR_M, Observer, see_many
 from robocup_gym.types import GameState, HeardMessage, Perception, Vision
 
 __all__ = ["HEARING_RANGE_M", "PAUSED_MODES", "SAY_MAX_CHARS", "AgentState", "Senses"]
@@ -259,21 +259,7 @@ class Senses:
         seeing = [
             i for i in indices if (c := self.robot(i).perception_counter) % interval == 0 and c > 0
         ]
-        visions = {}
-        if seeing:
-            observers = []
-            for i in seeing:
-                head_pos, head_rot = self._head_pose(i)
-                r = self.robot(i)
-                observers.append(Observer(head_pos, head_rot, r.calibration, r.team == "right"))
-            seen = see_many(
-                observers,
-                ball_pos=self.ball_position(),
-                players=self._seen_players(),
-                rng=self.rng,
-                config=self.vision_config,
-            )
-            visions = dict(zip(seeing, seen, strict=True))
+        visions = dict(zip(seeing, self._visions(seeing), strict=True)) if seeing else {}
         return [
             self.perceive(i, vision=i in visions, ground_truth=ground_truth, _vision=visions.get(i))
             for i in indices
@@ -337,16 +323,20 @@ class Senses:
 
     def vision(self, index: int = 0):
         """The ``See`` percept of robot ``index`` for the current state (ignores the interval)."""
-        r = self.robot(index)
-        players = self._seen_players()
-        head_pos, head_rot = self._head_pose(index)
-        return see(
-            head_pos=head_pos,
-            head_rot=head_rot,
+        return self._visions([index])[0]
+
+    def _visions(self, indices: Sequence[int]) -> list[Vision]:
+        """The ``See`` percepts of robots ``indices`` for the current state, computed together
+        (:func:`~robocup_gym.sim.vision.see_many`; the noise drawn robot after robot)."""
+        observers = []
+        for i in indices:
+            head_pos, head_rot = self._head_pose(i)
+            r = self.robot(i)
+            observers.append(Observer(head_pos, head_rot, r.calibration, r.team == "right"))
+        return see_many(
+            observers,
             ball_pos=self.ball_position(),
-            players=players,
-            calibration=r.calibration,
+            players=self._seen_players(),
             rng=self.rng,
             config=self.vision_config,
-            mirror=r.team == "right",
         )
