@@ -467,9 +467,10 @@ class Walk(BaseEnv):
         gt = self.ground_truth
         v = gt.torso_vel if gt.torso_vel is not None else np.zeros(3)
         w = gt.torso_ang_vel if gt.torso_ang_vel is not None else np.zeros(3)
-        forward, left = in_heading_frame(heading_frame(gt.torso_quat), v[0], v[1])
+        heading = heading_frame(gt.torso_quat)
+        forward, left = in_heading_frame(heading, v[0], v[1])
         if self._start_heading is None:
-            self._start_heading = heading_frame(gt.torso_quat)
+            self._start_heading = heading
         progress = v[0] * self._start_heading[0] + v[1] * self._start_heading[1]
         velocity = np.array([forward, left, v[2]])
         upright = up_z(gt.torso_quat)
