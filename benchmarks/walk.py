@@ -133,11 +133,7 @@ def tracking(env, act, episodes: int, seed: int) -> dict:
         worst = max(worst, res["error_fraction"])
         falls += res["falls"]
         out["tracking"][name] = res
-        print(
-            f"{name:9s} command {command}: forward {res['forward_speed_mps']:+.3f} m/s, left "
-            f"{res['left_speed_mps']:+.3f} m/s, turn {res['turn_rate_deg_s']:+.1f} deg/s "
-            f"(error {100 * res['error_fraction']:.0f} %), falls {res['falls']}/{episodes}"
-        )
+        print(_line(name, command, res, f" (error {100 * error:.0f} %)"))
     stop = run(
         env,
         act,
@@ -160,6 +156,15 @@ def tracking(env, act, episodes: int, seed: int) -> dict:
         worst <= TRACKING_TOLERANCE and speed < STOP_SPEED_MPS and falls == 0
     )
     return out
+
+
+def _line(name: str, command, res: dict, extra: str = "") -> str:
+    """One command's result as the benchmark prints it."""
+    return (
+        f"{name:9s} command {command}: forward {res['forward_speed_mps']:+.3f} m/s, left "
+        f"{res['left_speed_mps']:+.3f} m/s, turn {res['turn_rate_deg_s']:+.1f} deg/s{extra}, "
+        f"falls {res['falls']}/{res['episodes']}"
+    )
 
 
 def _heading(quat) -> float:
@@ -206,10 +211,7 @@ def main(argv: list[str] | None = None) -> dict:
         forward = 1.5 if isinstance(env.unwrapped, Run) else 0.5
     commands = dict(COMMANDS, forward=(forward, 0.0, 0.0))
     config = env.unwrapped.config
-    sprint = tuple(config.sideways_speed_range) == (0.0, 0.0) and tuple(config.turn_rate_range) == (
-        0.0,
-        0.0,
-    )
+    sprint = not any(config.sideways_speed_range) and not any(config.turn_rate_range)
     if sprint:  # a task that only ever runs straight ahead (Run-v1): forward alone
         commands = {"forward": commands["forward"]}
     out: dict = {
@@ -228,11 +230,7 @@ def main(argv: list[str] | None = None) -> dict:
         for name, command in commands.items():
             res = run(env, act, command, args.episodes, args.seed)
             out[name] = res
-            print(
-                f"{name:9s} command {command}: forward {res['forward_speed_mps']:+.3f} m/s, "
-                f"left {res['left_speed_mps']:+.3f} m/s, turn {res['turn_rate_deg_s']:+.1f} "
-                f"deg/s, falls {res['falls']}/{args.episodes}"
-            )
+            print(_line(name, command, res))
     finally:
         env.close()
     out["forward_speed_mps"] = out["forward"]["forward_speed_mps"]
