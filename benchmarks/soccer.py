@@ -78,26 +78,26 @@ def physics_per_s(env, cycles: int) -> float:
 
 
 def game_and_physics_per_s(game_env, physics_env, rounds: int, steps: int) -> tuple[float, float]:
-    """Cycles per second of ``game_env`` (skill actions: ``steps`` steps of 10 cycles per round,
-    random walk commands) and of ``physics_env``'s world stepped alone (as
+    """Cycles per second of ``game_env`` (skill actions: ``steps`` steps of ``skill_cycles``
+    cycles per round, random walk commands) and of ``physics_env``'s world stepped alone (as
     :func:`physics_per_s`, as many cycles per round), measured in alternating rounds: a change
     of the machine's speed during the run (other work, clock scaling) slows both alike, so
     their ratio holds."""
     rng = np.random.default_rng(0)
     game_env.reset(seed=0)
     world = _moving_world(physics_env)
+    cycles = steps * game_env.config.skill_cycles  # a round's cycles
     game_s = physics_s = 0.0
     for _ in range(rounds):
         t0 = time.perf_counter()
         _random_steps(game_env, rng, steps)
         t1 = time.perf_counter()
-        for _ in range(steps * 10):
+        for _ in range(cycles):
             world.step()
         t2 = time.perf_counter()
         game_s += t1 - t0
         physics_s += t2 - t1
-    cycles = rounds * steps * 10
-    return cycles / game_s, cycles / physics_s
+    return rounds * cycles / game_s, rounds * cycles / physics_s
 
 
 def main(argv: list[str] | None = None) -> dict:
