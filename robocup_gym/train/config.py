@@ -35,6 +35,7 @@ from robocup_gym.backends import (
     available_backends,
     resolve_backend,
 )
+from robocup_gym.robot.types import ROBOT_TYPES, is_type_number
 from robocup_gym.train.algos import ALGOS
 from robocup_gym.train.tasks import is_team_task, resolve_task
 from robocup_gym.types import reject_unknown_fields
@@ -300,6 +301,11 @@ class TrainConfig:
     environments."""
     start_method: str = ""
     """multiprocessing start method for subprocess envs ('' = forkserver where available)."""
+    robot_types: list[int] = field(default_factory=list)
+    """Nao types to train on together: environment ``i`` of the run is of type
+    ``robot_types[i % len(robot_types)]`` (e.g. ``[0, 1, 2, 3, 4]`` with ``n_envs`` a multiple
+    of 5 trains one policy on every type); empty (the default): every environment is of
+    ``env_kwargs``' ``robot_type``. Evaluations use ``env_kwargs``' type."""
     selfplay: dict[str, Any] = field(default_factory=dict)
     """Team scenarios: how opponents are drawn (``snapshot_every``, ``pool_size``,
     ``scripted_share``; :class:`robocup_gym.train.selfplay.SelfPlaySettings`), over the
@@ -361,6 +367,20 @@ class TrainConfig:
         from robocup_gym.train.selfplay import SelfPlaySettings
 
         SelfPlaySettings.of(self.selfplay)  # an unknown setting or a bad value: named here
+        if self.robot_types:
+            if not all(is_type_number(t) for t in self.robot_types):
+                raise ValueError(f"robot_types are Nao types 0-4, got {self.robot_types!r}")
+            if self.env_kwargs.get("robot", "nao") != "nao" or is_team_task(self._task_id()):
+                raise ValueError(
+                    "robot_types varies the Nao of a single-robot task; this run's robot is "
+                    f"{self.env_kwargs.get('robot', 'nao')!r} in task {self.task!r}"
+                )
+            self.robot_types = [int(t) for t in self.robot_types]
+            if len({ROBOT_TYPES[t].has_toes for t in self.robot_types}) > 1:
+                raise ValueError(
+                    f"robot_types {self.robot_types}: type 4 (toes) has two joints more than "
+                    "types 0-3, so its observations and actions differ; train it apart"
+                )
         if self.ray_address and self.vec_env != "ray":
             raise ValueError(f"ray_address {self.ray_address!r} needs vec_env='ray'")
 

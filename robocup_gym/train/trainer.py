@@ -393,6 +393,7 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
                 }
                 if cfg.assist_force > 0.0
                 else None,
+                robot_types=cfg.robot_types,
             )
         try:
             if cfg.normalize_obs:

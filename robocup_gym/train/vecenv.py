@@ -62,18 +62,24 @@ def env_factories(
     env_kwargs: dict[str, Any] | None = None,
     seed: int | None = 0,
     assist: dict[str, Any] | None = None,
+    robot_types: Sequence[int] = (),
 ) -> list[Callable[[], gym.Env]]:
     """``n_envs`` constructors, environment ``i`` seeded with ``seed + i``. ``assist``: the
     keyword arguments of a :class:`~robocup_gym.envs.assist.TorsoAssist` around each
     environment, with ``decay_steps`` and ``start_step`` counted over all environments together
-    (each gets its part), or ``None``."""
+    (each gets its part), or ``None``. ``robot_types``: Nao types the environments take in
+    turn (environment ``i`` is of type ``robot_types[i % len(robot_types)]``, over
+    ``env_kwargs``' ``robot_type``); empty: all as ``env_kwargs`` say."""
     per_env = None
     if assist is not None and assist.get("share", 0.0) > 0.0:
         per_env = dict(assist)
         per_env["decay_steps"] = max(1, round(assist.get("decay_steps", 0) / n_envs))
         per_env["start_step"] = round(assist.get("start_step", 0) / n_envs)
+    kwargs = [dict(env_kwargs or {}) for _ in range(n_envs)]
+    for i, options in enumerate(kwargs if robot_types else ()):
+        options["robot_type"] = int(robot_types[i % len(robot_types)])
     return [
-        _EnvFactory(env_id, backend, env_kwargs or {}, None if seed is None else seed + i, per_env)
+        _EnvFactory(env_id, backend, kwargs[i], None if seed is None else seed + i, per_env)
         for i in range(n_envs)
     ]
 
@@ -116,6 +122,7 @@ def make_vec_env(
     start_method: str = "",
     n_workers: int = 0,
     assist: dict[str, Any] | None = None,
+    robot_types: Sequence[int] = (),
     ray_address: str = "",
     ray_start_timeout_s: float = 60.0,
 ):
@@ -126,12 +133,19 @@ def make_vec_env(
     on the cluster at ``ray_address``: :class:`~robocup_gym.train.ray_vecenv.RayVecEnv`).
     ``n_workers`` (0 = one per CPU core, with Ray one per CPU of the cluster; capped at
     ``n_envs``) is the number of workers. Every environment is wrapped in SB3's ``Monitor``
-    (episode return/length for the logs). ``assist``: see :func:`env_factories`.
+    (episode return/length for the logs). ``assist``, ``robot_types``: see
+    :func:`env_factories`.
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     factories = env_factories(
-        env_id, n_envs, backend=backend, env_kwargs=env_kwargs, seed=seed, assist=assist
+        env_id,
+        n_envs,
+        backend=backend,
+        env_kwargs=env_kwargs,
+        seed=seed,
+        assist=assist,
+        robot_types=robot_types,
     )
     wrapped = [_Monitored(f) for f in factories]
     if kind == "dummy" or (kind == "auto" and n_envs == 1):

@@ -625,6 +625,18 @@ def test_train_with_an_assist_records_it_and_resume_keeps_it(tmp_path):
     assert result.exit_code == 1 and "assist_steps >= 1" in result.output
 
 
+def test_train_over_several_robot_types_records_them(tmp_path):
+    from robocup_gym.train.config import TrainConfig
+
+    out = tmp_path / "runs"
+    args = ["train", "velocity-kick", "--engine", "mujoco", "--n-envs", 2, "--timesteps", 32]
+    args += ["--robot-types", 1, "--robot-types", 3, "--out", out, "--no-progress"]
+    invoke([*args, "--eval-freq", 0, "--checkpoint-freq", 0, *TINY_PPO])
+    (run,) = out.iterdir()
+    assert TrainConfig.load(run / "config.yaml").robot_types == [1, 3]
+    invoke(["train", "--resume", run, "--timesteps", 32, "--no-progress"])  # kept, not refused
+
+
 def test_pretrained_policies_are_found_evaluated_and_listed(ppo_run, tmp_path, monkeypatch):
     """The shipped-policy machinery on a policy put where the package keeps them: found by
     its name (loosely), evaluated in-process like a run, listed by `tasks`, unknown names

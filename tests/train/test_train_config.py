@@ -149,6 +149,11 @@ def test_hp_flags_read_exponent_notation():
             {"assist_force": 0.5, "assist_steps": 10, "backend": "rcssserver3d"},
             r"'rcssserver3d' backend\s+cannot",
         ),
+        ({"robot_types": [0, 5]}, r"robot_types are Nao types 0-4, got \[0, 5\]"),
+        ({"robot_types": [0, True]}, "robot_types are Nao types 0-4"),
+        ({"robot_types": [3, 4]}, "type 4 .toes. has two joints more"),
+        ({"task": "game-2v2", "robot_types": [0, 1]}, "single-robot task"),
+        ({"robot_types": [0], "env_kwargs": {"robot": "T1"}}, "this run's robot is 'T1'"),
     ],
 )
 def test_invalid_config(kwargs, match):

@@ -118,3 +118,26 @@ def test_workers_fork_from_a_server_that_imported_the_environments_once():
     assert worker_start_method("spawn") == "spawn"
     for module in WORKER_PRELOAD[1:]:  # each one importable (the server skips those that fail)
         __import__(module)
+
+
+def test_robot_types_are_taken_in_turn_by_the_environments():
+    """``TrainConfig.robot_types``: environment ``i`` is of type ``robot_types[i % n]``, each
+    built as that type; without it every environment is of ``env_kwargs``' type."""
+    from robocup_gym.train.vecenv import env_factories
+
+    fns = env_factories(
+        "RobocupGym/Walk-v0",
+        5,
+        env_kwargs={"robot_type": 2, "max_episode_steps": 7},
+        robot_types=[1, 3],
+    )
+    assert [f.env_kwargs["robot_type"] for f in fns] == [1, 3, 1, 3, 1]
+    assert all(f.env_kwargs["max_episode_steps"] == 7 for f in fns)
+    env = fns[1]()
+    try:
+        assert env.unwrapped.config.robot_type == 3
+        assert env.unwrapped.backend.robot_type == 3
+    finally:
+        env.close()
+    plain = env_factories("RobocupGym/Walk-v0", 2, env_kwargs={"robot_type": 2})
+    assert [f.env_kwargs["robot_type"] for f in plain] == [2, 2]
