@@ -49,6 +49,9 @@ option                default  meaning
                                the field, in play (as dm_control's soccer starts), instead of
                                the kick-off; a training aid (:func:`random_start`)
 ``skill_cycles``      10       cycles per step with skill actions
+``skills``            ("kick",) skill actions: the motion skills a player can start, their
+                               values (start, parameters) after the walk's three
+                               (``skills.register_motion_skill``)
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
 ``ball_progress``     0.0      per metre the ball moves toward the opponent goal
 ``possession``        0.0      per step for the team whose player is nearest the ball
@@ -81,10 +84,11 @@ from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
 from robocup_gym.soccer.observations import PlayerObserver
 from robocup_gym.soccer.scripted import TeamView
 from robocup_gym.soccer.skills import (
-    SKILL_ACTION_LABELS,
-    SKILL_ACTION_WHAT,
+    DEFAULT_MOTION_SKILLS,
     SkillSet,
     checked_action,
+    motion_skill,
+    skill_action_labels,
 )
 from robocup_gym.types import reject_unknown_fields
 
@@ -114,6 +118,7 @@ class SoccerConfig:
     walk_faces_x: bool = True
     random_start: bool = False
     skill_cycles: int = 10
+    skills: tuple[str, ...] = DEFAULT_MOTION_SKILLS
     reward_goal: float = 1.0
     ball_progress: float = 0.0
     possession: float = 0.0
@@ -146,6 +151,15 @@ class SoccerConfig:
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.actions not in ("joints", "skills"):
             raise ValueError(f"actions must be 'joints' or 'skills', got {self.actions!r}")
+        if isinstance(self.skills, str) or not isinstance(self.skills, Sequence):
+            raise ValueError(
+                f"skills must be a sequence of motion skill names, got {self.skills!r}"
+            )
+        object.__setattr__(self, "skills", tuple(self.skills))
+        for name in self.skills:
+            motion_skill(name)  # an unknown name: the registered ones listed
+        if len(set(self.skills)) != len(self.skills):
+            raise ValueError(f"skills lists a motion skill twice: {self.skills}")
         for name in ("max_cycles", "cycles_per_step", "skill_cycles"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -249,6 +263,7 @@ class SoccerParallelEnv(ParallelEnv):
                 self.game.robot_types,
                 self_collisions=c.self_collisions,
                 walk_faces_x=c.walk_faces_x,
+                motions=c.skills,
             )
             if c.actions == "skills"
             else None
@@ -266,8 +281,14 @@ class SoccerParallelEnv(ParallelEnv):
 
     @functools.cache  # noqa: B019
     def action_space(self, agent: str) -> gym.spaces.Box:
-        size = len(SKILL_ACTION_LABELS) if self.skills is not None else self._mapper(agent).size
-        return gym.spaces.Box(-1.0, 1.0, (size,), np.float32)
+        n = len(self.skill_action_labels) if self.skills is not None else self._mapper(agent).size
+        return gym.spaces.Box(-1.0, 1.0, (n,), np.float32)
+
+    @property
+    def skill_action_labels(self) -> tuple[str, ...]:
+        """The values of a skill action in this game (the walk's, then one per motion skill
+        of ``skills``), whatever its ``actions``: what a scripted team fits its actions to."""
+        return skill_action_labels(self.config.skills)
 
     def _observer(self, agent: str) -> PlayerObserver:
         try:
@@ -423,7 +444,7 @@ class SoccerParallelEnv(ParallelEnv):
             if name not in actions:
                 raise KeyError(f"no action for {name!r} (every agent acts every step)")
             if self.skills is not None:
-                labels, what = list(SKILL_ACTION_LABELS), SKILL_ACTION_WHAT
+                labels, what = self.skills.action_labels, self.skills.action_what
             else:
                 labels = self._mappers[name].labels()
                 what = f"one value per joint of its type-{self._type(name)} robot"

@@ -27,6 +27,7 @@ import numpy as np
 
 from robocup_gym.soccer import game_v1, penalty_v1
 from robocup_gym.soccer.scripted import TEAMS
+from robocup_gym.soccer.skills import skills_of_teams
 
 __all__ = ["SERVERS", "GameResult", "MatchResult", "make_team", "play_match", "play_server_match"]
 
@@ -161,6 +162,7 @@ def play_match(
     privileged = any(getattr(t, "privileged", False) for t in (a, b))
     options: dict[str, Any] = {
         "actions": "skills",
+        "skills": skills_of_teams(a, b),
         "privileged": privileged,
         "left_types": types,
         "right_types": types,

@@ -47,12 +47,7 @@ from robocup_gym.sim.referee import BEAM_MODES, next_kickoff_side
 from robocup_gym.soccer.formation import kickoff_positions
 from robocup_gym.soccer.localisation import Estimator, level_offsets
 from robocup_gym.soccer.scripted import TeamView
-from robocup_gym.soccer.skills import (
-    SKILL_ACTION_LABELS,
-    SKILL_ACTION_WHAT,
-    SkillSet,
-    checked_action,
-)
+from robocup_gym.soccer.skills import SkillSet, checked_action, skills_of_teams
 from robocup_gym.types import AgentCommand, Perception
 
 __all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
@@ -256,10 +251,17 @@ class ServerTeam:
         except BaseException:
             self.close()
             raise
-        self.skills = SkillSet(types, self_collisions=True)  # as every server applies it
+        self.skills = SkillSet(  # the self-collision rule as every server applies it
+            types, self_collisions=True, motions=skills_of_teams(team)
+        )
         self._observers: dict[str, Any] = {}
         self._opponents: dict[int, np.ndarray] = {}
         """Where the team's players last saw each opponent (by uniform number), world (x, y)."""
+
+    @property
+    def skill_action_labels(self) -> tuple[str, ...]:
+        """The values of the team's skill actions (the walk's, then its motion skills')."""
+        return self.skills.action_labels
 
     def _handshake(self, timeout: float) -> None:
         """Answer every player's percepts as they come (a server in sync mode waits for each
@@ -396,7 +398,8 @@ class ServerTeam:
         started = False
         start_time: float | None = None
         beamed_in: str | None = None
-        actions = {k: np.zeros(len(SKILL_ACTION_LABELS)) for k in range(len(self.players))}
+        labels = self.skills.action_labels
+        actions = {k: np.zeros(len(labels)) for k in range(len(self.players))}
         score = (0, 0)
         try:
             while True:
@@ -451,15 +454,15 @@ class ServerTeam:
                         for p in self.players:
                             self._see_opponents(p)
                         if stopped:
-                            decided = {a: np.zeros(len(SKILL_ACTION_LABELS)) for a in self.agents}
+                            decided = {a: np.zeros(len(labels)) for a in self.agents}
                         else:
                             decided = self.team(self, self.agents, self._observations())
                         for k, a in enumerate(self.agents):
                             actions[k] = checked_action(
                                 a,
                                 decided.get(a, actions[k]),
-                                SKILL_ACTION_LABELS,
-                                SKILL_ACTION_WHAT,
+                                labels,
+                                self.skills.action_what,
                             )
                             self.skills.decide(k, actions[k])
                     for k, c in self.skills.commands().items():

@@ -14,8 +14,9 @@ the opponents and the play mode from what the game tells it (``team_view(agents)
 the team has seen, :mod:`robocup_gym.soccer.localisation`). :class:`StandingTeam` stands still.
 
 A team is called with the game (an environment, or a team's connection to a server), the names
-of its agents and (optionally) their observations, and returns their skill actions
-(``robocup_gym.soccer.skills.SKILL_ACTION_LABELS``).
+of its agents and (optionally) their observations, and returns their skill actions (the
+game's ``skill_action_labels``; the scripted teams decide the walk and the kick, and start no
+other motion skill).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import numpy as np
 from robocup_gym.sim.field import FIELD_HALF_LENGTH
 from robocup_gym.sim.referee import restart_side
 from robocup_gym.soccer.ball_play import BallPlay, walk_to
+from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, fit_skill_action
 
 __all__ = [
     "TEAMS",
@@ -104,7 +106,8 @@ class StandingTeam:
     def __call__(
         self, env: Any, agents: list[str], obs: dict[str, np.ndarray] | None = None
     ) -> dict[str, np.ndarray]:
-        return {a: np.zeros(4) for a in agents}
+        labels = getattr(env, "skill_action_labels", SKILL_ACTION_LABELS)
+        return {a: np.zeros(len(labels)) for a in agents}
 
 
 class ScriptedTeam:
@@ -149,7 +152,8 @@ class ScriptedTeam:
                 support = ball - _SUPPORT_DISTANCE_M * to_goal
                 act = walk_to(pos, heading, support, ball)
             out[a] = act
-        return out
+        labels = getattr(env, "skill_action_labels", SKILL_ACTION_LABELS)
+        return {a: fit_skill_action(act, labels) for a, act in out.items()}
 
 
 TEAMS = {"scripted": ScriptedTeam, "standing": StandingTeam}

@@ -1,5 +1,14 @@
 """Skills as actions: every player walks at a commanded velocity with the shipped walk policy,
-kicks with the scripted kick, and gets up with the shipped get-up policy when it has fallen.
+plays motion skills (the scripted kick) when told, and gets up with the shipped get-up policy
+when it has fallen.
+
+A skill action is the walk's velocity command (``forward``, ``left``, ``turn``) and one value
+per motion skill of the game (``SoccerConfig.skills``, by default ``("kick",)``) and one per
+parameter it takes: a start value above 0.5 starts that motion (the first such in order) with
+its parameters' values if the player is walking; the motion runs to its end, then the player
+walks again. Motion skills are registered by name
+(:func:`register_motion_skill`): a skill registered becomes an action of every game that lists
+it, with no change to the environment.
 
 Each skill is the single-agent task it was trained in (Walk, GetUp), run on the player's robot
 in the game through :class:`PlayerBackend` (which never moves or steps the world: the game does)
@@ -19,9 +28,9 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -33,17 +42,30 @@ from robocup_gym.sim.rotations import quat_multiply, yaw_quat
 from robocup_gym.types import AgentCommand, Perception
 
 __all__ = [
+    "DEFAULT_MOTION_SKILLS",
     "KICK_CYCLES",
     "MAX_FORWARD_MPS",
     "MAX_SIDEWAYS_MPS",
     "MAX_TURN_DPS",
     "SKILL_ACTION_LABELS",
     "SKILL_ACTION_WHAT",
+    "WALK_ACTION_LABELS",
+    "Motion",
+    "MotionSkill",
     "PlayerBackend",
     "PlayerSkills",
+    "ScriptedMotion",
     "SkillSet",
     "checked_action",
     "facing_x",
+    "fit_skill_action",
+    "motion_skill",
+    "motion_skills",
+    "register_motion_skill",
+    "skill_action_labels",
+    "skill_action_what",
+    "skills_of_teams",
+    "unregister_motion_skill",
 ]
 
 MAX_FORWARD_MPS = 0.8
@@ -52,12 +74,54 @@ MAX_SIDEWAYS_MPS = 0.3
 """Leftward speed of a walk action of +1, m/s."""
 MAX_TURN_DPS = 30.0
 """Counter-clockwise turn rate of a walk action of +1, deg/s."""
-SKILL_ACTION_LABELS = ("forward", "left", "turn", "kick")
-"""A skill action: the walk's velocity command, each in [-1, 1] (scaled by the maxima above),
-and a kick when the last value is above 0.5."""
+WALK_ACTION_LABELS = ("forward", "left", "turn")
+"""The walk's part of a skill action: its velocity command, each in [-1, 1] (scaled by the
+maxima above)."""
+DEFAULT_MOTION_SKILLS = ("kick",)
+"""The motion skills of a game unless it says otherwise (``SoccerConfig.skills``)."""
 
-SKILL_ACTION_WHAT = "a skill action: " + ", ".join(SKILL_ACTION_LABELS)
-"""How error messages describe a skill action."""
+
+def skill_action_labels(motions: Sequence[str] = DEFAULT_MOTION_SKILLS) -> tuple[str, ...]:
+    """The values of a skill action with the registered motion skills ``motions``: the
+    walk's, then each motion's (:attr:`MotionSkill.labels`: its start value, above 0.5 to
+    start it, and its parameters)."""
+    return (*WALK_ACTION_LABELS, *(label for m in motions for label in motion_skill(m).labels))
+
+
+def skill_action_what(motions: Sequence[str] = DEFAULT_MOTION_SKILLS) -> str:
+    """How error messages describe a skill action with the motion skills ``motions``."""
+    return "a skill action: " + ", ".join(skill_action_labels(motions))
+
+
+def skills_of_teams(*teams: Any) -> tuple[str, ...]:
+    """The motion skills a game of ``teams`` plays: those a learnt team was trained with
+    (its ``options["skills"]``), :data:`DEFAULT_MOTION_SKILLS` when no team says.
+
+    Raises:
+        ValueError: two teams trained with different motion skills.
+    """
+    said = {
+        tuple(options["skills"])
+        for options in (getattr(t, "options", None) for t in teams)
+        if isinstance(options, dict) and "skills" in options
+    }
+    if len(said) > 1:
+        raise ValueError(
+            f"the teams were trained with different motion skills ({sorted(said)}); a game "
+            "plays one set"
+        )
+    return said.pop() if said else DEFAULT_MOTION_SKILLS
+
+
+def fit_skill_action(action: Any, labels: Sequence[str]) -> np.ndarray:
+    """A skill action of the default layout (:data:`SKILL_ACTION_LABELS`, what the scripted
+    teams decide) as one with ``labels``: the walk's values kept, each motion's value taken
+    from the action where it has one (the kick), else −1 (not started)."""
+    a = np.asarray(action, dtype=float)
+    if tuple(labels) == SKILL_ACTION_LABELS:
+        return a
+    value = dict(zip(SKILL_ACTION_LABELS, a, strict=True))
+    return np.array([value.get(name, -1.0) for name in labels])
 
 
 def checked_action(agent: str, action: Any, labels: Sequence[str], what: str) -> np.ndarray:
@@ -113,6 +177,135 @@ KICK_FOLLOW_THROUGH_CYCLES = 15
 after the motion starts)."""
 KICK_CYCLES = 25 + KICK_FOLLOW_THROUGH_CYCLES
 """Cycles of the scripted kick: its 25 cycles of motion and the follow-through."""
+
+
+class Motion(Protocol):
+    """One run of a motion skill on one player, from its start to its end."""
+
+    def command(self, p: Perception) -> np.ndarray:
+        """This cycle's joint velocities (rad/s, one per effector of the player's Nao type, in
+        its effector order) from the player's perception ``p`` of the cycle; called once a
+        cycle while the motion runs."""
+        ...
+
+    @property
+    def done(self) -> bool:
+        """Whether the motion has ended (the player then walks again)."""
+        ...
+
+
+class ScriptedMotion:
+    """An open-loop motion: given joint velocities, one row per cycle (rad/s)."""
+
+    def __init__(self, rows: Sequence[np.ndarray]) -> None:
+        if not rows:
+            raise ValueError("a scripted motion needs at least one cycle")
+        self.rows = rows
+        self.cycle = 0
+
+    def command(self, p: Perception) -> np.ndarray:
+        row = self.rows[self.cycle]
+        self.cycle += 1
+        return row
+
+    @property
+    def done(self) -> bool:
+        return self.cycle >= len(self.rows)
+
+
+@dataclass(frozen=True)
+class MotionSkill:
+    """A motion skill: what a skill action's value of its name starts."""
+
+    name: str
+    start: Callable[..., Motion]
+    """``start(robot_type, *parameters)``: a new run of the motion on a Nao of the given type
+    (0–4), with the action's values of :attr:`parameters` (each in [-1, 1])."""
+    description: str = ""
+    parameters: tuple[str, ...] = ()
+    """Names of the values the motion takes from the skill action besides its start value
+    (e.g. a kick's ``direction``)."""
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Its values in a skill action: its name (the start value), then ``name.parameter``
+        for each parameter."""
+        return (self.name, *(f"{self.name}.{p}" for p in self.parameters))
+
+
+_MOTION_SKILLS: dict[str, MotionSkill] = {}
+
+
+def register_motion_skill(
+    name: str,
+    start: Callable[..., Motion],
+    description: str = "",
+    parameters: Sequence[str] = (),
+    replace: bool = False,
+) -> MotionSkill:
+    """Register a motion skill: ``start(robot_type, *parameters)`` gives a new :class:`Motion`
+    (e.g. a :class:`ScriptedMotion`) each time a player starts it, from the skill action's
+    values of ``parameters`` (each in [-1, 1]). A game with ``skills`` naming it then has
+    ``1 + len(parameters)`` more values in its skill actions (:attr:`MotionSkill.labels`).
+
+    Raises:
+        ValueError: ``name`` is empty, is a walk value's name or a skill's mode (``walk``,
+            ``get-up``), or is registered already (unless ``replace``).
+    """
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"a motion skill needs a name, got {name!r}")
+    if name in (*WALK_ACTION_LABELS, "walk", "get-up"):
+        raise ValueError(f"{name!r} is taken by the walk or the get-up; choose another name")
+    if name in _MOTION_SKILLS and not replace:
+        raise ValueError(
+            f"a motion skill {name!r} is registered already (replace=True replaces it)"
+        )
+    if not callable(start):
+        raise ValueError(f"motion skill {name!r}: start must be callable, got {start!r}")
+    if isinstance(parameters, str) or not all(isinstance(p, str) and p for p in parameters):
+        raise ValueError(f"motion skill {name!r}: parameters are names, got {parameters!r}")
+    skill = MotionSkill(name, start, description, tuple(parameters))
+    _MOTION_SKILLS[name] = skill
+    return skill
+
+
+def unregister_motion_skill(name: str) -> None:
+    """Remove the motion skill ``name`` (nothing if there is none)."""
+    _MOTION_SKILLS.pop(name, None)
+
+
+def motion_skills() -> dict[str, MotionSkill]:
+    """The registered motion skills, by name."""
+    return dict(_MOTION_SKILLS)
+
+
+def motion_skill(name: str) -> MotionSkill:
+    """The registered motion skill ``name``.
+
+    Raises:
+        ValueError: none of that name (the message lists the registered ones).
+    """
+    try:
+        return _MOTION_SKILLS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"no motion skill {name!r}; registered: {', '.join(sorted(_MOTION_SKILLS))}"
+        ) from None
+
+
+register_motion_skill(
+    "kick",
+    lambda robot_type: ScriptedMotion(kick_sequence(robot_type)),
+    "rcssserver3d's scripted kick D with the right foot in the direction the player faces, "
+    f"{KICK_CYCLES} cycles",
+)
+
+SKILL_ACTION_LABELS = skill_action_labels()
+"""A skill action of a game with the default motion skills: the walk's velocity command and a
+kick when the last value is above 0.5."""
+
+SKILL_ACTION_WHAT = skill_action_what()
+"""How error messages describe a skill action with the default motion skills."""
 
 
 def facing_x(p: Perception) -> Perception:
@@ -196,7 +389,8 @@ class _Skill:
 
 
 class PlayerSkills:
-    """One player's walk and get-up tasks and what it is doing (``mode``: walk, kick, get-up)."""
+    """One player's walk and get-up tasks and what it is doing (``mode``: ``walk``, ``get-up``
+    or the name of the motion skill it plays, ``motion``)."""
 
     def __init__(
         self, model: NaoModel, index: int, walk: Any, getup: Any, walk_faces_x: bool = True
@@ -210,7 +404,7 @@ class PlayerSkills:
         self.walk = _Skill(walk(self.walk_backend))
         self.getup = _Skill(getup(self.backend))
         self.mode = "walk"
-        self.kick_cycle = 0
+        self.motion: Motion | None = None
         self.failed_getups = 0
         self.command = np.zeros(3)
 
@@ -226,6 +420,7 @@ class PlayerSkills:
         self.walk.obs, _ = self.walk.env.reset(seed=seed, options={"velocity_command": (0, 0, 0)})
         self.getup.env.reset(seed=None if seed is None else seed + 1000)
         self.mode = "walk"
+        self.motion = None
         self.failed_getups = 0
 
     def fallen(self, p: Perception) -> bool:
@@ -245,6 +440,8 @@ class SkillSet:
     Args:
         robot_types: The players' Nao types, in player order.
         walk, getup: Names of the shipped policies that walk and get up.
+        motions: The registered motion skills (:func:`register_motion_skill`) the players
+            can start, in the order of their values in a skill action (:attr:`action_labels`).
         self_collisions: Whether the world runs rcssserver3d's self-collision rule (a real
             server and ``serve`` always do). Then the get-up plays ``GetUp-v1``'s scripts
             alone, which keep clear of the rule; without it, the shipped get-up (a policy over
@@ -263,14 +460,20 @@ class SkillSet:
         getup: str = "get-up",
         self_collisions: bool = False,
         walk_faces_x: bool = True,
+        motions: Sequence[str] = DEFAULT_MOTION_SKILLS,
     ) -> None:
         from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
 
         self.robot_types = tuple(int(t) for t in robot_types)
+        self.motions = {name: motion_skill(name) for name in motions}
+        if len(self.motions) != len(motions):
+            raise ValueError(f"motion skills listed twice: {list(motions)}")
+        self.action_labels = skill_action_labels(tuple(self.motions))
+        """The values of a skill action of this game."""
+        self.action_what = skill_action_what(tuple(self.motions))
+        """How error messages describe a skill action of this game."""
         self.walk_policy = pretrained_policy(walk)
         self.getup_policy = pretrained_policy(getup)
-        if len(kick_sequence()) != KICK_CYCLES:
-            raise RuntimeError(f"the scripted kick has {len(kick_sequence())} cycles")
         self.players: list[PlayerSkills] = []
         self.uses_policy: dict[str, set[int]] = {"walk": set(), "get-up": set()}
         for index, t in enumerate(self.robot_types):
@@ -314,8 +517,9 @@ class SkillSet:
             s.start(perceptions[s.index], None if seed is None else seed + k)
 
     def decide(self, index: int, action: np.ndarray) -> None:
-        """Player ``index``'s skill action (checked and clipped by the caller): a walk command,
-        or a kick (which runs to its end; a fallen player gets up first)."""
+        """Player ``index``'s skill action (:attr:`action_labels`; checked and clipped by the
+        caller): a walk command, or a motion skill started (the first whose value is above
+        0.5), which runs to its end; a fallen player gets up first."""
         s = self.players[index]
         s.command[:] = (
             action[0] * MAX_FORWARD_MPS,
@@ -324,8 +528,13 @@ class SkillSet:
         )
         if s.mode == "walk":
             s.walk.env.velocity_command[:] = s.command
-            if action[3] > 0.5:
-                s.mode, s.kick_cycle = "kick", 0
+            at = len(WALK_ACTION_LABELS)
+            for skill in self.motions.values():
+                if action[at] > 0.5:
+                    values = (float(v) for v in action[at + 1 : at + len(skill.labels)])
+                    s.mode, s.motion = skill.name, skill.start(self.robot_types[index], *values)
+                    break
+                at += len(skill.labels)
 
     def commands(self) -> dict[int, AgentCommand]:
         """This cycle's joint command of every player (the policies batched)."""
@@ -347,20 +556,20 @@ class SkillSet:
                 if a is None:
                     a = np.zeros(env.action_space.shape, np.float32)
                 out[s.index] = env.act(a)
-        for s, t in zip(self.players, self.robot_types, strict=True):
-            if s.mode == "kick":
-                out[s.index] = AgentCommand(kick_sequence(t)[s.kick_cycle])
+        for s in self.players:
+            if s.motion is not None:
+                out[s.index] = AgentCommand(s.motion.command(s.backend.perception))
         return out
 
     def observe(self, perceptions: dict[int, Perception]) -> None:
         """After the cycle: every skill sees its player's perception; a player that fell gets
-        up, one that is up again walks, a kick that ended walks."""
+        up, one that is up again walks, a motion that ended walks."""
         for s in self.players:
             p = perceptions[s.index]
             s.see(p)
-            if s.mode == "kick":
-                s.kick_cycle += 1
-                if s.kick_cycle >= KICK_CYCLES:
+            if s.motion is not None:
+                if s.motion.done:
+                    s.motion = None
                     self._walk_again(s)
                 continue
             skill, seen = (s.walk, s.walk_backend) if s.mode == "walk" else (s.getup, s.backend)

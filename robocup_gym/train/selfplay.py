@@ -480,7 +480,7 @@ def team_description(options: Mapping[str, Any]) -> dict[str, Any]:
     from robocup_gym.robot.nao import nao_model
     from robocup_gym.soccer.ball_play import PLAY_ACTION_LABELS
     from robocup_gym.soccer.observations import observation_labels
-    from robocup_gym.soccer.skills import SKILL_ACTION_LABELS
+    from robocup_gym.soccer.skills import DEFAULT_MOTION_SKILLS, skill_action_labels
 
     model = nao_model(int(options["left_types"][0]))
     mates, opponents = len(options["left_types"]) - 1, len(options["right_types"])
@@ -488,7 +488,11 @@ def team_description(options: Mapping[str, Any]) -> dict[str, Any]:
     return {
         "env_config": dict(options),
         "observation_labels": labels,
-        "action_labels": list(PLAY_ACTION_LABELS if options.get("plays") else SKILL_ACTION_LABELS),
+        "action_labels": list(
+            PLAY_ACTION_LABELS
+            if options.get("plays")
+            else skill_action_labels(options.get("skills", DEFAULT_MOTION_SKILLS))
+        ),
     }
 
 

@@ -145,3 +145,106 @@ def test_skill_games_repeat_from_their_seed():
         return np.concatenate(out)
 
     assert np.array_equal(run(), run())
+
+
+@pytest.fixture
+def nod():
+    """A motion skill registered for the test: the head turns at ``speed`` rad/s (its one
+    parameter) for 15 cycles."""
+    from robocup_gym.robot.nao import nao_model
+    from robocup_gym.soccer.skills import (
+        ScriptedMotion,
+        register_motion_skill,
+        unregister_motion_skill,
+    )
+
+    def start(robot_type: int, speed: float) -> ScriptedMotion:
+        row = np.zeros(len(nao_model(robot_type).effector_names))
+        row[0] = speed  # he1, rad/s
+        return ScriptedMotion([row] * 15)
+
+    register_motion_skill("look", start, "the head turned", parameters=("speed",))
+    yield "look"
+    unregister_motion_skill("look")
+
+
+def test_a_registered_motion_skill_becomes_an_action(nod):
+    """A game whose ``skills`` list a registered motion has its values in the actions: one
+    that starts the motion and one per parameter; the motion runs to its end and the player
+    walks again; the scripted team's actions are fitted to the game's (its kick kept, no other
+    motion started)."""
+    from robocup_gym.soccer.scripted import ScriptedTeam
+
+    env = game_v1.parallel_env(
+        actions="skills", left_types=(0,), right_types=(), max_cycles=10**5, skills=("kick", nod)
+    )
+    try:
+        assert env.action_space("left_1").shape == (6,)
+        labels = ("forward", "left", "turn", "kick", "look", "look.speed")
+        assert env.skill_action_labels == labels
+        env.reset(seed=0)
+        player = env.skills.players[0]
+        for _ in range(5):
+            env.step({"left_1": np.zeros(6)})
+        for speed in (-1.0, 0.5):
+            head = player.backend.perception.joint("hj1")
+            env.step({"left_1": np.array([0.0, 0.0, 0.0, 0.0, 1.0, speed])})  # 10 cycles of 15
+            assert env.skills.modes() == ["look"]
+            turned = player.backend.perception.joint("hj1") - head
+            expected = speed * 10 * 0.02 * 180.0 / np.pi  # at most 10 cycles at the speed, deg
+            assert 0.7 * abs(expected) < speed * turned / abs(speed) <= abs(expected), turned
+            env.step({"left_1": np.zeros(6)})
+            assert env.skills.modes() == ["walk"]
+        with pytest.raises(ValueError, match=r"expected \(6,\) \(a skill action: forward, left, "):
+            env.step({"left_1": np.zeros(4)})
+        acts = ScriptedTeam()(env, ["left_1"])
+        assert acts["left_1"].shape == (6,) and acts["left_1"][4] == -1.0
+        env.step(acts)
+    finally:
+        env.close()
+
+
+def test_motion_skills_are_checked_by_name(nod):
+    from robocup_gym.soccer.skills import motion_skills, register_motion_skill
+
+    assert set(motion_skills()) >= {"kick", nod}
+    with pytest.raises(ValueError, match=r"no motion skill 'dive'; registered: .*kick"):
+        game_v1.parallel_env(actions="skills", skills=("kick", "dive"))
+    with pytest.raises(ValueError, match="lists a motion skill twice"):
+        game_v1.parallel_env(actions="skills", skills=("kick", "kick"))
+    with pytest.raises(ValueError, match="sequence of motion skill names"):
+        game_v1.parallel_env(actions="skills", skills="kick")
+    with pytest.raises(ValueError, match="registered already"):
+        register_motion_skill(nod, lambda t: None)
+    for taken in ("turn", "get-up"):
+        with pytest.raises(ValueError, match="taken by the walk or the get-up"):
+            register_motion_skill(taken, lambda t: None)
+
+
+def test_a_game_without_the_kick_has_only_the_walk():
+    env = game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), skills=())
+    try:
+        assert env.action_space("left_1").shape == (3,)
+        env.reset(seed=0)
+        env.step({"left_1": np.array([0.0, 0.0, 1.0])})
+        assert env.skills.modes() == ["walk"]
+    finally:
+        env.close()
+
+
+def test_a_game_plays_the_motion_skills_its_learnt_teams_were_trained_with():
+    from types import SimpleNamespace
+
+    from robocup_gym.soccer.scripted import ScriptedTeam
+    from robocup_gym.soccer.skills import fit_skill_action, skills_of_teams
+
+    scripted, old = ScriptedTeam(), SimpleNamespace(options={"privileged": True})
+    assert skills_of_teams(scripted, old) == ("kick",)  # no team says: the default
+    trained = SimpleNamespace(options={"skills": ["kick", "look"]})
+    assert skills_of_teams(scripted, trained) == ("kick", "look")
+    with pytest.raises(ValueError, match="trained with different motion skills"):
+        skills_of_teams(trained, SimpleNamespace(options={"skills": []}))
+    labels = ("forward", "left", "turn", "look", "look.speed")
+    np.testing.assert_array_equal(
+        fit_skill_action([0.5, -0.2, 0.1, 1.0], labels), [0.5, -0.2, 0.1, -1.0, -1.0]
+    )
