@@ -386,6 +386,12 @@ def tasks() -> None:
         "\nteam scenarios (one policy for a team's players; the soccer extra): penalty, "
         "keepaway, game-1v1 … game-11v11"
     )
+    from robocup_gym.soccer.skills import motion_skills
+
+    print(
+        "motion skills of the game's skill actions (--env skills=[NAME, ...]): "
+        + ", ".join(motion_skills())
+    )
     try:
         league = ", ".join(league_robot_names()) + " (--env robot=NAME)"
     except RcsssmjUnavailableError:

@@ -12,8 +12,9 @@ kick-offs and set pieces waited for the drop ball.
 They run in-process on the world of the single-agent environments with the referee of
 ``robocup-gym serve`` (:mod:`robocup_gym.sim.referee`), with joint-level actions or skills as
 actions (:mod:`~robocup_gym.soccer.skills`: the shipped walk and get-up policies, the scripted
-kick). :mod:`~robocup_gym.soccer.scripted` has the scripted teams, :mod:`~robocup_gym.soccer.match`
-plays matches (``robocup-gym match``). Needs ``pettingzoo`` (the ``soccer`` extra).
+kick and any registered motion skill). :mod:`~robocup_gym.soccer.scripted` has the scripted
+teams, :mod:`~robocup_gym.soccer.match` plays matches (``robocup-gym match``). Needs
+``pettingzoo`` (the ``soccer`` extra).
 """
 
 SCENARIOS = ("penalty_v1", "keepaway_v1", "game_v1", "penalty_v0", "keepaway_v0", "game_v0")

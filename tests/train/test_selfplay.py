@@ -240,6 +240,36 @@ def test_a_team_policy_exports_to_onnx_and_plays_a_match(team_run, tmp_path):
     }
 
 
+@needs_ode
+def test_a_team_trained_with_other_motion_skills_keeps_them_in_its_matches(tmp_path):
+    """A team trained on skill actions without the kick (``skills=[]``: the walk's three
+    values) exports them and plays its matches with them; the scripted team's actions are
+    fitted to the game's."""
+    from robocup_gym.train.export import export_onnx
+    from robocup_gym.train.trainer import train
+
+    cfg = TrainConfig(
+        task="game-1v1",
+        n_envs=1,
+        timesteps=128,
+        vec_env="dummy",
+        env_kwargs={"max_cycles": 100, "skills": []},
+        algo_kwargs={"n_steps": 64, "batch_size": 64, "n_epochs": 1},
+        checkpoint_every_s=0,
+        checkpoint_freq=0,
+        eval_freq=0,
+    )
+    run = train(cfg, out=tmp_path, progress=False).run_dir
+    meta = export_onnx(run, tmp_path / "team.onnx")
+    assert meta["action_labels"] == ["forward", "left", "turn"]
+    assert meta["output"]["shape"][1] == 3
+    team = make_team(str(tmp_path / "team.onnx"))
+    assert tuple(team.options["skills"]) == ()
+    kwargs = {"games": 1, "players": 1, "seconds": 1.0, "robot_types": [0], "seed": 1}
+    s = play_match(str(tmp_path / "team.onnx"), "scripted", **kwargs).summary
+    assert s["games"] == 1 and s["wins"] + s["draws"] + s["losses"] == 1
+
+
 def test_a_team_plays_only_the_match_it_was_trained_for(team_run):
     run = str(team_run[0].run_dir)  # game-1v1
     with pytest.raises(

@@ -591,6 +591,7 @@ def test_tasks_lists_the_tasks_and_the_robots():
     assert "velocity-kick" in out and "RobocupGym/GetUp-v1" in out
     assert "robots: the Nao, types 0-4" in out
     assert "team scenarios" in out and "game-1v1 … game-11v11" in out
+    assert "motion skills of the game's skill actions (--env skills=[NAME, ...]): kick" in out
     try:
         import rcsssmj  # noqa: F401
     except ImportError:
