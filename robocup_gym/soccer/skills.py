@@ -247,6 +247,9 @@ def register_motion_skill(
     (e.g. a :class:`ScriptedMotion`) each time a player starts it, from the skill action's
     values of ``parameters`` (each in [-1, 1]). A game with ``skills`` naming it then has
     ``1 + len(parameters)`` more values in its skill actions (:attr:`MotionSkill.labels`).
+    A game takes its motion skills when it is made: one replaced later is the new one in games
+    made after. A motion's command that is not one finite velocity per joint stops the step with
+    a ``ValueError`` naming the skill and the player.
 
     Raises:
         ValueError: ``name`` is empty, is a walk value's name or a skill's mode (``walk``,
@@ -558,8 +561,25 @@ class SkillSet:
                 out[s.index] = env.act(a)
         for s in self.players:
             if s.motion is not None:
-                out[s.index] = AgentCommand(s.motion.command(s.backend.perception))
+                out[s.index] = AgentCommand(self._motion_command(s))
         return out
+
+    def _motion_command(self, s: PlayerSkills) -> np.ndarray:
+        """The joint velocities of player ``s``'s motion this cycle, checked.
+
+        Raises:
+            ValueError: not one finite velocity per joint of the player's robot (naming the
+                motion skill and the player).
+        """
+        v = np.asarray(s.motion.command(s.backend.perception), dtype=float)
+        n = len(s.backend.robot_model.joints)
+        if v.shape != (n,) or not np.isfinite(v).all():
+            raise ValueError(
+                f"motion skill {s.mode!r} of player {s.index}: its command must be {n} finite "
+                f"joint velocities (rad/s), got {v.shape} values"
+                + ("" if v.shape != (n,) else f" with {int((~np.isfinite(v)).sum())} not finite")
+            )
+        return v
 
     def observe(self, perceptions: dict[int, Perception]) -> None:
         """After the cycle: every skill sees its player's perception; a player that fell gets

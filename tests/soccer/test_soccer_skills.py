@@ -205,7 +205,12 @@ def test_a_registered_motion_skill_becomes_an_action(nod):
 
 
 def test_motion_skills_are_checked_by_name(nod):
-    from robocup_gym.soccer.skills import motion_skills, register_motion_skill
+    from robocup_gym.soccer.skills import (
+        ScriptedMotion,
+        motion_skills,
+        register_motion_skill,
+        unregister_motion_skill,
+    )
 
     assert set(motion_skills()) >= {"kick", nod}
     with pytest.raises(ValueError, match=r"no motion skill 'dive'; registered: .*kick"):
@@ -216,6 +221,16 @@ def test_motion_skills_are_checked_by_name(nod):
         game_v1.parallel_env(actions="skills", skills="kick")
     with pytest.raises(ValueError, match="registered already"):
         register_motion_skill(nod, lambda t: None)
+    # a motion whose command is not one finite velocity per joint: named
+    register_motion_skill("bad", lambda t: ScriptedMotion([np.zeros(3)]))
+    env = game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), skills=["bad"])
+    try:
+        env.reset(seed=0)
+        with pytest.raises(ValueError, match=r"motion skill 'bad' of player 0: .* 22 finite"):
+            env.step({"left_1": np.array([0.0, 0.0, 0.0, 1.0])})
+    finally:
+        env.close()
+        unregister_motion_skill("bad")
     for taken in ("turn", "get-up"):
         with pytest.raises(ValueError, match="taken by the walk or the get-up"):
             register_motion_skill(taken, lambda t: None)
