@@ -286,8 +286,8 @@ class SoccerParallelEnv(ParallelEnv):
 
     @property
     def skill_action_labels(self) -> tuple[str, ...]:
-        """The values of a skill action in this game (the walk's, then one per motion skill
-        of ``skills``), whatever its ``actions``: what a scripted team fits its actions to."""
+        """The values of a skill action in this game (the walk's, then each motion skill's of
+        ``skills``), whatever its ``actions``: what a scripted team fits its actions to."""
         return skill_action_labels(self.config.skills)
 
     def _observer(self, agent: str) -> PlayerObserver:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.soccer.ball_play import BallPlay
-from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, fit_skill_action
+from robocup_gym.soccer.skills import fit_skill_actions
 
 __all__ = ["PolicyTeam", "team_task_error"]
 
@@ -160,7 +160,5 @@ class PolicyTeam:
             )
         actions = dict(zip(agents, np.asarray(self.act(x), dtype=float), strict=True))
         if self._plays is not None:  # the ball played along a direction: skill actions
-            played = self._plays.skill_actions(env.team_view(agents), actions)
-            labels = getattr(env, "skill_action_labels", SKILL_ACTION_LABELS)
-            return {a: fit_skill_action(act, labels) for a, act in played.items()}
+            return fit_skill_actions(self._plays.skill_actions(env.team_view(agents), actions), env)
         return actions

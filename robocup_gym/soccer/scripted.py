@@ -29,7 +29,7 @@ import numpy as np
 from robocup_gym.sim.field import FIELD_HALF_LENGTH
 from robocup_gym.sim.referee import restart_side
 from robocup_gym.soccer.ball_play import BallPlay, walk_to
-from robocup_gym.soccer.skills import SKILL_ACTION_LABELS, fit_skill_action
+from robocup_gym.soccer.skills import fit_skill_actions, game_skill_labels
 
 __all__ = [
     "TEAMS",
@@ -106,7 +106,7 @@ class StandingTeam:
     def __call__(
         self, env: Any, agents: list[str], obs: dict[str, np.ndarray] | None = None
     ) -> dict[str, np.ndarray]:
-        labels = getattr(env, "skill_action_labels", SKILL_ACTION_LABELS)
+        labels = game_skill_labels(env)
         return {a: np.zeros(len(labels)) for a in agents}
 
 
@@ -152,8 +152,7 @@ class ScriptedTeam:
                 support = ball - _SUPPORT_DISTANCE_M * to_goal
                 act = walk_to(pos, heading, support, ball)
             out[a] = act
-        labels = getattr(env, "skill_action_labels", SKILL_ACTION_LABELS)
-        return {a: fit_skill_action(act, labels) for a, act in out.items()}
+        return fit_skill_actions(out, env)
 
 
 TEAMS = {"scripted": ScriptedTeam, "standing": StandingTeam}

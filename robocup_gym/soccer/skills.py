@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -59,6 +59,8 @@ __all__ = [
     "checked_action",
     "facing_x",
     "fit_skill_action",
+    "fit_skill_actions",
+    "game_skill_labels",
     "motion_skill",
     "motion_skills",
     "register_motion_skill",
@@ -111,6 +113,19 @@ def skills_of_teams(*teams: Any) -> tuple[str, ...]:
             "plays one set"
         )
     return said.pop() if said else DEFAULT_MOTION_SKILLS
+
+
+def game_skill_labels(game: Any) -> tuple[str, ...]:
+    """The values of a skill action in ``game`` (an environment or a team on a server: its
+    ``skill_action_labels``; :data:`SKILL_ACTION_LABELS` for one that does not say)."""
+    return tuple(getattr(game, "skill_action_labels", SKILL_ACTION_LABELS))
+
+
+def fit_skill_actions(actions: Mapping[str, Any], game: Any) -> dict[str, np.ndarray]:
+    """Skill actions of the default layout, by agent, as the skill actions of ``game``
+    (:func:`fit_skill_action` with :func:`game_skill_labels`)."""
+    labels = game_skill_labels(game)
+    return {agent: fit_skill_action(a, labels) for agent, a in actions.items()}
 
 
 def fit_skill_action(action: Any, labels: Sequence[str]) -> np.ndarray:

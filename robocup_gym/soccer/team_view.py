@@ -35,7 +35,7 @@ import gymnasium as gym
 import numpy as np
 
 from robocup_gym.soccer.ball_play import PLAY_ACTION_LABELS, BallPlay
-from robocup_gym.soccer.skills import fit_skill_action
+from robocup_gym.soccer.skills import fit_skill_actions
 
 __all__ = [
     "TEAM_DEFAULTS",
@@ -231,9 +231,8 @@ class TeamView:
         mine, theirs = self.mine, self.theirs
         joint = dict(zip(mine, actions, strict=True))
         if self.plays is not None:
-            joint = self.plays.skill_actions(self.env.team_view(mine), joint)
-            labels = self.env.skill_action_labels
-            joint = {a: fit_skill_action(act, labels) for a, act in joint.items()}
+            played = self.plays.skill_actions(self.env.team_view(mine), joint)
+            joint = fit_skill_actions(played, self.env)
         theirs_obs = {a: self._obs[a] for a in theirs}
         joint.update(self.opponent(self.env, theirs, theirs_obs) if theirs else {})
         self._obs, rewards, terms, truncs, infos = self.env.step(joint)
