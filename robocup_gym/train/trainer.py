@@ -206,6 +206,7 @@ def train(
         RichProgressCallback,
         StopOnSignal,
         TorchThreadsCallback,
+        task_measure,
     )
 
     team = None
@@ -313,13 +314,12 @@ def train(
         last_eval=evaluator.last if evaluator is not None else None,
     )
     s = result.recent
-    dx = s.get("ball_dx_mean")
+    ended = s.get("return_mean") is not None  # episodes ended recently: their measures
     say(
         f"[bold green]{'stopped' if interrupted else 'done'}[/bold green]: {steps_done:,} steps; "
         f"{steps_done - (cfg.timesteps - remaining):,} of them now, in {wall:,.0f} s "
         f"({result.steps_per_s:,.0f} steps/s)"
-        + (f" · recent ball Δx {dx:.2f} m" if dx is not None else "")
-        + (f" · recent reward {s['return_mean']:.2f}" if s.get("return_mean") is not None else "")
+        + (f" · recent {task_measure(s)} · recent reward {s['return_mean']:.2f}" if ended else "")
     )
     say(f"model: [cyan]{path / 'model.zip'}[/cyan]")
     if interrupted and steps_done < cfg.timesteps:

@@ -386,6 +386,8 @@ def test_progress_lines_report_the_rate_of_a_short_run(tmp_path):
     assert final, result.stdout
     rate = re.search(r"(\d[\d,]*) steps/s", final[-1])
     assert rate and int(rate.group(1).replace(",", "")) > 0, final[-1]
+    done = [line for line in result.stdout.splitlines() if line.startswith("done: ")]
+    assert re.search(r"recent ball Δx [\d.]+ m · recent reward", done[0]), done  # its measure
 
 
 def test_init_from_starts_a_new_run_from_a_trained_policy(ppo_run, tmp_path):
