@@ -386,7 +386,7 @@ def tasks() -> None:
         "\nteam scenarios (one policy for a team's players; the soccer extra): penalty, "
         "keepaway, game-1v1 … game-11v11"
     )
-    from robocup_gym.soccer.skills import motion_skills
+    from robocup_gym.soccer.motions import motion_skills
 
     print(
         "motion skills of the game's skill actions (--env skills=[NAME, ...]): "

@@ -51,7 +51,7 @@ option                default  meaning
 ``skill_cycles``      10       cycles per step with skill actions
 ``skills``            ("kick",) skill actions: the motion skills a player can start, their
                                values (start, parameters) after the walk's three
-                               (``skills.register_motion_skill``)
+                               (``motions.register_motion_skill``)
 ``reward_goal``       1.0      per goal, to the scorers (minus to the others)
 ``ball_progress``     0.0      per metre the ball moves toward the opponent goal
 ``possession``        0.0      per step for the team whose player is nearest the ball
@@ -81,13 +81,13 @@ from robocup_gym.envs.observations import heading_frame
 from robocup_gym.sim.field import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH
 from robocup_gym.sim.referee import Rules, other
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
+from robocup_gym.soccer.motions import motion_skill
 from robocup_gym.soccer.observations import PlayerObserver
 from robocup_gym.soccer.scripted import TeamView
 from robocup_gym.soccer.skills import (
     DEFAULT_MOTION_SKILLS,
     SkillSet,
     checked_action,
-    motion_skill,
     skill_action_labels,
 )
 from robocup_gym.types import reject_unknown_fields

@@ -152,7 +152,7 @@ def nod():
     """A motion skill registered for the test: the head turns at ``speed`` rad/s (its one
     parameter) for 15 cycles."""
     from robocup_gym.robot.nao import nao_model
-    from robocup_gym.soccer.skills import (
+    from robocup_gym.soccer.motions import (
         ScriptedMotion,
         register_motion_skill,
         unregister_motion_skill,
@@ -205,7 +205,7 @@ def test_a_registered_motion_skill_becomes_an_action(nod):
 
 
 def test_motion_skills_are_checked_by_name(nod):
-    from robocup_gym.soccer.skills import (
+    from robocup_gym.soccer.motions import (
         ScriptedMotion,
         motion_skills,
         register_motion_skill,
