@@ -263,7 +263,7 @@ def test_environments_created_and_closed_keep_memory_flat():
 
 
 def test_percepts_are_built_one_by_one_when_building_them_together_fails(
-    sync_server, warnings_of_the_server
+    sync_server, warnings_of_the_server, monkeypatch
 ):
     """A failure of the batched perception (every robot's percept in one ``perceive_all``) is
     logged and the percepts are built robot by robot: every agent still gets each cycle's."""
@@ -272,7 +272,8 @@ def test_percepts_are_built_one_by_one_when_building_them_together_fails(
     def broken(*args, **kwargs):
         raise RuntimeError("broken perceive_all")
 
-    sync_server.world.perceive_all = broken  # the world the server builds its percepts from
+    # on the class: the server builds a new world each time robots join
+    monkeypatch.setattr(type(sync_server.world), "perceive_all", broken)
     results = run_agents(sync_server, [("Both", 1, 0), ("Both", 2, 1)], steps=20)
     assert all(len(r) == 22 for r in results)
     assert all("(HJ (n raj1)" in r[-1] for r in results)
