@@ -34,12 +34,20 @@ from robocup_gym.types import Perception
 __all__ = [
     "KICK_CYCLES",
     "KICK_FOLLOW_THROUGH_CYCLES",
+    "KICK_TO_DIRECTION_DEG",
+    "KICK_TO_DISTANCE_M",
+    "KICK_TO_HOLD_S",
+    "KICK_TO_PRELUDE_S",
+    "KeyframeMotion",
     "RESERVED_NAMES",
     "WALK_ACTION_LABELS",
     "Motion",
     "MotionSkill",
     "ScriptedMotion",
     "kick_sequence",
+    "kick_to",
+    "kick_to_command",
+    "kick_to_spot",
     "motion_skill",
     "motion_skills",
     "register_motion_skill",
@@ -208,4 +216,124 @@ register_motion_skill(
     lambda robot_type: ScriptedMotion(kick_sequence(robot_type)),
     "rcssserver3d's scripted kick D with the right foot in the direction the player faces, "
     f"{KICK_CYCLES} cycles",
+)
+
+
+# ---------------------------------------------------------------------------- kick-to
+KICK_TO_PRELUDE_S = 1.0
+"""Seconds a ``kick-to`` first drives the joints to the crouched pose its kicks start from.
+Played in a game straight from the walk's stance, the kicks miss (the 10 m kick moved the ball
+2.6 m once in three after a 0.6 s prelude); after 1 s they carry as from the pose."""
+KICK_TO_HOLD_S = 0.5
+"""Seconds a ``kick-to`` holds the pose after its kick's last keyframe."""
+KICK_TO_DISTANCE_M = (2.0, 10.0)
+"""The distances a ``kick-to``'s ``distance`` value spans from −1 to 1, m."""
+KICK_TO_DIRECTION_DEG = 45.0
+"""The direction of a ``kick-to``'s ``direction`` value of 1, deg counter-clockwise from the
+player's heading (−1: clockwise)."""
+
+
+class KeyframeMotion:
+    """A motion of target angles: every joint driven toward a pose plus a kick's keyframed
+    offsets (:data:`~robocup_gym.envs.tasks.reference_kick.Keyframes`) as the kicking tasks
+    drive theirs under a zero action (velocity = ``target_gain`` × the angle error, clipped to
+    the joint's maximum speed): first ``prelude_s`` toward the pose alone, then the keyframes,
+    then ``hold_s`` in the pose.
+
+    Args:
+        robot_type: The player's Nao type (0–4).
+        keyframes: The offsets over the pose, deg, by effector name, at times from the end
+            of the prelude.
+        prelude_s, hold_s: See above, s.
+        pose_deg: The pose, deg by joint name (default: the kicking tasks' start pose, the
+            paper's crouched standing pose).
+    """
+
+    def __init__(
+        self,
+        robot_type: int,
+        keyframes,
+        prelude_s: float = KICK_TO_PRELUDE_S,
+        hold_s: float = KICK_TO_HOLD_S,
+        pose_deg=None,
+    ) -> None:
+        from robocup_gym.envs.actions import ActionMapper, ActionMode
+        from robocup_gym.envs.config import resolve_angles
+        from robocup_gym.envs.tasks.reference_kick import ReferenceKickConfig, kick_table
+        from robocup_gym.sim.physics import CYCLE_S
+
+        c = ReferenceKickConfig()
+        model = nao_model(robot_type)
+        pose = resolve_angles(model, c.joint_start_deg if pose_deg is None else pose_deg, "pose")
+        self._mapper = ActionMapper(
+            model,
+            np.arange(len(model.joints)),
+            ActionMode.TARGET_ANGLE,
+            c.target_gain,
+            around_deg=pose,
+            spread_deg=c.target_around_start_deg,
+            stop_margin_deg=c.target_stop_margin_deg,
+        )
+        self._zero = np.zeros(len(model.joints))
+        self._table = kick_table(keyframes)
+        self._prelude = round(prelude_s / CYCLE_S)
+        self._cycles = self._prelude + round((float(self._table[1][-1]) + hold_s) / CYCLE_S)
+        self._cycle_s = CYCLE_S
+        self.cycle = 0
+
+    def command(self, p: Perception) -> np.ndarray:
+        from robocup_gym.envs.tasks.reference_kick import kick_offsets_deg
+
+        t = (self.cycle - self._prelude) * self._cycle_s
+        self._mapper.set_offsets({} if t < 0.0 else kick_offsets_deg(self._table, t))
+        self.cycle += 1
+        return self._mapper.command(self._zero, p.joint_angles_deg)
+
+    @property
+    def done(self) -> bool:
+        return self.cycle >= self._cycles
+
+
+def kick_to_command(distance: float, direction: float) -> tuple[float, float]:
+    """A ``kick-to`` action's ``distance`` and ``direction`` values (each in [-1, 1]) as the
+    command: (distance m, :data:`KICK_TO_DISTANCE_M`; direction deg, ±
+    :data:`KICK_TO_DIRECTION_DEG`)."""
+    lo, hi = KICK_TO_DISTANCE_M
+    d, a = (float(np.clip(v, -1.0, 1.0)) for v in (distance, direction))
+    return lo + (d + 1.0) / 2.0 * (hi - lo), a * KICK_TO_DIRECTION_DEG
+
+
+def kick_to_spot(
+    distance_m: float, direction_deg: float, robot_type: int = 0
+) -> tuple[float, float]:
+    """Where the ball must lie for the ``kick-to`` of a command once its prelude is over: (ahead,
+    left) of the torso's centre in its heading frame, m (the spot the kick was searched with).
+    The prelude moves the torso (after walking: 1–3 cm forward, up to ~2 cm sideways, by where
+    the walk left the feet), and the kicks are sharp: a ball 3 cm nearer goes ~1.5 m."""
+    from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
+    from robocup_gym.envs.tasks.reference_kick import ReferenceKickConfig
+
+    _, spot = commanded_kick(distance_m, direction_deg, robot_type)
+    start = ReferenceKickConfig().robot_start_pos  # the kicks were searched facing +x from here
+    return float(spot[0] - start[0]), float(spot[1] - start[1])
+
+
+def kick_to(robot_type: int, distance: float, direction: float) -> KeyframeMotion:
+    """The ``kick-to`` motion for its action values (:func:`kick_to_command`): the kick that
+    TargetKick-v1 plays for that command on this Nao type
+    (:func:`~robocup_gym.envs.tasks.commanded_kicks.commanded_kick`), after a
+    :data:`KICK_TO_PRELUDE_S` prelude to its start pose; the ball must then be at
+    :func:`kick_to_spot`."""
+    from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
+
+    keyframes, _ = commanded_kick(*kick_to_command(distance, direction), robot_type)
+    return KeyframeMotion(robot_type, keyframes)
+
+
+register_motion_skill(
+    "kick-to",
+    kick_to,
+    "the commanded kick of TargetKick-v1 for a distance (2-10 m) and a direction (±45°), "
+    f"after {KICK_TO_PRELUDE_S:g} s to its crouched start pose; the ball at kick_to_spot then",
+    parameters=("distance", "direction"),
 )

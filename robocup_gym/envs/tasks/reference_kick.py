@@ -29,6 +29,7 @@ __all__ = [
     "Keyframes",
     "ReferenceKickConfig",
     "ReferenceKickTask",
+    "kick_offsets_deg",
     "kick_table",
     "mirror_keyframes",
     "reference_kick_deg",
@@ -68,7 +69,11 @@ def kick_table(keyframes: Keyframes) -> tuple[tuple[str, ...], np.ndarray, np.nd
     return names, times, values
 
 
-def _offsets(table: tuple[tuple[str, ...], np.ndarray, np.ndarray], t_s: float) -> dict[str, float]:
+def kick_offsets_deg(
+    table: tuple[tuple[str, ...], np.ndarray, np.ndarray], t_s: float
+) -> dict[str, float]:
+    """A kick's target-angle offsets (deg, by effector name) ``t_s`` seconds into it, from its
+    :func:`kick_table`: linear between keyframes, the last keyframe's after it."""
     names, times, values = table
     return {n: float(np.interp(t_s, times, values[:, k])) for k, n in enumerate(names)}
 
@@ -79,7 +84,7 @@ def reference_kick_deg(
     """A kick's target-angle offsets (deg, by Nao effector name) ``t_s`` seconds into the
     episode: ``keyframes`` (default :data:`REFERENCE_KICK_KEYFRAMES`) interpolated linearly,
     0 for a joint a keyframe leaves out and after the last."""
-    return _offsets(kick_table(keyframes), t_s)
+    return kick_offsets_deg(kick_table(keyframes), t_s)
 
 
 def mirror_keyframes(keyframes: Keyframes, robot_type: int = 0) -> Keyframes:
@@ -196,7 +201,8 @@ class ReferenceKickTask:
     def _before_action(self) -> None:
         super()._before_action()  # type: ignore[misc]
         if self.config.reference_kick:
-            self._actions.set_offsets(_offsets(self._kick_table, self.episode_step * CYCLE_S))  # type: ignore[attr-defined]
+            t = self.episode_step * CYCLE_S  # type: ignore[attr-defined]
+            self._actions.set_offsets(kick_offsets_deg(self._kick_table, t))  # type: ignore[attr-defined]
 
     @classmethod
     def league_defaults(cls, robot: str) -> dict[str, Any]:

@@ -1,0 +1,86 @@
+"""Motion skills: the commanded kick (``kick-to``) as a game's action."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pettingzoo")
+
+from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
+from robocup_gym.sim.engines.ode import available
+from robocup_gym.soccer.motions import (
+    KICK_TO_HOLD_S,
+    KICK_TO_PRELUDE_S,
+    KeyframeMotion,
+    kick_to,
+    kick_to_command,
+    kick_to_spot,
+    motion_skill,
+)
+
+
+def test_kick_to_actions_span_the_commanded_kicks():
+    assert kick_to_command(-1.0, -1.0) == (2.0, -45.0)
+    assert kick_to_command(0.0, 0.5) == (6.0, 22.5)
+    assert kick_to_command(3.0, 2.0) == (10.0, 45.0)  # clipped to the action's range
+    assert motion_skill("kick-to").labels == ("kick-to", "kick-to.distance", "kick-to.direction")
+    _, spot = commanded_kick(10.0, 0.0, 0)
+    ahead, left = kick_to_spot(10.0, 0.0, 0)
+    assert (ahead, left) == pytest.approx((spot[0] + 1.0, spot[1]))  # searched from (-1, 0)
+    assert 0.1 < ahead < 0.3 and -0.1 < left < 0.0  # before the right foot
+
+
+def test_a_keyframe_motion_holds_the_pose_then_plays_its_kick():
+    """The prelude drives the joints to the pose alone (a joint at the pose is not moved),
+    then the keyframes' offsets move it; the motion lasts prelude + kick + hold."""
+    from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, resolve_angles
+    from robocup_gym.robot.nao import nao_model
+    from robocup_gym.types import Perception
+
+    model = nao_model(0)
+    pose = resolve_angles(model, PAPER_STANDING_POSE_DEG, "pose")
+    keyframes = ((0.0, {}), (0.2, {"rle4": -20.0}), (0.4, {}))
+    motion = KeyframeMotion(0, keyframes)
+    knee = model.effector_names.index("rle4")
+    seen = Perception(
+        time=0.0, game=None, gyro=np.zeros(3), accel=np.zeros(3),
+        joint_names=model.perceptor_names, joint_angles_deg=pose.copy(),
+    )  # fmt: skip
+    velocities = []
+    while not motion.done:
+        velocities.append(motion.command(seen)[knee])
+    prelude = round(KICK_TO_PRELUDE_S / 0.02)
+    assert len(velocities) == prelude + round((0.4 + KICK_TO_HOLD_S) / 0.02)
+    assert np.allclose(velocities[:prelude], 0.0, atol=1e-9)
+    assert min(velocities[prelude : prelude + 20]) < -1.0  # the knee bends toward −20°
+
+
+@pytest.mark.skipif(not available(), reason="the kicks were searched on ODE")
+def test_kick_to_kicks_in_a_game_after_walking(run_benchmark):
+    """``benchmarks/game_kick.py``: after 3 s of walking and 1 s standing, with the ball at
+    the kick's spot once the prelude is over, kick-to meets TargetKick's targets (median
+    distance error ≤ 15 %, direction ≤ 5°) and the player stays up."""
+    result, lines = run_benchmark("game_kick.py", "--robot-type", 3)
+    assert len(lines) == result["kicks"] == 15
+    assert result["distance_error_median"] < 0.15, result
+    assert result["direction_error_deg_median"] < 5.0, result
+    assert result["stand_after_kick_rate"] >= 0.9, result
+
+
+def test_kick_to_plays_the_kick_of_its_command_and_type():
+    from robocup_gym.robot.nao import nao_model
+    from robocup_gym.types import Perception
+
+    model = nao_model(4)
+    seen = Perception(
+        time=0.0, game=None, gyro=np.zeros(3), accel=np.zeros(3),
+        joint_names=model.perceptor_names, joint_angles_deg=np.zeros(len(model.joints)),
+    )  # fmt: skip
+    motion, cycles = kick_to(4, 1.0, 0.0), 0
+    while not motion.done:
+        assert motion.command(seen).shape == (len(model.joints),)  # the toes too
+        cycles += 1
+    keyframes, _ = commanded_kick(10.0, 0.0, 4)
+    prelude = round(KICK_TO_PRELUDE_S / 0.02)
+    assert cycles == prelude + round((keyframes[-1][0] + KICK_TO_HOLD_S) / 0.02)
