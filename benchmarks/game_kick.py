@@ -11,6 +11,9 @@ off) per kick: the player walks 3 s forward (0.3–0.5 m/s, by seed), stands 1 s
 * ``--ball before``: when the kick starts, relative to the standing torso (what a team that
   brings the ball to the spot and then kicks gets: the prelude moves the torso 1–3 cm).
 
+``--lead AHEAD,LEFT`` (m) puts the ball that much farther ahead and to the left of the spot
+(e.g. ``--ball before --lead 0.03,0.01``, ahead of where the prelude takes the torso).
+
 Commands: distances 3, 6, 9 m × directions −45°, −22.5°, 0°, 22.5°, 45°. Per kick, where the
 ball comes to rest (``robocup_gym.sim.physics.ball_rest_point``, 3 s after the prelude),
 its distance error as a fraction of the command, its direction error (deg), and whether the
@@ -38,7 +41,13 @@ _STEP_S = 0.2
 """A skill step: 10 cycles."""
 
 
-def kick(robot_type: int, command: tuple[float, float], seed: int, ball: str) -> dict:
+def kick(
+    robot_type: int,
+    command: tuple[float, float],
+    seed: int,
+    ball: str,
+    lead: tuple[float, float] = (0.0, 0.0),
+) -> dict:
     """One kick-to in a game (see the module docstring); its outcome."""
     from robocup_gym.soccer import game_v1
     from robocup_gym.soccer.motions import (
@@ -50,7 +59,8 @@ def kick(robot_type: int, command: tuple[float, float], seed: int, ball: str) ->
 
     lo, hi = KICK_TO_DISTANCE_M
     values = (2.0 * (command[0] - lo) / (hi - lo) - 1.0, command[1] / KICK_TO_DIRECTION_DEG)
-    spot = kick_to_spot(*command, robot_type)
+    ahead, left = kick_to_spot(*command, robot_type)
+    spot = (ahead + lead[0], left + lead[1])
     env = game_v1.parallel_env(
         actions="skills",
         skills=("kick-to",),
@@ -100,10 +110,19 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--robot-type", type=int, default=0, choices=range(5))
     parser.add_argument("--ball", choices=("after", "before"), default="after")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--lead",
+        type=lambda text: tuple(float(v) for v in text.split(",")),
+        default=(0.0, 0.0),
+        metavar="AHEAD,LEFT",
+        help="put the ball this much farther ahead and to the left of the kick's spot, m",
+    )
     args = parser.parse_args(argv)
+    if len(args.lead) != 2:
+        parser.error(f"--lead takes AHEAD,LEFT in m, got {args.lead}")
     rows = []
     for k, (d, a) in enumerate((d, a) for d in DISTANCES_M for a in DIRECTIONS_DEG):
-        r = kick(args.robot_type, (d, a), args.seed + k, args.ball)
+        r = kick(args.robot_type, (d, a), args.seed + k, args.ball, args.lead)
         rows.append(r)
         print(
             f"{d:4.1f} m {a:+6.1f}°: {r['kick_distance_m']:5.2f} m "
@@ -114,6 +133,7 @@ def main(argv: list[str] | None = None) -> dict:
     out = {
         "robot_type": args.robot_type,
         "ball": args.ball,
+        "lead_m": list(args.lead),
         "kicks": len(rows),
         "distance_error_median": float(np.median([r["distance_error"] for r in rows])),
         "direction_error_deg_median": float(np.median([r["direction_error_deg"] for r in rows])),
