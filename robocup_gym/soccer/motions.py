@@ -21,14 +21,24 @@ Registered here:
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
+from robocup_gym.envs.actions import ActionMapper, ActionMode
+from robocup_gym.envs.config import resolve_angles
+from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
+from robocup_gym.envs.tasks.reference_kick import (
+    Keyframes,
+    ReferenceKickConfig,
+    kick_offsets_deg,
+    kick_table,
+)
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim.fidelity import load_data
+from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.types import Perception
 
 __all__ = [
@@ -252,16 +262,11 @@ class KeyframeMotion:
     def __init__(
         self,
         robot_type: int,
-        keyframes,
+        keyframes: Keyframes,
         prelude_s: float = KICK_TO_PRELUDE_S,
         hold_s: float = KICK_TO_HOLD_S,
-        pose_deg=None,
+        pose_deg: Mapping[str, float] | None = None,
     ) -> None:
-        from robocup_gym.envs.actions import ActionMapper, ActionMode
-        from robocup_gym.envs.config import resolve_angles
-        from robocup_gym.envs.tasks.reference_kick import ReferenceKickConfig, kick_table
-        from robocup_gym.sim.physics import CYCLE_S
-
         c = ReferenceKickConfig()
         model = nao_model(robot_type)
         pose = resolve_angles(model, c.joint_start_deg if pose_deg is None else pose_deg, "pose")
@@ -278,13 +283,10 @@ class KeyframeMotion:
         self._table = kick_table(keyframes)
         self._prelude = round(prelude_s / CYCLE_S)
         self._cycles = self._prelude + round((float(self._table[1][-1]) + hold_s) / CYCLE_S)
-        self._cycle_s = CYCLE_S
         self.cycle = 0
 
     def command(self, p: Perception) -> np.ndarray:
-        from robocup_gym.envs.tasks.reference_kick import kick_offsets_deg
-
-        t = (self.cycle - self._prelude) * self._cycle_s
+        t = (self.cycle - self._prelude) * CYCLE_S
         self._mapper.set_offsets({} if t < 0.0 else kick_offsets_deg(self._table, t))
         self.cycle += 1
         return self._mapper.command(self._zero, p.joint_angles_deg)
@@ -310,9 +312,6 @@ def kick_to_spot(
     left) of the torso's centre in its heading frame, m (the spot the kick was searched with).
     The prelude moves the torso (after walking: 1–3 cm forward, up to ~2 cm sideways, by where
     the walk left the feet), and the kicks are sharp: a ball 3 cm nearer goes ~1.5 m."""
-    from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
-    from robocup_gym.envs.tasks.reference_kick import ReferenceKickConfig
-
     _, spot = commanded_kick(distance_m, direction_deg, robot_type)
     start = ReferenceKickConfig().robot_start_pos  # the kicks were searched facing +x from here
     return float(spot[0] - start[0]), float(spot[1] - start[1])
@@ -324,8 +323,6 @@ def kick_to(robot_type: int, distance: float, direction: float) -> KeyframeMotio
     (:func:`~robocup_gym.envs.tasks.commanded_kicks.commanded_kick`), after a
     :data:`KICK_TO_PRELUDE_S` prelude to its start pose; the ball must then be at
     :func:`kick_to_spot`."""
-    from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
-
     keyframes, _ = commanded_kick(*kick_to_command(distance, direction), robot_type)
     return KeyframeMotion(robot_type, keyframes)
 
