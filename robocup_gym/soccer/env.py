@@ -81,7 +81,7 @@ from robocup_gym.envs.observations import heading_frame
 from robocup_gym.sim.field import FIELD_HALF_LENGTH, FIELD_HALF_WIDTH
 from robocup_gym.sim.referee import Rules, other
 from robocup_gym.soccer.game import SIDES, CycleReport, SoccerGame, Start
-from robocup_gym.soccer.motions import motion_skill
+from robocup_gym.soccer.motions import checked_motion_skills
 from robocup_gym.soccer.observations import PlayerObserver
 from robocup_gym.soccer.scripted import TeamView
 from robocup_gym.soccer.skills import (
@@ -151,15 +151,7 @@ class SoccerConfig:
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.actions not in ("joints", "skills"):
             raise ValueError(f"actions must be 'joints' or 'skills', got {self.actions!r}")
-        if isinstance(self.skills, str) or not isinstance(self.skills, Sequence):
-            raise ValueError(
-                f"skills must be a sequence of motion skill names, got {self.skills!r}"
-            )
-        object.__setattr__(self, "skills", tuple(self.skills))
-        for name in self.skills:
-            motion_skill(name)  # an unknown name: the registered ones listed
-        if len(set(self.skills)) != len(self.skills):
-            raise ValueError(f"skills lists a motion skill twice: {self.skills}")
+        object.__setattr__(self, "skills", checked_motion_skills(self.skills))
         for name in ("max_cycles", "cycles_per_step", "skill_cycles"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:

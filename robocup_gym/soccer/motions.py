@@ -54,6 +54,7 @@ __all__ = [
     "Motion",
     "MotionSkill",
     "ScriptedMotion",
+    "checked_motion_skills",
     "kick_sequence",
     "kick_to",
     "kick_to_command",
@@ -195,6 +196,23 @@ def register_motion_skill(
     skill = MotionSkill(name, start, description, tuple(parameters))
     _MOTION_SKILLS[name] = skill
     return skill
+
+
+def checked_motion_skills(names: object) -> tuple[str, ...]:
+    """``names`` as a game's motion skills: a sequence of registered names, each once.
+
+    Raises:
+        ValueError: not a sequence of names (a single string included), an unknown name (the
+            registered ones listed) or a name listed twice.
+    """
+    if isinstance(names, str) or not isinstance(names, Sequence):
+        raise ValueError(f"skills must be a sequence of motion skill names, got {names!r}")
+    out = tuple(names)
+    for name in out:
+        motion_skill(name)
+    if len(set(out)) != len(out):
+        raise ValueError(f"skills lists a motion skill twice: {out}")
+    return out
 
 
 def unregister_motion_skill(name: str) -> None:

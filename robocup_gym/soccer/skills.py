@@ -35,7 +35,13 @@ from robocup_gym.backends.base import Backend, EpisodeSetup
 from robocup_gym.envs.observations import heading_frame, in_heading_frame, up_z
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.rotations import quat_multiply, yaw_quat
-from robocup_gym.soccer.motions import KICK_CYCLES, WALK_ACTION_LABELS, Motion, motion_skill
+from robocup_gym.soccer.motions import (
+    KICK_CYCLES,
+    WALK_ACTION_LABELS,
+    Motion,
+    checked_motion_skills,
+    motion_skill,
+)
 from robocup_gym.types import AgentCommand, Perception
 
 __all__ = [
@@ -313,9 +319,7 @@ class SkillSet:
         from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
 
         self.robot_types = tuple(int(t) for t in robot_types)
-        self.motions = {name: motion_skill(name) for name in motions}
-        if len(self.motions) != len(motions):
-            raise ValueError(f"motion skills listed twice: {list(motions)}")
+        self.motions = {name: motion_skill(name) for name in checked_motion_skills(motions)}
         self.action_labels = skill_action_labels(tuple(self.motions))
         """The values of a skill action of this game."""
         self.action_what = skill_action_what(tuple(self.motions))

@@ -84,3 +84,22 @@ def test_kick_to_plays_the_kick_of_its_command_and_type():
     keyframes, _ = commanded_kick(10.0, 0.0, 4)
     prelude = round(KICK_TO_PRELUDE_S / 0.02)
     assert cycles == prelude + round((keyframes[-1][0] + KICK_TO_HOLD_S) / 0.02)
+
+
+def test_the_scripted_kick_runs_its_cycles_on_every_type():
+    """``kick``: the fixture's 25 cycles of motion and the follow-through at rest, as
+    :data:`KICK_CYCLES` says, on every Nao type (its velocities in the type's joint order)."""
+    from robocup_gym.robot.nao import nao_model
+    from robocup_gym.soccer.motions import KICK_CYCLES, KICK_FOLLOW_THROUGH_CYCLES, kick_sequence
+
+    for t in range(5):
+        rows = kick_sequence(t)
+        assert len(rows) == KICK_CYCLES
+        assert all(r.shape == (len(nao_model(t).joints),) for r in rows)
+        assert not any(r.any() for r in rows[-KICK_FOLLOW_THROUGH_CYCLES:])
+        assert rows[0].any()
+        motion, cycles = motion_skill("kick").start(t), 0
+        while not motion.done:
+            motion.command(None)
+            cycles += 1
+        assert cycles == KICK_CYCLES
