@@ -34,11 +34,12 @@ import numpy as np
 from robocup_gym.envs.observations import heading_frame
 from robocup_gym.envs.tasks.target_kick import kick_outcome
 from robocup_gym.sim.physics import BALL_REST_Z, CYCLE_S
+from robocup_gym.soccer.env import SoccerConfig
 
 DISTANCES_M = (3.0, 6.0, 9.0)
 DIRECTIONS_DEG = (-45.0, -22.5, 0.0, 22.5, 45.0)
-_STEP_S = 0.2
-"""A skill step: 10 cycles."""
+_STEP_S = SoccerConfig.skill_cycles * CYCLE_S
+"""A skill step, s."""
 
 
 def kick(
@@ -139,7 +140,6 @@ def main(argv: list[str] | None = None) -> dict:
         "direction_error_deg_median": float(np.median([r["direction_error_deg"] for r in rows])),
         "ball_distance_median_m": float(np.median([r["kick_distance_m"] for r in rows])),
         "stand_after_kick_rate": float(np.mean([r["standing"] for r in rows])),
-        "cycle_s": CYCLE_S,
     }
     print(json.dumps(out))
     return out
