@@ -72,15 +72,15 @@ def agent(
         raise _usage_error("Missing argument 'onnx' (an exported policy, or --pretrained)")
     if onnx is not None and pretrained is not None:
         _fail("give an exported policy (.onnx) or --pretrained NAME, not both")
+    overrides = _parse_assignments(env, "--env")
     if pretrained is not None:
         from robocup_gym.train.pretrained import pretrained_path
 
         try:
-            onnx = pretrained_path(pretrained)
+            robot_type = overrides.get("robot_type")  # a bad one is refused by the environment
+            onnx = pretrained_path(pretrained, robot_type if isinstance(robot_type, int) else None)
         except ValueError as exc:
             _fail(str(exc))
-
-    overrides = _parse_assignments(env, "--env")
     reset_options: dict[str, Any] = {}
     if command is not None:
         parts = command.split(",")

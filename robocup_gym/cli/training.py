@@ -217,6 +217,14 @@ def eval_(
             help="Instead of --engine: ode, mujoco or rcssserver3d (a real server, closed-loop)."
         ),
     ] = None,
+    robot_type: Annotated[
+        int | None,
+        typer.Option(
+            "--robot-type",
+            help="On this Nao type (0-4) instead of the policy's own; a shipped policy with "
+            "a policy of its own for the type runs that.",
+        ),
+    ] = None,
 ) -> None:
     """Evaluate a run (or a shipped policy) deterministically; the last line of output is one
     JSON object."""
@@ -236,7 +244,7 @@ def eval_(
                 "--pretrained evaluates the shipped ONNX policy: no --video/--checkpoint/"
                 "--no-deterministic"
             )
-        _eval_pretrained(console, pretrained, episodes, seed, _backend(backend, engine))
+        _eval_pretrained(console, pretrained, episodes, seed, _backend(backend, engine), robot_type)
         return
     try:
         if video is not None:
@@ -252,6 +260,7 @@ def eval_(
                 video_episodes=video_episodes,
                 checkpoint=checkpoint,
                 backend=_backend(backend, engine),
+                robot_type=robot_type,
             )
     except typer.Exit:
         raise
@@ -290,12 +299,16 @@ def eval_(
     print(json.dumps(summary), flush=True)
 
 
-def _eval_pretrained(console, name: str, episodes: int, seed: int, backend) -> None:
+def _eval_pretrained(
+    console, name: str, episodes: int, seed: int, backend, robot_type: int | None
+) -> None:
     from robocup_gym.train.pretrained import evaluate_pretrained
 
     try:
         with console.status(f"evaluating the shipped policy {name} ({episodes} episodes)…"):
-            summary = evaluate_pretrained(name, episodes=episodes, seed=seed, backend=backend)
+            summary = evaluate_pretrained(
+                name, episodes=episodes, seed=seed, backend=backend, robot_type=robot_type
+            )
     except typer.Exit:
         raise
     except (ValueError, FileNotFoundError, RuntimeError) as exc:
@@ -309,7 +322,7 @@ def _eval_pretrained(console, name: str, episodes: int, seed: int, backend) -> N
     )
     console.print(
         f"[bold]{summary['pretrained']}[/bold] ({summary['env_id']}) · {summary['backend']}"
-        f" · {summary['episodes']} episodes"
+        f" · Nao type {summary['robot_type']} · {summary['episodes']} episodes"
     )
     for key, label in keys:
         if summary.get(key) is not None:
@@ -397,9 +410,14 @@ def tasks() -> None:
     except RcsssmjUnavailableError:
         league = "not installed (pip install 'robocup-gym[mj]')"
     print(f"\nrobots: the Nao, types 0-4 (--env robot_type=N); the league's: {league}")
-    from robocup_gym.train.pretrained import pretrained_names
+    from robocup_gym.train.pretrained import pretrained_names, pretrained_types
 
-    shipped = ", ".join(pretrained_names()) or "none yet"
+    def listed(name: str) -> str:
+        types = pretrained_types(name)
+        own = ", ".join(str(t) for t in types)
+        return f"{name} (Nao types {own}: their own)" if types else name
+
+    shipped = ", ".join(listed(n) for n in pretrained_names()) or "none yet"
     print(f"pretrained policies (eval/agent --pretrained NAME): {shipped}")
 
 

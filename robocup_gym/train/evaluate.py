@@ -43,7 +43,7 @@ def policy_and_env(
         zeros = np.zeros(env.action_space.shape)
         return env, lambda obs: zeros
     if policy.startswith("pretrained:"):
-        onnx = pretrained_policy(policy.split(":", 1)[1])
+        onnx = pretrained_policy(policy.split(":", 1)[1], extra.get("robot_type"))
         return pretrained_env(onnx, engine, extra), onnx
     info = load_run(policy)
     model = load_model(info)
@@ -321,13 +321,15 @@ def evaluate_run(
     checkpoint: str | os.PathLike | None = None,
     write: bool = True,
     backend: str | None = None,
+    robot_type: int | None = None,
 ) -> dict[str, Any]:
     """Evaluate a run folder's policy; returns (and writes to ``eval.json``, or to
-    ``eval-<backend>.json`` for another backend than the run's) the summary.
+    ``eval-<backend>.json`` for another backend than the run's, ``eval[-<backend>]-type<N>.json``
+    on another Nao type) the summary.
 
     ``backend`` evaluates on another simulator than the run trained on (e.g. ``"ode"``:
-    SimSpark's physics on ODE itself, closed-loop); the video, if any, is recorded on the run's
-    own backend."""
+    SimSpark's physics on ODE itself, closed-loop); ``robot_type`` on another Nao type than the
+    run's. The video, if any, is recorded on the run's own backend."""
 
     if int(episodes) < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
@@ -338,7 +340,8 @@ def evaluate_run(
     model = load_model(info, checkpoint=checkpoint)
     normalizer = info.obs_normalizer()
     backend = backend or cfg.backend
-    env = make_env(cfg.env_id, backend=backend, env_kwargs=cfg.env_options())
+    on_type = {} if robot_type is None else {"robot_type": int(robot_type)}
+    env = make_env(cfg.env_id, backend=backend, env_kwargs=cfg.env_options(**on_type))
     try:
         records = run_episodes(
             model, env, episodes, seed=seed, deterministic=deterministic, obs_normalizer=normalizer
@@ -354,12 +357,15 @@ def evaluate_run(
         "timesteps_trained": int(model.num_timesteps),
         "deterministic": deterministic,
         "backend": backend,
+        "robot_type": env.unwrapped.config.robot_type,
         **summarize(records),
     }
     if video is not None:
         summary["video"] = str(record_video(info, model, video, episodes=video_episodes, seed=seed))
     if write:
-        name = "eval.json" if backend == cfg.backend else f"eval-{backend}.json"
+        name = "eval" if backend == cfg.backend else f"eval-{backend}"
+        name += "" if robot_type is None else f"-type{int(robot_type)}"
+        name += ".json"
         summary["written"] = str(info.path / name)
         (info.path / name).write_text(json.dumps(summary, indent=2) + "\n")
     return summary

@@ -3,7 +3,10 @@ exported to ONNX, ready to run.
 
 Each lives in ``robocup_gym/data/policies/`` as ``<name>.onnx`` (the graph, with its description
 in the metadata) and ``<name>.json`` (the same description, readable: task, environment options,
-observation layout, action mapping, and how it was trained). ``robocup-gym eval --pretrained
+observation layout, action mapping, and how it was trained). Where one policy does not serve every
+Nao type, a type has its own, trained on it: ``<name>.type<N>.onnx`` (and its ``.json``), which
+:func:`pretrained_path` and :func:`pretrained_policy` give for ``robot_type=N``; the other types
+run ``<name>.onnx``. ``robocup-gym eval --pretrained
 NAME`` evaluates one in-process; ``robocup-gym agent --pretrained NAME`` drives a robot with it
 on a server; :func:`pretrained_policy` gives one to Python code.
 """
@@ -32,6 +35,7 @@ __all__ = [
     "pretrained_names",
     "pretrained_path",
     "pretrained_policy",
+    "pretrained_types",
     "recorded_env_options",
 ]
 
@@ -39,33 +43,65 @@ POLICY_DIR = Path(__file__).resolve().parents[1] / "data" / "policies"
 """Where the shipped policies are."""
 
 
+_TYPE_TAG = ".type"
+"""Between a policy's name and the Nao type of a type's own policy: ``run.type1.onnx``."""
+
+
 def pretrained_names() -> list[str]:
-    """The names of the shipped policies (``get-up``, …), sorted."""
+    """The names of the shipped policies (``get-up``, …), sorted (a type's own policy is
+    listed under its name: :func:`pretrained_types`)."""
     if not POLICY_DIR.is_dir():
         return []
-    return sorted(p.stem for p in POLICY_DIR.glob("*.onnx"))
+    return sorted(p.stem for p in POLICY_DIR.glob("*.onnx") if _TYPE_TAG not in p.stem)
 
 
-def pretrained_path(name: str) -> Path:
-    """The ONNX file of the shipped policy ``name`` (``get-up``; ``Get_Up`` and ``getup``
-    too).
-
-    Raises:
-        ValueError: no such policy (the message lists the shipped ones).
-    """
+def _shipped_name(name: str) -> str:
     names = pretrained_names()
     key = str(name).strip().lower().replace("_", "-")
     for n in names:
         if key in (n, n.replace("-", "")):
-            return POLICY_DIR / f"{n}.onnx"
+            return n
     shipped = ", ".join(names) if names else "none"
     raise ValueError(f"no pretrained policy {name!r}; shipped: {shipped}")
 
 
-def pretrained_policy(name: str):
-    """The shipped policy ``name`` as an :class:`~robocup_gym.train.export.OnnxPolicy`
-    (``policy(obs) → action``; ``policy.metadata`` has its task and options)."""
-    return OnnxPolicy(pretrained_path(name))
+def pretrained_types(name: str) -> list[int]:
+    """The Nao types that have a policy of their own under the shipped name ``name``, sorted
+    (the others run the name's shared policy).
+
+    Raises:
+        ValueError: no such policy (the message lists the shipped ones).
+    """
+    n = _shipped_name(name)
+    types = []
+    for p in POLICY_DIR.glob(f"{n}{_TYPE_TAG}*.onnx"):
+        tag = p.stem[len(n) + len(_TYPE_TAG) :]
+        if tag.isdigit():
+            types.append(int(tag))
+    return sorted(types)
+
+
+def pretrained_path(name: str, robot_type: int | None = None) -> Path:
+    """The ONNX file of the shipped policy ``name`` (``get-up``; ``Get_Up`` and ``getup``
+    too): for ``robot_type`` its own where that Nao type has one (:func:`pretrained_types`),
+    else the shared one.
+
+    Raises:
+        ValueError: no such policy (the message lists the shipped ones).
+    """
+    n = _shipped_name(name)
+    if robot_type is not None:
+        own = POLICY_DIR / f"{n}{_TYPE_TAG}{int(robot_type)}.onnx"
+        if own.is_file():
+            return own
+    return POLICY_DIR / f"{n}.onnx"
+
+
+def pretrained_policy(name: str, robot_type: int | None = None):
+    """The shipped policy ``name`` (for ``robot_type``: see :func:`pretrained_path`) as an
+    :class:`~robocup_gym.train.export.OnnxPolicy` (``policy(obs) → action``;
+    ``policy.metadata`` has its task and options)."""
+    return OnnxPolicy(pretrained_path(name, robot_type))
 
 
 def recorded_env_options(meta: dict[str, Any]) -> dict[str, Any]:
@@ -145,27 +181,35 @@ class _Predictor:
 
 
 def evaluate_pretrained(
-    name: str, *, episodes: int = 10, seed: int = 100_000, backend: str | None = None
+    name: str,
+    *,
+    episodes: int = 10,
+    seed: int = 100_000,
+    backend: str | None = None,
+    robot_type: int | None = None,
 ) -> dict[str, Any]:
     """Evaluate the shipped policy ``name`` in-process, as ``robocup-gym eval`` evaluates a
     run: ``episodes`` episodes of its task with its options (episode ``k`` seeded ``seed + k``)
-    on ``backend`` (default: the engine it was trained on). Returns the summary (mean return,
-    the task's measures: ``success_rate``, ``forward_speed_mps_mean``, …)."""
+    on ``backend`` (default: the engine it was trained on), on Nao type ``robot_type``
+    (default: the policy's own; a type with a policy of its own runs that). Returns the summary
+    (mean return, the task's measures: ``success_rate``, ``forward_speed_mps_mean``, …)."""
     if int(episodes) < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
-    policy = pretrained_policy(name)
+    policy = pretrained_policy(name, robot_type)
     meta = policy.metadata
     backend = backend or meta.get("backend") or DEFAULT_ENGINE
-    env = pretrained_env(policy, backend)
+    on_type = None if robot_type is None else {"robot_type": int(robot_type)}
+    env = pretrained_env(policy, backend, on_type)
     try:
         records = run_episodes(_Predictor(policy), env, episodes, seed=seed)
     finally:
         env.close()
     return {
-        "pretrained": pretrained_path(name).stem,
+        "pretrained": policy.path.stem,
         "model": str(policy.path),
         "env_id": meta["env_id"],
         "backend": backend,
+        "robot_type": env.unwrapped.config.robot_type,
         "training": meta.get("training", {}),
         **summarize(records),
     }

@@ -102,6 +102,12 @@ def test_progress_pays_the_speed_along_the_start_heading():
     assert _terms(run, progress=-0.2)["progress"] == pytest.approx(-0.6)  # backwards costs
     with pytest.raises(EnvConfigError, match="w_progress"):
         WalkConfig(w_progress=float("nan")).validate()
+    capped = WalkConfig(w_progress=3.0, progress_cap_mps=1.7)
+    assert _terms(capped, progress=2.0)["progress"] == pytest.approx(3.0 * 1.7)
+    assert _terms(capped, progress=1.2)["progress"] == pytest.approx(3.0 * 1.2)
+    for bad in (0.0, -1.0, float("inf")):
+        with pytest.raises(EnvConfigError, match="progress_cap_mps"):
+            WalkConfig(progress_cap_mps=bad).validate()
 
 
 def test_progress_is_measured_along_the_heading_the_episode_started_with():

@@ -661,6 +661,27 @@ def test_pretrained_policies_are_found_evaluated_and_listed(ppo_run, tmp_path, m
     assert "quick-kick" in invoke(["tasks"]).stdout
     with pytest.raises(ValueError, match="shipped: quick-kick"):
         pretrained.pretrained_path("walk")
+    # a Nao type's own policy: listed under the name, given for that type, the shared for others
+    assert pretrained.pretrained_types("quick-kick") == []
+    for suffix in (".onnx", ".json"):
+        (shipped / f"quick-kick.type3{suffix}").write_bytes(
+            (shipped / f"quick-kick{suffix}").read_bytes()
+        )
+    assert pretrained.pretrained_names() == ["quick-kick"]
+    assert pretrained.pretrained_types("quick-kick") == [3]
+    assert pretrained.pretrained_path("quick-kick", 3) == shipped / "quick-kick.type3.onnx"
+    assert pretrained.pretrained_path("quick-kick", 1) == shipped / "quick-kick.onnx"
+    on3 = last_json(
+        invoke(["eval", "--pretrained", "quick-kick", "--episodes", 1, "--robot-type", 3]).stdout
+    )
+    assert on3["pretrained"] == "quick-kick.type3" and on3["robot_type"] == 3
+    on1 = last_json(
+        invoke(["eval", "--pretrained", "quick-kick", "--episodes", 1, "--robot-type", 1]).stdout
+    )
+    assert on1["pretrained"] == "quick-kick" and on1["robot_type"] == 1
+    assert out["robot_type"] == 0
+    run_on1 = last_json(invoke(["eval", ppo_run, "--episodes", 1, "--robot-type", 1]).stdout)
+    assert run_on1["robot_type"] == 1 and run_on1["written"].endswith("eval-type1.json")
     from typer.testing import CliRunner
 
     from robocup_gym.cli import app

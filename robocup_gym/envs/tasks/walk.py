@@ -128,6 +128,10 @@ class WalkConfig(EnvConfig):
     """Weight of the torso's speed along the heading it started the episode with, m/s (the
     distance covered that way: FC Portugal's running reward); 0 in Walk, which tracks the
     command instead."""
+    progress_cap_mps: float | None = None
+    """The speed beyond which ``progress`` pays no more, m/s (``None``: no cap). With a cap a
+    policy that already runs that fast gains nothing by running faster and can trade the rest
+    for not falling."""
     w_upright: float = 0.3
     """Weight of the torso's up axis z component (1 upright)."""
     w_feet_phase: float = 0.5
@@ -186,6 +190,9 @@ class WalkConfig(EnvConfig):
                 raise EnvConfigError(f"{name} must be in [0, 90] deg, got {value!r}")
         if not (math.isfinite(self.gait_lead_s) and abs(self.gait_lead_s) <= 1.0):
             raise EnvConfigError(f"gait_lead_s must be within ±1 s, got {self.gait_lead_s!r}")
+        cap = self.progress_cap_mps
+        if cap is not None and not (math.isfinite(cap) and cap > 0.0):
+            raise EnvConfigError(f"progress_cap_mps must be > 0 m/s or None, got {cap!r}")
         target = self.feet_air_time_target_s
         if target is not None and not (math.isfinite(target) and target >= 0.0):
             raise EnvConfigError(f"feet_air_time_target_s must be >= 0 s, got {target!r}")
@@ -201,6 +208,11 @@ class WalkConfig(EnvConfig):
         ):  # fmt: skip
             if not math.isfinite(getattr(self, name)):
                 raise EnvConfigError(f"{name} must be finite, got {getattr(self, name)!r}")
+
+
+def capped(value: float, cap: float | None) -> float:
+    """``value`` up to ``cap`` (``None``: no cap)."""
+    return value if cap is None else min(value, cap)
 
 
 def asks_to_move(command: np.ndarray) -> bool:
@@ -309,7 +321,8 @@ def walk_reward_terms(
         phase: The gait clock's phase in [0, 1).
         feet_down: Whether the (left, right) foot touches the ground; ``None``: no
             ``feet_phase`` term (0).
-        progress: The torso's speed along its heading at the episode's start, m/s.
+        progress: The torso's speed along its heading at the episode's start, m/s (paid up
+            to ``progress_cap_mps``).
     """
     c = config
     lin_err = float((velocity[0] - command[0]) ** 2 + (velocity[1] - command[1]) ** 2)
@@ -332,7 +345,7 @@ def walk_reward_terms(
     return {
         "tracking_linear": c.w_tracking_linear * math.exp(-lin_err / c.tracking_sigma),
         "tracking_turn": c.w_tracking_turn * math.exp(-turn_err / turn_sigma),
-        "progress": c.w_progress * float(progress),
+        "progress": c.w_progress * capped(float(progress), c.progress_cap_mps),
         "upright": c.w_upright * float(up_z),
         "feet_phase": c.w_feet_phase * feet_phase,
         "feet_air_time": c.w_feet_air_time * air,
