@@ -322,7 +322,8 @@ def _eval_pretrained(
     )
     console.print(
         f"[bold]{summary['pretrained']}[/bold] ({summary['env_id']}) · {summary['backend']}"
-        f" · Nao type {summary['robot_type']} · {summary['episodes']} episodes"
+        + ("" if summary["robot_type"] is None else f" · Nao type {summary['robot_type']}")
+        + f" · {summary['episodes']} episodes"
     )
     for key, label in keys:
         if summary.get(key) is not None:

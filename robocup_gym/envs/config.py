@@ -178,6 +178,12 @@ def robot_model(config: EnvConfig) -> Any:
     return league_robot_of(config.robot)
 
 
+def nao_type(config: EnvConfig) -> int | None:
+    """The Nao type a config runs (``robot_type``), or ``None`` where its robot is a league
+    robot (whose ``robot_type`` means nothing)."""
+    return int(config.robot_type) if config.robot == "nao" else None
+
+
 def league_robot_of(name: Any) -> Any:
     """The :class:`~robocup_gym.robot.league.LeagueRobot` called ``name``.
 

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.backends import DEFAULT_ENGINE
+from robocup_gym.envs.config import nao_type
 from robocup_gym.train.episodes import run_episodes
 from robocup_gym.train.metrics import summarize
 from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
@@ -357,7 +358,7 @@ def evaluate_run(
         "timesteps_trained": int(model.num_timesteps),
         "deterministic": deterministic,
         "backend": backend,
-        "robot_type": env.unwrapped.config.robot_type,
+        "robot_type": nao_type(env.unwrapped.config),
         **summarize(records),
     }
     if video is not None:

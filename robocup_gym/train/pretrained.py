@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from robocup_gym.backends import DEFAULT_ENGINE
+from robocup_gym.envs.config import nao_type
 from robocup_gym.train.episodes import run_episodes
 from robocup_gym.train.metrics import summarize
 from robocup_gym.train.onnx_policy import OnnxPolicy
@@ -209,7 +210,7 @@ def evaluate_pretrained(
         "model": str(policy.path),
         "env_id": meta["env_id"],
         "backend": backend,
-        "robot_type": env.unwrapped.config.robot_type,
+        "robot_type": nao_type(env.unwrapped.config),
         "training": meta.get("training", {}),
         **summarize(records),
     }
