@@ -51,15 +51,9 @@ def kick(
 ) -> dict:
     """One kick-to in a game (see the module docstring); its outcome."""
     from robocup_gym.soccer import game_v1
-    from robocup_gym.soccer.motions import (
-        KICK_TO_DIRECTION_DEG,
-        KICK_TO_DISTANCE_M,
-        KICK_TO_PRELUDE_S,
-        kick_to_spot,
-    )
+    from robocup_gym.soccer.motions import KICK_TO_PRELUDE_S, kick_to_spot, kick_to_values
 
-    lo, hi = KICK_TO_DISTANCE_M
-    values = (2.0 * (command[0] - lo) / (hi - lo) - 1.0, command[1] / KICK_TO_DIRECTION_DEG)
+    values = kick_to_values(*command)
     ahead, left = kick_to_spot(*command, robot_type)
     spot = (ahead + lead[0], left + lead[1])
     env = game_v1.parallel_env(

@@ -260,6 +260,12 @@ class SoccerParallelEnv(ParallelEnv):
             if c.actions == "skills"
             else None
         )
+        self.skill_action_labels = (
+            self.skills.action_labels if self.skills is not None else skill_action_labels(c.skills)
+        )
+        """The values of a skill action in this game (the walk's, then each motion skill's of
+        ``skills``, as registered when the game was made), whatever its ``actions``: what a
+        scripted team fits its actions to."""
         self._angles: dict[str, np.ndarray] = {}
         self._cycles = 0
         self._rng = np.random.default_rng()
@@ -275,12 +281,6 @@ class SoccerParallelEnv(ParallelEnv):
     def action_space(self, agent: str) -> gym.spaces.Box:
         n = len(self.skill_action_labels) if self.skills is not None else self._mapper(agent).size
         return gym.spaces.Box(-1.0, 1.0, (n,), np.float32)
-
-    @property
-    def skill_action_labels(self) -> tuple[str, ...]:
-        """The values of a skill action in this game (the walk's, then each motion skill's of
-        ``skills``), whatever its ``actions``: what a scripted team fits its actions to."""
-        return skill_action_labels(self.config.skills)
 
     def _observer(self, agent: str) -> PlayerObserver:
         try:

@@ -59,6 +59,7 @@ __all__ = [
     "kick_to",
     "kick_to_command",
     "kick_to_spot",
+    "kick_to_values",
     "motion_skill",
     "motion_skills",
     "register_motion_skill",
@@ -321,6 +322,13 @@ def kick_to_command(distance: float, direction: float) -> tuple[float, float]:
     lo, hi = KICK_TO_DISTANCE_M
     d, a = (float(np.clip(v, -1.0, 1.0)) for v in (distance, direction))
     return lo + (d + 1.0) / 2.0 * (hi - lo), a * KICK_TO_DIRECTION_DEG
+
+
+def kick_to_values(distance_m: float, direction_deg: float) -> tuple[float, float]:
+    """The ``kick-to`` action's ``distance`` and ``direction`` values (each in [-1, 1]) of a
+    command (distance m, direction deg): the inverse of :func:`kick_to_command`."""
+    lo, hi = KICK_TO_DISTANCE_M
+    return 2.0 * (distance_m - lo) / (hi - lo) - 1.0, direction_deg / KICK_TO_DIRECTION_DEG
 
 
 def kick_to_spot(

@@ -16,6 +16,7 @@ from robocup_gym.soccer.motions import (
     kick_to,
     kick_to_command,
     kick_to_spot,
+    kick_to_values,
     motion_skill,
 )
 
@@ -24,6 +25,9 @@ def test_kick_to_actions_span_the_commanded_kicks():
     assert kick_to_command(-1.0, -1.0) == (2.0, -45.0)
     assert kick_to_command(0.0, 0.5) == (6.0, 22.5)
     assert kick_to_command(3.0, 2.0) == (10.0, 45.0)  # clipped to the action's range
+    for command in ((3.0, -45.0), (6.0, 22.5), (9.0, 0.0)):
+        assert kick_to_command(*kick_to_values(*command)) == pytest.approx(command)
+    assert kick_to_values(2.0, -45.0) == (-1.0, -1.0)
     assert motion_skill("kick-to").labels == ("kick-to", "kick-to.distance", "kick-to.direction")
     _, spot = commanded_kick(10.0, 0.0, 0)
     ahead, left = kick_to_spot(10.0, 0.0, 0)
