@@ -403,8 +403,12 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         """A point a task asks for, world (x, y) m (the ``target_rel`` observation); the origin
         unless the task sets it."""
         self.velocity_command = np.zeros(3)
-        """The planar velocity a task commands (forward m/s, left m/s, turn deg/s; the
-        ``velocity_command`` observation); zeros unless the task sets it."""
+        """The planar velocity a task commands (forward m/s, left m/s, turn deg/s); zeros unless
+        the task sets it."""
+        self.policy_command = self.velocity_command
+        """The planar velocity the policy is told (the ``velocity_command`` observation):
+        ``velocity_command`` itself unless the task closes a loop around it (Walk's
+        ``command_feedback_gain``)."""
         self.gait_clock = (0.0, 0.0)
         """The task's gait clock (phase at the episode's start in [0, 1), frequency in Hz): the
         ``gait_phase`` observation; (0, 0) unless the task sets it."""

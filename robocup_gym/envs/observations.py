@@ -167,7 +167,7 @@ def _write_target_rel(env, out: np.ndarray) -> None:
 
 
 def _write_velocity_command(env, out: np.ndarray) -> None:
-    out[:] = env.velocity_command
+    out[:] = env.policy_command
 
 
 def _write_gait_phase(env, out: np.ndarray) -> None:
@@ -341,7 +341,8 @@ COMPONENTS: dict[str, Component] = {
         ),
         Component(
             "velocity_command",
-            "The planar velocity the task commands (Walk): forward and leftward speed in the "
+            "The planar velocity the task commands (Walk; with its command loop, corrected by "
+            "the measured motion): forward and leftward speed in the "
             "heading frame and turn rate (CCW positive); zeros in tasks without a command.",
             "m/s, m/s, deg/s",
             "[-1, 1], [-1, 1], [-90, 90]",

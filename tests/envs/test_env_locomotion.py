@@ -364,11 +364,68 @@ def test_the_command_is_observed_and_changes_mid_episode():
     env.close()
 
 
+def test_single_axis_commands_move_along_one_axis_at_the_ranges():
+    env = Walk(command_change_steps=1, standing_command_prob=0.0, single_axis_command_prob=1.0)
+    env.reset(seed=3)
+    axes = set()
+    for _ in range(60):
+        command = env.step(np.zeros(env.action_space.shape))[4]["velocity_command"]
+        moving = np.flatnonzero(command)
+        assert moving.size == 1
+        axes.add(int(moving[0]))
+    assert axes == {0, 1, 2}
+    env.close()
+    env = Walk(command_change_steps=1, standing_command_prob=0.0)  # the default: all three
+    env.reset(seed=3)
+    assert np.count_nonzero(env.step(np.zeros(env.action_space.shape))[4]["velocity_command"]) == 3
+    env.close()
+
+
+def _speed_along_x(env, command, steps=300, settle=100):
+    env.reset(seed=0, options={"velocity_command": command})
+    for k in range(steps):
+        _, _, terminated, truncated, _ = env.step(np.zeros(env.action_space.shape))
+        assert not (terminated or truncated)
+        if k == settle - 1:
+            start = env.torso_pos.copy()
+    return (env.torso_pos - start) / ((steps - settle) * 0.02)
+
+
+def test_the_command_loop_makes_the_gait_go_where_it_is_told():
+    # the reference gait alone (zero actions) overshoots 0.4 m/s; the loop brings it to it
+    open_loop = Walk(command_change_steps=0)
+    assert open_loop.policy_command is open_loop.velocity_command  # no loop: the command as given
+    speed_open = _speed_along_x(open_loop, (0.4, 0.0, 0.0))
+    open_loop.close()
+    env = Walk(command_change_steps=0, command_feedback_gain=1.0)
+    speed_loop = _speed_along_x(env, (0.4, 0.0, 0.0))
+    error_open, error_loop = abs(speed_open[0] - 0.4), abs(speed_loop[0] - 0.4)
+    assert error_open > 0.03 and error_loop < 0.01, (speed_open, speed_loop)
+    assert abs(speed_loop[1]) < 0.01
+    # the policy is told the corrected command, within the command ranges; the reward and info
+    # keep the one given
+    sl = env.component_slices["velocity_command"]
+    obs, _, _, _, info = env.step(np.zeros(env.action_space.shape))
+    np.testing.assert_allclose(info["velocity_command"], (0.4, 0.0, 0.0))
+    assert env.policy_command[0] < 0.39
+    raw = (obs[sl] - env._offset[sl]) / env._scale[sl]
+    np.testing.assert_allclose(raw, env.policy_command, atol=1e-5)
+    # a new command starts the loop afresh; standing is standing
+    env.velocity_command[:] = 0.0
+    env.step(np.zeros(env.action_space.shape))
+    assert not env.policy_command.any()
+    env.close()
+
+
 def test_walk_options_are_validated():
     with pytest.raises(EnvConfigError, match="forward_speed_range"):
         Walk(forward_speed_range=(1.0, -1.0))
     with pytest.raises(EnvConfigError, match="standing_command_prob"):
         Walk(standing_command_prob=2.0)
+    with pytest.raises(EnvConfigError, match="command_feedback_gain"):
+        Walk(command_feedback_gain=math.nan)
+    with pytest.raises(EnvConfigError, match="single_axis_command_prob"):
+        Walk(single_axis_command_prob=-0.1)
     with pytest.raises(EnvConfigError, match="gait_frequency_hz must be in"):
         Walk(gait_frequency_hz=0.0)
     with pytest.raises(EnvConfigError, match="swing_share"):

@@ -22,6 +22,7 @@ from robocup_gym.envs.config import (
 )
 from robocup_gym.envs.observations import heading_frame, in_heading_frame, up_z
 from robocup_gym.sim.physics import CYCLE_S
+from robocup_gym.types import Perception
 
 __all__ = [
     "WALK_OBSERVATIONS",
@@ -110,6 +111,18 @@ class WalkConfig(EnvConfig):
     """Commanded leftward speed, m/s."""
     turn_rate_range: tuple[float, float] = (-45.0, 45.0)
     """Commanded turn rate, deg/s (CCW positive)."""
+    single_axis_command_prob: float = 0.0
+    """Probability that a moving command has one component only (forward, sideways or turning,
+    each as likely, drawn from its range): the pure motions at the ranges' ends, which a
+    uniform draw over all three rarely gives."""
+    command_feedback_gain: float = 0.0
+    """Closes the loop around the command, 1/s (0: the policy and the reference gait get the
+    command as given). Above 0 they get the command plus the integral of (command − measured
+    planar velocity) × this gain, and a turn toward the heading the command asks for (the
+    heading error × this gain, the error held within ±45°), clipped to the command ranges: a
+    walk that drifts or falls short of the command goes where it is told, as far as those ranges
+    allow. The velocity and heading are the torso's, as the ``torso_velocity`` and
+    ``torso_orientation`` observations give them; a new command starts the loop afresh."""
     command_change_steps: int = 250
     """A new command is drawn every this many steps (0 = one command per episode)."""
     standing_command_prob: float = 0.2
@@ -162,8 +175,12 @@ class WalkConfig(EnvConfig):
             and self.command_change_steps >= 0
         ):
             raise EnvConfigError("command_change_steps must be an integer >= 0")
-        if not 0.0 <= self.standing_command_prob <= 1.0:
-            raise EnvConfigError("standing_command_prob must be in [0, 1]")
+        gain = self.command_feedback_gain
+        if not (math.isfinite(gain) and 0.0 <= gain <= 100.0):
+            raise EnvConfigError(f"command_feedback_gain must be in [0, 100] 1/s, got {gain!r}")
+        for name in ("standing_command_prob", "single_axis_command_prob"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise EnvConfigError(f"{name} must be in [0, 1]")
         if not (math.isfinite(self.tracking_sigma) and self.tracking_sigma > 0):
             raise EnvConfigError("tracking_sigma must be > 0")
         turn_sigma = self.tracking_turn_sigma
@@ -357,13 +374,19 @@ def walk_reward_terms(
     }
 
 
+_LOOP_HEADING_ERROR = math.radians(45.0)
+"""``command_feedback_gain``: the largest heading error the loop turns against, rad."""
+
+
 class Walk(BaseEnv):
     """Walk at a commanded planar velocity: forward, sideways and turning.
 
     The episode samples a command (uniform in the configured ranges, zero with probability
-    ``standing_command_prob``) and draws a new one every ``command_change_steps`` steps; the
-    command is part of the observation (``velocity_command``). The robot starts standing in the
-    crouched walking pose, placed instantly. A fall ends the episode (``terminate_on_fall``).
+    ``standing_command_prob``, one component alone with ``single_axis_command_prob``) and
+    draws a new one every ``command_change_steps`` steps; the command is part of the
+    observation (``velocity_command``; with ``command_feedback_gain`` the command corrected by
+    the measured motion, ``policy_command``). The robot starts standing in the crouched walking
+    pose, placed instantly. A fall ends the episode (``terminate_on_fall``).
     Actions are target angles around that pose (± ``target_around_start_deg``) added to a
     reference gait (``reference_gait``: an open-loop stepping pattern, :func:`reference_gait_deg`)
     while the command asks to move, so zero actions walk and the policy learns corrections. A
@@ -410,6 +433,13 @@ class Walk(BaseEnv):
         """Whether the reference gait is added to the target angles."""
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
+        if self.config.command_feedback_gain:
+            self.policy_command = np.zeros(3)
+        self._loop_command = np.zeros(3)
+        """The command the loop (``command_feedback_gain``) works for: a change restarts it."""
+        self._loop_integral = np.zeros(2)
+        self._loop_heading: float | None = None
+        """The heading the command asks for, rad (``None``: the torso's at the next update)."""
 
     def _draw_command(self) -> None:
         c, rng = self.config, self.np_random
@@ -421,6 +451,9 @@ class Walk(BaseEnv):
                 rng.uniform(*c.sideways_speed_range),
                 rng.uniform(*c.turn_rate_range),
             )
+            if c.single_axis_command_prob and rng.uniform() < c.single_axis_command_prob:
+                keep = rng.integers(3)
+                self.velocity_command[np.arange(3) != keep] = 0.0
 
     def _initial_state(self, options):
         start = super()._initial_state(options)
@@ -443,7 +476,9 @@ class Walk(BaseEnv):
                     f"m/s, turn deg/s), got {command!r}"
                 )
             self.velocity_command[:] = cmd
-        self._gait_command = self.velocity_command.copy()
+        self._loop_command[:] = np.nan  # the loop starts afresh at the first perception
+        self.policy_command[:] = self.velocity_command
+        self._gait_command = self.policy_command.copy()
         """The command the reference gait follows (the command, low-pass filtered)."""
         return start
 
@@ -461,9 +496,9 @@ class Walk(BaseEnv):
             # the pattern eases in and out over a gait cycle, and follows command changes with a
             # time constant of one cycle: no step starts, stops or changes all at once
             rate = min(1.0, CYCLE_S * c.gait_frequency_hz)
-            level = 1.0 if asks_to_move(self.velocity_command) else 0.0
+            level = 1.0 if asks_to_move(self.policy_command) else 0.0
             self._gait_level += min(rate, max(-rate, float(level - self._gait_level)))
-            self._gait_command += (self.velocity_command - self._gait_command) * rate
+            self._gait_command += (self.policy_command - self._gait_command) * rate
             lead = c.gait_lead_s * c.gait_frequency_hz  # in cycles
             phase = (self._phase_acted + lead) % 1.0
             self._actions.set_offsets(
@@ -475,6 +510,46 @@ class Walk(BaseEnv):
             and (self.episode_step % c.command_change_steps == 0)
         ):
             self._draw_command()
+
+    def _set_perception(self, p: Perception, cycles: int = 1, episode_over: bool = False) -> None:
+        super()._set_perception(p, cycles, episode_over)
+        if self.config.command_feedback_gain and not episode_over:
+            self._close_the_loop(cycles * CYCLE_S)
+
+    def _close_the_loop(self, dt: float) -> None:
+        """``policy_command`` from ``velocity_command`` and the torso's motion over the last
+        ``dt`` s (``command_feedback_gain``)."""
+        c, target, gt = self.config, self.velocity_command, self.ground_truth
+        if not np.array_equal(target, self._loop_command):  # a new command: start afresh
+            self._loop_command[:] = target
+            self._loop_integral[:] = 0.0
+            self._loop_heading = None
+        if gt is None or gt.torso_vel is None or not asks_to_move(target):
+            self.policy_command[:] = target
+            return
+        gain = c.command_feedback_gain
+        cos_h, sin_h = heading_frame(gt.torso_quat)
+        heading = math.atan2(sin_h, cos_h)
+        forward, left = in_heading_frame((cos_h, sin_h), gt.torso_vel[0], gt.torso_vel[1])
+        self._loop_integral[0] += gain * dt * (target[0] - forward)
+        self._loop_integral[1] += gain * dt * (target[1] - left)
+        wanted = heading if self._loop_heading is None else self._loop_heading
+        wanted += math.radians(target[2]) * dt
+        error = math.remainder(wanted - heading, math.tau)
+        error = min(_LOOP_HEADING_ERROR, max(-_LOOP_HEADING_ERROR, error))
+        self._loop_heading = heading + error  # no wind-up beyond the held error
+        low, high = self._command_ranges
+        out = self.policy_command
+        out[:2] = target[:2] + self._loop_integral
+        out[2] = target[2] + math.degrees(gain * error)
+        np.clip(out, low, high, out=out)
+        self._loop_integral[:] = out[:2] - target[:2]  # nor beyond the ranges
+
+    @property
+    def _command_ranges(self) -> tuple[np.ndarray, np.ndarray]:
+        c = self.config
+        ranges = (c.forward_speed_range, c.sideways_speed_range, c.turn_rate_range)
+        return np.array([r[0] for r in ranges]), np.array([r[1] for r in ranges])
 
     def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         gt = self.ground_truth
