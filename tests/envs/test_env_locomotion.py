@@ -415,6 +415,17 @@ def test_the_command_loop_makes_the_gait_go_where_it_is_told():
     env.step(np.zeros(env.action_space.shape))
     assert not env.policy_command.any()
     env.close()
+    # a loop turned on by replacing the config corrects what the policy is told, never the
+    # command given
+    env = Walk(command_change_steps=0)
+    env.config = env.config.replace(command_feedback_gain=1.0)
+    speed_replaced = _speed_along_x(env, (0.4, 0.0, 0.0))
+    np.testing.assert_array_equal(env.velocity_command, (0.4, 0.0, 0.0))
+    assert abs(speed_replaced[0] - 0.4) < 0.01
+    env.config = env.config.replace(command_feedback_gain=0.0)
+    env.reset(seed=0)
+    assert env.policy_command is env.velocity_command
+    env.close()
 
 
 def test_walk_options_are_validated():

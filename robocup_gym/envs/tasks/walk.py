@@ -433,8 +433,6 @@ class Walk(BaseEnv):
         """Whether the reference gait is added to the target angles."""
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
-        if self.config.command_feedback_gain:
-            self.policy_command = np.zeros(3)
         self._loop_command = np.zeros(3)
         """The command the loop (``command_feedback_gain``) works for: a change restarts it."""
         self._loop_integral = np.zeros(2)
@@ -477,6 +475,12 @@ class Walk(BaseEnv):
                 )
             self.velocity_command[:] = cmd
         self._loop_command[:] = np.nan  # the loop starts afresh at the first perception
+        # with a loop the policy is told a command of its own; without, the given one (read
+        # at each reset: the config may have been replaced since the last)
+        if not self.config.command_feedback_gain:
+            self.policy_command = self.velocity_command
+        elif self.policy_command is self.velocity_command:
+            self.policy_command = self.velocity_command.copy()
         self.policy_command[:] = self.velocity_command
         self._gait_command = self.policy_command.copy()
         """The command the reference gait follows (the command, low-pass filtered)."""
