@@ -1,7 +1,7 @@
-"""How well does a player know where it is from its own perceptors? And does the shipped walk
+"""How well does a player know where it is from its own perceptors? And does the game's walk
 still walk on that estimate?
 
-On the default engine with rcssserver3d's vision noise, the shipped walk policy walks for
+On the default engine with rcssserver3d's vision noise, the game's walk (``game-walk``) walks for
 ``--seconds`` at each command while :class:`robocup_gym.soccer.localisation.Estimator` follows it
 from the robot's own perceptors (vision every third cycle, head joints, gyroscope,
 accelerometer, foot pressure); each cycle its estimate is compared with ground truth. Then the
@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--robot-type", type=int, default=0)
     args = ap.parse_args(argv)
-    policy = pretrained_policy("walk")
+    policy = pretrained_policy("game-walk")
     cycles = round(args.seconds / 0.02)
     all_errors = []
     per_command = []

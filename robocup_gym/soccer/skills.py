@@ -293,7 +293,11 @@ class SkillSet:
 
     Args:
         robot_types: The players' Nao types, in player order.
-        walk, getup: Names of the shipped policies that walk and get up.
+        walk, getup: Names of the shipped policies that walk and get up. The game walks with
+            ``game-walk`` (a 3 Hz walk: up to 0.8 m/s forward, 0.3 m/s sideways, 45°/s), the
+            walk the scripted team's play and the game's figures are measured with; the
+            omnidirectional ``walk`` (faster, and turning 60°/s) plays the ball differently,
+            which the scripted team is not tuned to; it runs with ``walk_faces_x=False``.
         motions: The registered motion skills (:func:`register_motion_skill`) the players
             can start, in the order of their values in a skill action (:attr:`action_labels`).
         self_collisions: Whether the world runs rcssserver3d's self-collision rule (a real
@@ -310,7 +314,7 @@ class SkillSet:
     def __init__(
         self,
         robot_types: Sequence[int],
-        walk: str = "walk",
+        walk: str = "game-walk",
         getup: str = "get-up",
         self_collisions: bool = False,
         walk_faces_x: bool = True,
@@ -325,6 +329,13 @@ class SkillSet:
         self.action_what = skill_action_what(tuple(self.motions))
         """How error messages describe a skill action of this game."""
         self.walk_policy = pretrained_policy(walk)
+        loop = self.walk_policy.metadata.get("env_config", {}).get("command_feedback_gain")
+        if walk_faces_x and loop:
+            raise ValueError(
+                f"the walk {walk!r} runs a command loop that holds the torso's heading, which "
+                "walk_faces_x hides from it (every player seen facing +x): use walk_faces_x="
+                "False (a walk trained turning through every heading needs no turned view)"
+            )
         self.getup_policy = pretrained_policy(getup)
         self.players: list[PlayerSkills] = []
         self.uses_policy: dict[str, set[int]] = {"walk": set(), "get-up": set()}

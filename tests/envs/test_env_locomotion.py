@@ -15,7 +15,7 @@ from gymnasium.utils.env_checker import check_env
 
 import robocup_gym.envs  # noqa: F401 (registers the tasks)
 from robocup_gym.envs import EnvConfigError, GetUp, Walk, WalkConfig
-from robocup_gym.envs.observations import heading_frame
+from robocup_gym.envs.observations import heading_frame, in_heading_frame
 from robocup_gym.envs.tasks.walk import reference_gait_deg, walk_reward_terms
 from robocup_gym.sim.engines.ode import available
 
@@ -425,6 +425,34 @@ def test_the_command_loop_makes_the_gait_go_where_it_is_told():
     env.config = env.config.replace(command_feedback_gain=0.0)
     env.reset(seed=0)
     assert env.policy_command is env.velocity_command
+    env.close()
+
+
+def test_a_walk_can_be_paid_for_following_the_loops_corrections():
+    # track_told_command: the tracking terms compare the motion with the command the policy
+    # was told when it acted (the loop's), not the one given
+    env = Walk(command_change_steps=0, command_feedback_gain=1.0, track_told_command=True)
+    env.reset(seed=0, options={"velocity_command": (0.4, 0.0, 20.0)})
+    c = env.config
+    for _ in range(100):
+        told = env.policy_command.copy()
+        env.step(np.zeros(env.action_space.shape))
+        gt = env.ground_truth
+        forward, left = in_heading_frame(
+            heading_frame(gt.torso_quat), gt.torso_vel[0], gt.torso_vel[1]
+        )
+        linear = c.w_tracking_linear * math.exp(
+            -((forward - told[0]) ** 2 + (left - told[1]) ** 2) / c.tracking_sigma
+        )
+        turn = c.w_tracking_turn * math.exp(
+            -((gt.torso_ang_vel[2] - math.radians(told[2])) ** 2) / c.tracking_sigma
+        )
+        assert env.reward_terms["tracking_linear"] == pytest.approx(linear, rel=1e-9)
+        assert env.reward_terms["tracking_turn"] == pytest.approx(turn, rel=1e-9)
+    # the loop's command has moved away from the given one, so the terms differ from Walk's
+    given = c.w_tracking_linear * math.exp(-((forward - 0.4) ** 2 + left**2) / c.tracking_sigma)
+    assert abs(told[0] - 0.4) > 0.01 and abs(env.reward_terms["tracking_linear"] - given) > 1e-3
+    np.testing.assert_array_equal(env.velocity_command, (0.4, 0.0, 20.0))
     env.close()
 
 

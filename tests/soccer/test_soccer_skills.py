@@ -263,3 +263,15 @@ def test_a_game_plays_the_motion_skills_its_learnt_teams_were_trained_with():
     np.testing.assert_array_equal(
         fit_skill_action([0.5, -0.2, 0.1, 1.0], labels), [0.5, -0.2, 0.1, -1.0, -1.0]
     )
+
+
+def test_a_walk_with_a_command_loop_is_refused_a_turned_view():
+    """The omnidirectional ``walk`` holds its heading with a command loop; seen turned to face
+    +x it would hold nothing: the skill set says so, and takes it with ``walk_faces_x=False``."""
+    from robocup_gym.soccer.skills import SkillSet
+
+    with pytest.raises(ValueError, match="walk_faces_x=False"):
+        SkillSet([0], walk="walk")
+    skills = SkillSet([0], walk="walk", walk_faces_x=False)
+    assert skills.walk_policy.metadata["env_config"]["command_feedback_gain"] > 0
+    assert SkillSet([0]).walk_policy.path.stem == "game-walk"

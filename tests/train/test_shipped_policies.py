@@ -4,6 +4,8 @@ what their names say in-process on the default engine."""
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,7 +27,7 @@ from robocup_gym.train.tasks import make_env
 
 
 def test_the_get_up_is_shipped_and_describes_itself():
-    assert {"get-up", "walk"} <= set(pretrained_names())
+    assert {"get-up", "walk", "game-walk"} <= set(pretrained_names())
     meta = describe("get-up")
     assert meta["env_id"] == "RobocupGym/GetUp-v1" and meta["backend"] == "ode"
     assert meta["env_config"]["self_collisions"] is True  # learnt under rcssserver3d's rule
@@ -67,7 +69,7 @@ def test_the_get_up_lifts_the_robot_within_80_cycles(side):
 def test_a_shipped_policy_runs_in_the_environment_it_was_exported_with():
     """Every recorded option, not today's task defaults: a later change of a default must not
     change what a shipped policy sees or does."""
-    for name in ("get-up", "walk", "run"):
+    for name in ("get-up", "walk", "game-walk", "run"):
         policy = pretrained_policy(name)
         meta = policy.metadata
         env = pretrained_env(policy, "mujoco")
@@ -114,14 +116,14 @@ def test_a_shipped_policy_runs_in_the_environment_it_was_exported_with():
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
-def test_the_walk_goes_where_it_is_told_and_stands_when_told():
-    """The shipped Walk policy on ODE, from several start phases of the gait clock: 4 s at
-    0.5 m/s forward moves the robot ~2 m forward without a fall; 0.3 m/s to the left moves it
-    left, 30°/s turns it counter-clockwise; told to stand, it stays put."""
-    assert "walk" in pretrained_names()
-    meta = describe("walk")
+@pytest.mark.parametrize("name", ["walk", "game-walk"])
+def test_the_walk_goes_where_it_is_told_and_stands_when_told(name):
+    """The shipped walks on ODE, from several start phases of the gait clock: 4 s at 0.5 m/s
+    forward moves the robot ~2 m forward without a fall; 0.3 m/s to the left moves it left,
+    30°/s turns it counter-clockwise; told to stand, it stays put."""
+    meta = describe(name)
     assert meta["env_id"] == "RobocupGym/Walk-v0" and meta["env_config"]["reference_gait"]
-    policy = pretrained_policy("walk")
+    policy = pretrained_policy(name)
     env = pretrained_env(policy, "ode", {"command_change_steps": 0})
     u = env.unwrapped
     try:
@@ -157,27 +159,52 @@ def test_the_walk_goes_where_it_is_told_and_stands_when_told():
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
-def test_the_command_loop_takes_the_shipped_walk_straight():
-    """Told 0.5 m/s forward the shipped walk drifts right at ~0.19 m/s and goes ~0.56 m/s; with
-    the command loop (``command_feedback_gain``) it goes 0.5 m/s straight (seconds 2 to 8)."""
+def test_the_walk_meets_the_omnidirectional_targets():
+    """The shipped ``walk`` (its command loop on, as recorded) by ``benchmarks/walk.py
+    --tracking``'s measure over 4 episodes: over seconds 4 to 10, 0.8 m/s forward, 0.4 m/s to
+    the left and 60°/s each within 10 %; told to stop, slower than 0.05 m/s; no fall."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    from walk import tracking
+
     policy = pretrained_policy("walk")
-    for gain, check in (
-        (0.0, lambda v: v[0] > 0.54 and v[1] < -0.15),
-        (1.0, lambda v: abs(v[0] - 0.5) < 0.02 and abs(v[1]) < 0.1),
+    assert policy.metadata["env_config"]["command_feedback_gain"] > 0.0
+    env = pretrained_env(policy, "ode")
+    try:
+        out = tracking(env, policy, episodes=4, seed=0)
+    finally:
+        env.close()
+    assert out["meets_tracking_target"], out
+    assert out["tracking"]["forward"]["forward_speed_mps"] > 0.72
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
+def test_the_command_loop_takes_the_shipped_walk_straight():
+    """The walk was trained with its command loop on: without it, told 0.5 m/s forward, it
+    turns left (~7°/s); with the loop it goes 0.5 m/s straight (seconds 2 to 8). The game's
+    walk, trained without a loop, drifts right (~0.19 m/s) and goes ~0.56 m/s; the loop takes
+    it straight as well."""
+    for name, gain, check in (
+        ("walk", 0.0, lambda v, turn: turn > 3.0),
+        ("walk", None, lambda v, turn: abs(v[0] - 0.5) < 0.02 and abs(v[1]) < 0.05),
+        ("game-walk", 0.0, lambda v, turn: v[0] > 0.54 and v[1] < -0.15),
+        ("game-walk", 1.0, lambda v, turn: abs(v[0] - 0.5) < 0.02 and abs(v[1]) < 0.1),
     ):
-        env = pretrained_env(
-            policy, "ode", {"command_change_steps": 0, "command_feedback_gain": gain}
-        )
+        policy = pretrained_policy(name)
+        extra = {"command_change_steps": 0}
+        if gain is not None:
+            extra["command_feedback_gain"] = gain
+        env = pretrained_env(policy, "ode", extra)
         u = env.unwrapped
         for seed in range(2):
             obs, _ = env.reset(seed=seed, options={"velocity_command": (0.5, 0.0, 0.0)})
             for k in range(400):
                 obs, _, terminated, _, _ = env.step(policy(obs))
-                assert not terminated, (gain, seed)
+                assert not terminated, (name, gain, seed)
                 if k == 99:
-                    start = u.torso_pos.copy()
+                    start, yaw0 = u.torso_pos.copy(), _yaw(u)
             velocity = (u.torso_pos - start) / 6.0  # the robot starts facing +x
-            assert check(velocity), (gain, seed, velocity)
+            turn = math.degrees((_yaw(u) - yaw0 + math.pi) % (2 * math.pi) - math.pi) / 6.0
+            assert check(velocity, turn), (name, gain, seed, velocity, turn)
         env.close()
 
 

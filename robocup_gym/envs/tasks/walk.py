@@ -123,6 +123,12 @@ class WalkConfig(EnvConfig):
     walk that drifts or falls short of the command goes where it is told, as far as those ranges
     allow. The velocity and heading are the torso's, as the ``torso_velocity`` and
     ``torso_orientation`` observations give them; a new command starts the loop afresh."""
+    track_told_command: bool = False
+    """The tracking terms pay for following the command the policy is told (``policy_command``:
+    with ``command_feedback_gain``, the command corrected by the loop) instead of the command
+    given. A policy trained so obeys the loop's corrections, turns toward the commanded heading
+    included, rather than learning to ignore them; the loop then takes it where the command
+    asks. Without a loop the two commands are the same."""
     command_change_steps: int = 250
     """A new command is drawn every this many steps (0 = one command per episode)."""
     standing_command_prob: float = 0.2
@@ -438,6 +444,8 @@ class Walk(BaseEnv):
         self._loop_integral = np.zeros(2)
         self._loop_heading: float | None = None
         """The heading the command asks for, rad (``None``: the torso's at the next update)."""
+        self._acted_command = np.zeros(3)
+        """The command the policy was told when it chose this step's action."""
 
     def _draw_command(self) -> None:
         c, rng = self.config, self.np_random
@@ -496,6 +504,7 @@ class Walk(BaseEnv):
     def _before_action(self) -> None:
         c = self.config
         self._phase_acted = self.gait_phase  # the phase the policy saw when choosing the action
+        self._acted_command[:] = self.policy_command
         if self._gait:
             # the pattern eases in and out over a gait cycle, and follows command changes with a
             # time constant of one cycle: no step starts, stops or changes all at once
@@ -587,7 +596,9 @@ class Walk(BaseEnv):
             self.config,
             velocity=velocity,
             turn_rate=float(w[2]),
-            command=self.velocity_command,
+            command=self._acted_command
+            if self.config.track_told_command
+            else self.velocity_command,
             up_z=upright,
             touchdown_air_times=touchdowns,
             action=action,
