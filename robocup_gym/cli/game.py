@@ -199,6 +199,13 @@ def match(
             "connection acting on its own perceptors."
         ),
     ] = "in-process",
+    walk: Annotated[
+        str,
+        typer.Option(
+            help="In-process: the shipped walk of the players' skill actions: game-walk (the "
+            "game's, to which the scripted team is tuned) or walk (the omnidirectional one)."
+        ),
+    ] = "game-walk",
 ) -> None:
     """Play two teams against each other, in-process (multi-agent soccer with skill
     actions) or on a server; a table, then one JSON object from the first team's side."""
@@ -213,6 +220,8 @@ def match(
         _fail(f"--on must be in-process, {', '.join(SERVERS)}; got {on!r}")
     if on != "in-process" and (scenario != "game" or video is not None):
         _fail(f"on {on} a match plays games (no --scenario penalty, no --video)")
+    if on != "in-process" and walk != "game-walk":
+        _fail(f"on {on} the players walk with game-walk (--walk is for in-process matches)")
     robot_types = _robot_types(types)
     console = _console()
 
@@ -237,6 +246,7 @@ def match(
                 on_game=progress,
                 video=video,
                 scenario=scenario,
+                walk=walk,
             )
         else:
             result = play_server_match(

@@ -41,6 +41,9 @@ option                default  meaning
                                on rcssserver3d (``game_v0``: False, its referee waited for the
                                drop ball after 15 s)
 ``actions``           joints   ``"joints"`` or ``"skills"`` (:mod:`robocup_gym.soccer.skills`)
+``walk``              game-walk skill actions: the shipped walk the players walk with
+                               (``game-walk``, to which the scripted team is tuned; ``walk``,
+                               the omnidirectional one, with ``walk_faces_x=False``)
 ``walk_faces_x``      True     skill actions: the walk sees its player as if it faced +x, as
                                it was trained (its observation of the torso's orientation is
                                in the world frame); the scenarios' v0 versions: False, their
@@ -115,6 +118,7 @@ class SoccerConfig:
     contact_fouls: bool = False
     first_touch_plays_on: bool = True
     actions: str = "joints"
+    walk: str = "game-walk"
     walk_faces_x: bool = True
     random_start: bool = False
     skill_cycles: int = 10
@@ -149,6 +153,8 @@ class SoccerConfig:
         ):  # fmt: skip
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        if not isinstance(self.walk, str) or not self.walk:
+            raise ValueError(f"walk must be the name of a shipped walk, got {self.walk!r}")
         if self.actions not in ("joints", "skills"):
             raise ValueError(f"actions must be 'joints' or 'skills', got {self.actions!r}")
         object.__setattr__(self, "skills", checked_motion_skills(self.skills))
@@ -253,6 +259,7 @@ class SoccerParallelEnv(ParallelEnv):
         self.skills = (
             SkillSet(
                 self.game.robot_types,
+                walk=c.walk,
                 self_collisions=c.self_collisions,
                 walk_faces_x=c.walk_faces_x,
                 motions=c.skills,

@@ -27,7 +27,7 @@ import numpy as np
 
 from robocup_gym.soccer import game_v1, penalty_v1
 from robocup_gym.soccer.scripted import TEAMS
-from robocup_gym.soccer.skills import skills_of_teams
+from robocup_gym.soccer.skills import runs_a_command_loop, skills_of_teams
 
 __all__ = ["SERVERS", "GameResult", "MatchResult", "make_team", "play_match", "play_server_match"]
 
@@ -123,6 +123,7 @@ def play_match(
     on_game: Callable[[int, GameResult], None] | None = None,
     video: str | os.PathLike | None = None,
     scenario: str = "game",
+    walk: str = "game-walk",
 ) -> MatchResult:
     """Play ``games`` games of ``team_a`` against ``team_b``.
 
@@ -138,6 +139,9 @@ def play_match(
         on_game: Called after each game.
         video: Record the first game to this file (``.mp4``, or ``.gif``) at 25 frames a second
             of game time, from the side, following the ball (MuJoCo's renderer).
+        walk: The shipped walk of both teams' skill actions: ``game-walk`` (the game's), or
+            ``walk`` (the omnidirectional walk, which runs a command loop and so sees the
+            players as they face: ``walk_faces_x`` off).
 
     Raises:
         ValueError: an unknown team or an impossible set-up.
@@ -169,6 +173,8 @@ def play_match(
         "engine": engine,
         "max_cycles": cycles,
         "render_mode": None if video is None else "rgb_array",
+        "walk": walk,
+        "walk_faces_x": not runs_a_command_loop(walk),
     }
     if penalty:
         env = penalty_v1.parallel_env(start_noise=penalty_v1.SPREAD_M, **options)

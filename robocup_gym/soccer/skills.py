@@ -61,6 +61,7 @@ __all__ = [
     "fit_skill_action",
     "fit_skill_actions",
     "game_skill_labels",
+    "runs_a_command_loop",
     "skill_action_labels",
     "skill_action_what",
     "skills_of_teams",
@@ -288,6 +289,19 @@ class PlayerSkills:
         return "front" if forward_z < 0.0 else "back"
 
 
+def runs_a_command_loop(walk: str) -> bool:
+    """Whether the shipped walk ``walk`` runs Walk's command loop (its recorded
+    ``command_feedback_gain`` is above 0): it holds the torso's real heading, so it must see
+    the players as they face (``walk_faces_x`` off).
+
+    Raises:
+        ValueError: no shipped policy of that name (the message lists them).
+    """
+    from robocup_gym.train.pretrained import describe
+
+    return bool(describe(walk).get("env_config", {}).get("command_feedback_gain"))
+
+
 class SkillSet:
     """The skills of a game's players (player ``k`` is the ``k``-th of ``robot_types``).
 
@@ -329,8 +343,7 @@ class SkillSet:
         self.action_what = skill_action_what(tuple(self.motions))
         """How error messages describe a skill action of this game."""
         self.walk_policy = pretrained_policy(walk)
-        loop = self.walk_policy.metadata.get("env_config", {}).get("command_feedback_gain")
-        if walk_faces_x and loop:
+        if walk_faces_x and runs_a_command_loop(walk):
             raise ValueError(
                 f"the walk {walk!r} runs a command loop that holds the torso's heading, which "
                 "walk_faces_x hides from it (every player seen facing +x): use walk_faces_x="

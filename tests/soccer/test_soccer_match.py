@@ -249,3 +249,21 @@ def test_a_match_on_a_server_refuses_what_it_cannot_play():
         "on serve a match plays games (no --scenario penalty, no --video)"
         in out.stderr + out.stdout
     )
+
+
+def test_a_match_can_be_played_with_the_omnidirectional_walk():
+    """``--walk walk``: both teams' skill actions walk with the omnidirectional walk (the
+    players seen as they face); on a server the players keep the game's walk."""
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    result = play_match("scripted", "standing", games=1, seconds=4.0, walk="walk")
+    assert len(result.games) == 1 and not result.games[0].diverged
+    runner = CliRunner()
+    bad = runner.invoke(app, ["match", "scripted", "standing", "--walk", "nowalk", "--games", "1"])
+    assert bad.exit_code == 1 and "no pretrained policy 'nowalk'" in bad.output
+    served = runner.invoke(
+        app, ["match", "scripted", "standing", "--walk", "walk", "--on", "serve"]
+    )
+    assert served.exit_code == 1 and "--walk is for in-process" in served.output

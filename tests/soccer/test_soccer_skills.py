@@ -275,3 +275,33 @@ def test_a_walk_with_a_command_loop_is_refused_a_turned_view():
     skills = SkillSet([0], walk="walk", walk_faces_x=False)
     assert skills.walk_policy.metadata["env_config"]["command_feedback_gain"] > 0
     assert SkillSet([0]).walk_policy.path.stem == "game-walk"
+    with pytest.raises(ValueError, match="walk_faces_x=False"):
+        game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk="walk")
+    with pytest.raises(ValueError, match="walk must be the name of a shipped walk"):
+        game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk=3)
+
+
+def test_a_game_plays_the_omnidirectional_walk_when_told():
+    """``walk="walk"`` (with ``walk_faces_x=False``): a player facing −x walks along −x and
+    turns clockwise as told, as with the game's walk."""
+    from robocup_gym.envs.observations import heading_frame, turn_to_deg
+
+    env = game_v1.parallel_env(
+        actions="skills", left_types=(0,), right_types=(), walk="walk", walk_faces_x=False
+    )
+    assert env.skills.walk_policy.path.stem == "walk"
+    env.reset(seed=0)
+    env.game.referee.set_play_mode("PlayOn")
+    w = env.game.world
+    w.place_robot(0, 5.0, 0.0, heading_deg=180.0)
+    start = w.torso_position(0).copy()
+    for _ in range(25):  # 5 s at 0.5 m/s forward, along -x
+        env.step({"left_1": np.array([0.625, 0.0, 0.0, 0.0])})
+    moved = w.torso_position(0) - start
+    for _ in range(15):  # 3 s turning clockwise at 30 deg/s
+        env.step({"left_1": np.array([0.0, 0.0, -1.0, 0.0])})
+    turned = -turn_to_deg(heading_frame(w.torso_quat(0)), np.pi)  # from facing -x, deg
+    assert env.skills.modes() == ["walk"]
+    env.close()
+    assert moved[0] < -2.2 and abs(moved[1]) < 0.5, moved
+    assert turned < -50.0, turned
