@@ -52,14 +52,27 @@ def test_a_player_walks_where_it_is_told(solo):
     assert w.torso_position(0)[2] > 0.3  # still up
 
 
-@pytest.mark.parametrize("module", [game_v1, game_v0], ids=["v1", "v0"])
-def test_a_player_facing_the_other_way_walks_and_turns_as_told(module):
-    """The walk was trained facing +x and observes its torso's orientation in the world frame;
-    from ``game_v1`` on (``walk_faces_x``) it sees every player as if it faced +x. Facing −x it
-    then walks straight and turns clockwise; ``game_v0``'s walk went askew and hardly turned."""
+OMNIDIRECTIONAL = {"walk": "walk", "walk_faces_x": False}
+"""A game's options that play the omnidirectional walk."""
+
+
+@pytest.mark.parametrize(
+    ("module", "options"),
+    [(game_v1, {}), (game_v0, {}), (game_v1, OMNIDIRECTIONAL)],
+    ids=["v1", "v0", "v1, the omnidirectional walk"],
+)
+def test_a_player_facing_the_other_way_walks_and_turns_as_told(module, options):
+    """The game's walk was trained facing +x and observes its torso's orientation in the world
+    frame; from ``game_v1`` on (``walk_faces_x``) it sees every player as if it faced +x.
+    Facing −x it then walks straight and turns clockwise; ``game_v0``'s walk went askew and
+    hardly turned. The omnidirectional walk (``walk="walk"``), trained turning through every
+    heading, sees the player as it faces and walks and turns as told too."""
     from robocup_gym.envs.observations import heading_frame, turn_to_deg
 
-    env = module.parallel_env(actions="skills", left_types=(0,), right_types=(), max_cycles=10**5)
+    env = module.parallel_env(
+        actions="skills", left_types=(0,), right_types=(), max_cycles=10**5, **options
+    )
+    assert env.skills.walk_policy.path.stem == options.get("walk", "game-walk")
     env.reset(seed=0)
     env.game.referee.set_play_mode("PlayOn")
     w = env.game.world
@@ -279,29 +292,3 @@ def test_a_walk_with_a_command_loop_is_refused_a_turned_view():
         game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk="walk")
     with pytest.raises(ValueError, match="walk must be the name of a shipped walk"):
         game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk=3)
-
-
-def test_a_game_plays_the_omnidirectional_walk_when_told():
-    """``walk="walk"`` (with ``walk_faces_x=False``): a player facing −x walks along −x and
-    turns clockwise as told, as with the game's walk."""
-    from robocup_gym.envs.observations import heading_frame, turn_to_deg
-
-    env = game_v1.parallel_env(
-        actions="skills", left_types=(0,), right_types=(), walk="walk", walk_faces_x=False
-    )
-    assert env.skills.walk_policy.path.stem == "walk"
-    env.reset(seed=0)
-    env.game.referee.set_play_mode("PlayOn")
-    w = env.game.world
-    w.place_robot(0, 5.0, 0.0, heading_deg=180.0)
-    start = w.torso_position(0).copy()
-    for _ in range(25):  # 5 s at 0.5 m/s forward, along -x
-        env.step({"left_1": np.array([0.625, 0.0, 0.0, 0.0])})
-    moved = w.torso_position(0) - start
-    for _ in range(15):  # 3 s turning clockwise at 30 deg/s
-        env.step({"left_1": np.array([0.0, 0.0, -1.0, 0.0])})
-    turned = -turn_to_deg(heading_frame(w.torso_quat(0)), np.pi)  # from facing -x, deg
-    assert env.skills.modes() == ["walk"]
-    env.close()
-    assert moved[0] < -2.2 and abs(moved[1]) < 0.5, moved
-    assert turned < -50.0, turned
