@@ -504,7 +504,8 @@ class Walk(BaseEnv):
     def _before_action(self) -> None:
         c = self.config
         self._phase_acted = self.gait_phase  # the phase the policy saw when choosing the action
-        self._acted_command[:] = self.policy_command
+        if c.track_told_command:  # the command the policy saw, for the tracking terms
+            self._acted_command[:] = self.policy_command
         if self._gait:
             # the pattern eases in and out over a gait cycle, and follows command changes with a
             # time constant of one cycle: no step starts, stops or changes all at once
