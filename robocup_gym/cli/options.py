@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated, Any
 
 import typer
@@ -22,7 +21,6 @@ _NOT_TRAIN_OPTIONS = (
 """TrainConfig fields the train command takes in its own way, not as ``--field-name``."""
 
 _TRAIN_OPTION_EXTRAS: dict[str, dict[str, Any]] = {
-    "init_from": {"type": Path, "exists": True, "file_okay": False},
     "assist_max_tilt_deg": {"flags": ("--assist-max-tilt-deg", "--assist-max-tilt")},
 }
 """Option settings beyond the field's type: a path that must exist, an extra flag name."""

@@ -115,8 +115,6 @@ def train(
     from robocup_gym.train.trainer import train as run_training
 
     given = {k: v for k, v in options.items() if v is not None}
-    if "init_from" in given:
-        given["init_from"] = str(given["init_from"])
     console = _console()
     try:
         if resume is not None:

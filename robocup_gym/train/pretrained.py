@@ -37,6 +37,7 @@ __all__ = [
     "pretrained_path",
     "pretrained_policy",
     "pretrained_types",
+    "pretrained_weights",
     "recorded_env_options",
 ]
 
@@ -103,6 +104,23 @@ def pretrained_policy(name: str, robot_type: int | None = None):
     :class:`~robocup_gym.train.export.OnnxPolicy` (``policy(obs) → action``;
     ``policy.metadata`` has its task and options)."""
     return OnnxPolicy(pretrained_path(name, robot_type))
+
+
+def pretrained_weights(policy) -> dict[str, np.ndarray]:
+    """The network of an exported ``policy`` (an :class:`~robocup_gym.train.export.OnnxPolicy`)
+    as the parameters of the SB3 policy it was exported from, by their names there
+    (``mlp_extractor.policy_net.0.weight``, ``action_net.bias``, …): the actor only; a value
+    network is not exported."""
+    import onnx
+    from onnx import numpy_helper
+
+    graph = onnx.load(str(policy.path)).graph
+    prefix = "policy."
+    return {
+        init.name[len(prefix) :]: numpy_helper.to_array(init)
+        for init in graph.initializer
+        if init.name.startswith(prefix)
+    }
 
 
 def recorded_env_options(meta: dict[str, Any]) -> dict[str, Any]:

@@ -82,6 +82,12 @@ def prepare_run(
     ``config.yaml``. Nothing is created when a check fails."""
     env_id = resolve_task(config.task)
     config = config.merged(env_id=env_id)
+    if config.init_from.startswith("pretrained:"):
+        config = _over_pretrained_options(config)
+    elif config.init_from and not Path(config.init_from).is_dir():
+        raise ValueError(
+            f"init_from {config.init_from!r} is neither a run folder nor pretrained:NAME"
+        )
     # check the options (before any folder or worker exists) and freeze every option of the
     # environment, so that the run keeps it if a default changes
     options = config.env_options()
@@ -102,6 +108,69 @@ def prepare_run(
         path.mkdir(parents=True, exist_ok=True)
     config.save(path / "config.yaml")
     return config, path
+
+
+def _init_policy(cfg: TrainConfig):
+    """The shipped policy a run starts from (``init_from="pretrained:NAME"``): for a run on one
+    Nao type, that type's own where it has one."""
+    from robocup_gym.train.pretrained import pretrained_policy
+
+    types = set(cfg.robot_types) or {cfg.env_kwargs.get("robot_type")}
+    robot_type = types.pop() if len(types) == 1 else None
+    return pretrained_policy(cfg.init_from.split(":", 1)[1], robot_type)
+
+
+def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
+    """``cfg`` starting from a shipped policy, under the run's own environment options: on the
+    policy's task, every option it was exported with
+    (:func:`~robocup_gym.train.pretrained.recorded_env_options`); on another task, the options
+    it was trained with (``env_kwargs``: a walk's gait for a task built on Walk, say).
+
+    Raises:
+        ValueError: no such policy, one of another algorithm, or one that normalises its
+            observations in its graph (or a run that would normalise them).
+    """
+    from robocup_gym.train.pretrained import recorded_env_options
+
+    meta = _init_policy(cfg).metadata
+    if meta.get("algo") != cfg.algo:
+        raise ValueError(
+            f"init_from {cfg.init_from} is a {meta.get('algo')} policy; this run uses {cfg.algo}"
+        )
+    if meta.get("obs_normalization_in_graph") or cfg.normalize_obs:
+        raise ValueError(
+            f"init_from {cfg.init_from}: a shipped policy starts a run without normalize_obs, "
+            "and only one that normalises nothing itself"
+        )
+    if meta.get("env_id") == cfg.env_id:
+        options = recorded_env_options(meta)
+    else:
+        options = dict(meta.get("env_kwargs") or {})
+    options.pop("robot_type", None)  # the run's own (robot_types, or the task's default)
+    return cfg.merged(env_kwargs={**options, **cfg.env_kwargs})
+
+
+def _start_from_pretrained(model, cfg: TrainConfig) -> None:
+    """Give a fresh ``model`` the actor of the shipped policy ``cfg.init_from``
+    (``pretrained:NAME``); its value network starts afresh (none is shipped).
+
+    Raises:
+        ValueError: the policy's network does not fit the model's (its layers named).
+    """
+    import torch
+
+    from robocup_gym.train.pretrained import pretrained_weights
+
+    own = model.policy.state_dict()
+    weights = pretrained_weights(_init_policy(cfg))
+    misfit = [k for k, w in weights.items() if k not in own or tuple(own[k].shape) != w.shape]
+    if misfit or not weights:
+        raise ValueError(
+            f"init_from {cfg.init_from}: its network does not fit this run's policy "
+            f"({', '.join(misfit) or 'no layers'}; the task's options and net_arch must match)"
+        )
+    state = {k: torch.tensor(w, device=own[k].device) for k, w in weights.items()}
+    model.policy.load_state_dict(state, strict=False)
 
 
 def _start_from_run(model, init, cfg: TrainConfig) -> None:
@@ -344,7 +413,8 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
 
         from robocup_gym.train.vecenv import make_vec_env
 
-        init = load_run(cfg.init_from) if start_from is None and cfg.init_from else None
+        from_run = cfg.init_from and not cfg.init_from.startswith("pretrained:")
+        init = load_run(cfg.init_from) if start_from is None and from_run else None
         if init is not None and (init.vecnormalize_path is not None) != cfg.normalize_obs:
             raise ValueError(
                 f"init_from {init.path} was trained with normalize_obs="
@@ -420,6 +490,8 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
                 )
                 if init is not None:
                     _start_from_run(model, init, cfg)
+                elif cfg.init_from:
+                    _start_from_pretrained(model, cfg)
             else:
                 model = cls.load(start_from, env=venv, device=cfg.device)
                 rb = path / "checkpoints" / "replay_buffer.pkl"

@@ -426,6 +426,57 @@ def test_init_from_starts_a_new_run_from_a_trained_policy(ppo_run, tmp_path):
     assert bad.exit_code == 1 and "normalize_obs" in bad.output
 
 
+def test_init_from_a_shipped_policy(tmp_path):
+    """``--init-from pretrained:NAME``: a new run starts from the shipped policy's actor, in the
+    environment it was exported with (with learning rate 0 the saved policy acts as the shipped
+    one); on another task whose spaces match, with the options it was trained with. A name that
+    is not shipped, a network of another shape and a folder that does not exist are refused,
+    each named."""
+    from stable_baselines3 import PPO
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+    from robocup_gym.envs.tasks.walk import WALK_OBSERVATIONS
+    from robocup_gym.train.config import TrainConfig
+    from robocup_gym.train.pretrained import describe, pretrained_policy
+
+    base = ["train", "--n-envs", 1, "--timesteps", 32, "--checkpoint-freq", 0, "--eval-freq", 0]
+    base += ["--no-progress", "--hp", "n_steps=16", "--hp", "batch_size=16", "--hp", "n_epochs=1"]
+    base += ["--hp", "learning_rate=0.0", "--init-from", "pretrained:walk"]
+    invoke(["train", "walk", *base[1:], "--out", tmp_path / "walk"])
+    (run,) = list((tmp_path / "walk").iterdir())
+    cfg = TrainConfig.load(run / "config.yaml")
+    assert cfg.init_from == "pretrained:walk"
+    for key, value in describe("walk")["env_kwargs"].items():
+        assert cfg.env_kwargs[key] == value, key
+    obs = np.random.default_rng(0).uniform(-1, 1, (64, 94)).astype(np.float32)
+    tuned = PPO.load(run / "model.zip", device="cpu").predict(obs, deterministic=True)[0]
+    np.testing.assert_allclose(tuned, pretrained_policy("walk")(obs), atol=1e-5)
+
+    # Dribble is a Walk: the walk's gait options carry over, its observations are given
+    walk_obs = "observations=[" + ", ".join(WALK_OBSERVATIONS) + "]"
+    invoke(["train", "dribble", *base[1:], "--env", walk_obs, "--out", tmp_path / "dribble"])
+    (run,) = list((tmp_path / "dribble").iterdir())
+    cfg = TrainConfig.load(run / "config.yaml")
+    gait = describe("walk")["env_kwargs"]["gait_frequency_hz"]
+    assert cfg.env_kwargs["gait_frequency_hz"] == gait
+    assert "command_change_steps" not in cfg.env_kwargs  # Dribble's own (its guide's)
+    tuned = PPO.load(run / "model.zip", device="cpu").predict(obs, deterministic=True)[0]
+    np.testing.assert_allclose(tuned, pretrained_policy("walk")(obs), atol=1e-5)
+
+    for extra, message in (
+        (["--init-from", "pretrained:no-such"], "no pretrained policy 'no-such'"),
+        (["--hp", "policy_kwargs={net_arch: [32, 32]}"], "does not fit this run's policy"),
+        (["--init-from", tmp_path / "none"], "neither a run folder nor pretrained:NAME"),
+        (["--env", "robot_type=4"], "does not fit this run's policy"),
+    ):
+        args = ["train", "walk", *base[1:], *extra, "--out", tmp_path / "refused"]
+        bad = CliRunner().invoke(app, [str(a) for a in args])
+        assert bad.exit_code == 1, bad.output
+        assert message in " ".join(bad.output.split()), bad.output
+    assert not (tmp_path / "refused").exists() or not any((tmp_path / "refused").iterdir())
+
+
 def test_init_from_carries_the_observation_statistics(tmp_path):
     """A run with ``normalize_obs`` passes its running observation statistics on: the new run
     continues them (its count starts at the source's)."""
