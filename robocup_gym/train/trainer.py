@@ -147,6 +147,9 @@ def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
     else:
         options = dict(meta.get("env_kwargs") or {})
     options.pop("robot_type", None)  # the run's own (robot_types, or the task's default)
+    if meta.get("controlled_joints") and options.get("controlled_joints") is None:
+        # the joints it drives, named: on type 4 a policy of types 0-3 holds the toes still
+        options["controlled_joints"] = list(meta["controlled_joints"])
     return cfg.merged(env_kwargs={**options, **cfg.env_kwargs})
 
 
