@@ -134,6 +134,16 @@ def _sample_observations(info: RunInfo, model, obs_space, n_random: int, seed: i
     return np.concatenate(rows, axis=0)
 
 
+def _action_noise(model) -> dict[str, Any]:
+    """``{"action_log_std": [...]}``: the log standard deviation of the policy's Gaussian
+    action noise when it has one of its own per action (PPO without gSDE), for a run that goes
+    on from the exported policy; else nothing."""
+    log_std = getattr(model.policy, "log_std", None)
+    if log_std is None or getattr(model, "use_sde", False) or log_std.dim() != 1:
+        return {}
+    return {"action_log_std": log_std.detach().cpu().numpy().astype(float).tolist()}
+
+
 def _env_description(info: RunInfo, env_kwargs: dict[str, Any], model=None) -> dict[str, Any]:
     """Observation/action layout of the policy's environment (RobocupGym tasks): the run's
     (:meth:`TrainConfig.env_options`), with ``env_kwargs`` over it.
@@ -285,6 +295,7 @@ def export_onnx(
             "high": np.asarray(act_space.high, float).tolist(),
         },
         "obs_normalization_in_graph": obs_stats is not None,
+        **_action_noise(model),
         "verification": {"samples": len(obs), "max_abs_diff": max_diff, "atol": atol},
         "training": _training_description(info),
         **described,

@@ -77,6 +77,10 @@ class PipelinedPPO(PPO):
         worker_rollouts: each worker plays its block's whole rollout with a copy of the policy
             (one round trip per rollout); ``False``: the learner computes every step's actions
             and sends them to the worker whose step came back (one round trip per step).
+        value_warmup_steps: the updates within a run's first this many steps train the value
+            network alone, the policy held as it is: a policy that starts from a trained one
+            whose value network starts afresh (``--init-from pretrained:NAME``) is not moved
+            by the advantages of a value network that has learnt nothing yet.
         *args, **kwargs: As :class:`stable_baselines3.PPO`.
     """
 
@@ -86,8 +90,12 @@ class PipelinedPPO(PPO):
         pipeline_rollouts: bool = True,
         overlap_updates: bool = False,
         worker_rollouts: bool = True,
+        value_warmup_steps: int = 0,
         **kwargs,
     ) -> None:
+        if not (isinstance(value_warmup_steps, int) and value_warmup_steps >= 0):
+            raise ValueError(f"value_warmup_steps must be an int >= 0, got {value_warmup_steps!r}")
+        self.value_warmup_steps = value_warmup_steps
         self.pipeline_rollouts = pipeline_rollouts
         self.overlap_updates = overlap_updates
         self.worker_rollouts = worker_rollouts
@@ -121,9 +129,26 @@ class PipelinedPPO(PPO):
         if error is not None:
             raise RuntimeError("the background PPO update failed") from error
 
-    def _background_update(self) -> None:
+    def _update(self) -> None:
+        """PPO's update (within ``value_warmup_steps``, the value network's alone)."""
+        held = []
+        if self.num_timesteps <= self.value_warmup_steps:
+            held = [
+                p
+                for name, p in self.policy.named_parameters()
+                if "value_net" not in name and p.requires_grad
+            ]
+        for p in held:
+            p.requires_grad_(False)
         try:
             super().train()
+        finally:
+            for p in held:
+                p.requires_grad_(True)
+
+    def _background_update(self) -> None:
+        try:
+            self._update()
         except BaseException as e:  # re-raised by join_update in the learner's thread
             self._update_error = e
 
@@ -132,7 +157,7 @@ class PipelinedPPO(PPO):
         self.join_update()
         last = self.num_timesteps >= getattr(self, "_total_timesteps", 0)
         if not self._overlapping() or last:
-            super().train()
+            self._update()
             if self._behaviour is not None:
                 self._behaviour.load_state_dict(self.policy.state_dict())
             return

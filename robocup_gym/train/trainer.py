@@ -155,17 +155,22 @@ def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
 
 def _start_from_pretrained(model, cfg: TrainConfig) -> None:
     """Give a fresh ``model`` the actor of the shipped policy ``cfg.init_from``
-    (``pretrained:NAME``); its value network starts afresh (none is shipped).
+    (``pretrained:NAME``) and, where its description records it (``action_log_std``), its
+    action noise; its value network starts afresh (none is shipped).
 
     Raises:
         ValueError: the policy's network does not fit the model's (its layers named).
     """
+    import numpy as np
     import torch
 
     from robocup_gym.train.pretrained import pretrained_weights
 
     own = model.policy.state_dict()
-    weights = pretrained_weights(_init_policy(cfg))
+    policy = _init_policy(cfg)
+    weights = pretrained_weights(policy)
+    if "action_log_std" in policy.metadata and "log_std" in own:
+        weights["log_std"] = np.asarray(policy.metadata["action_log_std"], dtype=np.float32)
     misfit = [k for k, w in weights.items() if k not in own or tuple(own[k].shape) != w.shape]
     if misfit or not weights:
         raise ValueError(

@@ -480,6 +480,70 @@ def test_init_from_a_shipped_policy(tmp_path):
     assert not (tmp_path / "refused").exists() or not any((tmp_path / "refused").iterdir())
 
 
+def test_an_exported_policy_carries_its_action_noise_into_a_run_from_it(tmp_path, monkeypatch):
+    """An export records a PPO policy's action noise (``action_log_std``); a run that starts
+    from it as a shipped policy (``pretrained:NAME``) starts with that noise and acts as it."""
+    from stable_baselines3 import PPO
+
+    import robocup_gym.train.pretrained as pretrained
+    from robocup_gym.train.export import export_onnx
+
+    base = ["train", "walk", "--n-envs", 2, "--checkpoint-freq", 0, "--eval-freq", 0]
+    base += ["--no-progress", *TINY_PPO]
+    invoke([*base, "--timesteps", 96, "--hp", "learning_rate=0.01", "--out", tmp_path / "a"])
+    (source,) = list((tmp_path / "a").iterdir())
+    trained = PPO.load(source / "model.zip", device="cpu")
+    log_std = trained.policy.log_std.detach().numpy()
+    assert np.abs(log_std).max() > 1e-4  # moved from its initial 0
+    (tmp_path / "policies").mkdir()
+    meta = export_onnx(source, tmp_path / "policies" / "my-walk.onnx")
+    np.testing.assert_allclose(meta["action_log_std"], log_std, atol=1e-7)
+
+    monkeypatch.setattr(pretrained, "POLICY_DIR", tmp_path / "policies")
+    args = [*base, "--timesteps", 32, "--hp", "learning_rate=0.0"]
+    invoke([*args, "--init-from", "pretrained:my-walk", "--out", tmp_path / "b"])
+    (run,) = list((tmp_path / "b").iterdir())
+    tuned = PPO.load(run / "model.zip", device="cpu")
+    np.testing.assert_allclose(tuned.policy.log_std.detach().numpy(), log_std, atol=1e-7)
+    obs = np.random.default_rng(0).uniform(-1, 1, (32, 94)).astype(np.float32)
+    np.testing.assert_allclose(
+        tuned.predict(obs, deterministic=True)[0],
+        trained.predict(obs, deterministic=True)[0],
+        atol=1e-5,
+    )
+
+
+def test_value_warmup_holds_the_policy_while_the_value_network_learns(tmp_path):
+    """``--hp value_warmup_steps=N``: the updates of a run's first N steps leave the policy as
+    it started (here the shipped walk) and train the value network; without it the same
+    updates move the policy."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from robocup_gym.train.pretrained import pretrained_policy
+
+    args = ["train", "walk", "--n-envs", 2, "--timesteps", 64, "--checkpoint-freq", 0]
+    args += ["--eval-freq", 0, "--no-progress", "--hp", "n_steps=16", "--hp", "batch_size=16"]
+    args += ["--hp", "learning_rate=0.001", "--init-from", "pretrained:walk", "--seed", 3]
+    obs = np.random.default_rng(0).uniform(-1, 1, (64, 94)).astype(np.float32)
+    shipped = pretrained_policy("walk")(obs)
+    models = {}
+    for name, extra in (
+        ("held", ["--hp", "value_warmup_steps=64"]),
+        ("moved", []),
+        ("fresh", ["--hp", "learning_rate=0.0"]),  # the value network as it started
+    ):
+        invoke([*args, *extra, "--out", tmp_path / name])
+        (run,) = list((tmp_path / name).iterdir())
+        models[name] = PPO.load(run / "model.zip", device="cpu")
+    held = models["held"].predict(obs, deterministic=True)[0]
+    np.testing.assert_allclose(held, shipped, atol=1e-5)
+    moved = models["moved"].predict(obs, deterministic=True)[0]
+    assert np.abs(moved - shipped).max() > 1e-3
+    value = {k: m.policy.state_dict()["value_net.weight"] for k, m in models.items()}
+    assert not torch.equal(value["held"], value["fresh"])
+
+
 def test_init_from_carries_the_observation_statistics(tmp_path):
     """A run with ``normalize_obs`` passes its running observation statistics on: the new run
     continues them (its count starts at the source's)."""
