@@ -23,7 +23,7 @@ _NOT_TRAIN_OPTIONS = (
 _TRAIN_OPTION_EXTRAS: dict[str, dict[str, Any]] = {
     "assist_max_tilt_deg": {"flags": ("--assist-max-tilt-deg", "--assist-max-tilt")},
 }
-"""Option settings beyond the field's type: a path that must exist, an extra flag name."""
+"""Option settings beyond the field's type: an extra flag name."""
 
 
 def _option_help(doc: str, default: Any) -> str:

@@ -39,6 +39,7 @@ __all__ = [
     "pretrained_types",
     "pretrained_weights",
     "recorded_env_options",
+    "with_policy_joints",
 ]
 
 POLICY_DIR = Path(__file__).resolve().parents[1] / "data" / "policies"
@@ -137,6 +138,16 @@ def recorded_env_options(meta: dict[str, Any]) -> dict[str, Any]:
     return {**recorded, **(meta.get("env_kwargs") or {})}
 
 
+def with_policy_joints(meta: dict[str, Any], options: dict[str, Any]) -> dict[str, Any]:
+    """``options`` driving the joints an exported policy (its description ``meta``) drives,
+    named, unless they name their own: on a Nao type with more joints than the one it was
+    trained on (type 4's toes) the others are held still (0 rad/s)."""
+    joints = meta.get("controlled_joints")
+    if joints and options.get("controlled_joints") is None:
+        return {**options, "controlled_joints": tuple(joints)}
+    return options
+
+
 _TARGETS_ONTO_STOPS = {"target_stop_margin_deg": 0.0}
 OPTIONS_ADDED: dict[str, dict[str, Any]] = {
     "RobocupGym/SimpleKick-v0": _TARGETS_ONTO_STOPS,
@@ -170,12 +181,7 @@ def pretrained_env(
             + (" --scenario penalty" if meta["env_id"].endswith("/penalty") else "")
         )
     extra = dict(env_overrides or {})
-    options = {**recorded_env_options(meta), **extra}
-    joints = meta.get("controlled_joints")
-    if joints and options.get("controlled_joints") is None:
-        # the joints the policy drives, named: on a Nao type with more joints than the one it
-        # was trained on (type 4's toes) the others are held still (0 rad/s)
-        options["controlled_joints"] = tuple(joints)
+    options = with_policy_joints(meta, {**recorded_env_options(meta), **extra})
     env = make_env(
         meta["env_id"], backend=backend or meta.get("backend") or DEFAULT_ENGINE, env_kwargs=options
     )

@@ -130,7 +130,7 @@ def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
         ValueError: no such policy, one of another algorithm, or one that normalises its
             observations in its graph (or a run that would normalise them).
     """
-    from robocup_gym.train.pretrained import recorded_env_options
+    from robocup_gym.train.pretrained import recorded_env_options, with_policy_joints
 
     meta = _init_policy(cfg).metadata
     if meta.get("algo") != cfg.algo:
@@ -147,10 +147,7 @@ def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
     else:
         options = dict(meta.get("env_kwargs") or {})
     options.pop("robot_type", None)  # the run's own (robot_types, or the task's default)
-    if meta.get("controlled_joints") and options.get("controlled_joints") is None:
-        # the joints it drives, named: on type 4 a policy of types 0-3 holds the toes still
-        options["controlled_joints"] = list(meta["controlled_joints"])
-    return cfg.merged(env_kwargs={**options, **cfg.env_kwargs})
+    return cfg.merged(env_kwargs=with_policy_joints(meta, {**options, **cfg.env_kwargs}))
 
 
 def _start_from_pretrained(model, cfg: TrainConfig) -> None:
