@@ -246,9 +246,10 @@ class TrainConfig:
     """Hyperparameters passed to the SB3 algorithm (merged over the paper's defaults)."""
     init_from: str = ""
     """A run folder whose final policy (and observation statistics) this run starts from, e.g.
-    a policy learnt on the embedded world, fine-tuned here on ``backend="ode"``, or a shipped
-    policy, ``pretrained:NAME`` (its actor; under this run's ``env_kwargs``, on the policy's
-    own task the environment it was exported with, on another its ``env_kwargs``). The task's
+    a policy learnt on the embedded world, fine-tuned here on ``backend="ode"``, or an exported
+    policy, a shipped ``pretrained:NAME`` or an ``.onnx`` file (its actor and recorded action
+    noise; under this run's ``env_kwargs``, on the policy's own task the environment it was
+    exported with, on another its ``env_kwargs``). The task's
     observation and action spaces must match; this run's hyperparameters apply. Empty: start
     from scratch."""
     normalize_obs: bool = False

@@ -82,11 +82,12 @@ def prepare_run(
     ``config.yaml``. Nothing is created when a check fails."""
     env_id = resolve_task(config.task)
     config = config.merged(env_id=env_id)
-    if config.init_from.startswith("pretrained:"):
-        config = _over_pretrained_options(config)
+    if _from_exported(config.init_from):
+        config = _over_exported_options(config)
     elif config.init_from and not Path(config.init_from).is_dir():
         raise ValueError(
-            f"init_from {config.init_from!r} is neither a run folder nor pretrained:NAME"
+            f"init_from {config.init_from!r} is neither a run folder, an exported policy "
+            "(.onnx) nor pretrained:NAME"
         )
     # check the options (before any folder or worker exists) and freeze every option of the
     # environment, so that the run keeps it if a default changes
@@ -110,19 +111,35 @@ def prepare_run(
     return config, path
 
 
+def _from_exported(init_from: str) -> bool:
+    """Whether ``init_from`` names an exported policy: ``pretrained:NAME`` or an ``.onnx`` file
+    (else a run folder)."""
+    return init_from.startswith("pretrained:") or init_from.endswith(".onnx")
+
+
 def _init_policy(cfg: TrainConfig):
-    """The shipped policy a run starts from (``init_from="pretrained:NAME"``): for a run on one
-    Nao type, that type's own where it has one."""
+    """The exported policy a run starts from: an ``.onnx`` file, or the shipped
+    ``pretrained:NAME`` (for a run on one Nao type, that type's own where it has one).
+
+    Raises:
+        ValueError: no such policy.
+    """
     from robocup_gym.train.pretrained import pretrained_policy
 
+    if not cfg.init_from.startswith("pretrained:"):
+        from robocup_gym.train.onnx_policy import OnnxPolicy
+
+        if not Path(cfg.init_from).is_file():
+            raise ValueError(f"init_from {cfg.init_from}: no such exported policy")
+        return OnnxPolicy(cfg.init_from)
     types = set(cfg.robot_types) or {cfg.env_kwargs.get("robot_type")}
     robot_type = types.pop() if len(types) == 1 else None
     return pretrained_policy(cfg.init_from.split(":", 1)[1], robot_type)
 
 
-def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
-    """``cfg`` starting from a shipped policy, under the run's own environment options: on the
-    policy's task, every option it was exported with
+def _over_exported_options(cfg: TrainConfig) -> TrainConfig:
+    """``cfg`` starting from an exported policy (:func:`_init_policy`), under the run's own
+    environment options: on the policy's task, every option it was exported with
     (:func:`~robocup_gym.train.pretrained.recorded_env_options`); on another task, the options
     it was trained with (``env_kwargs``: a walk's gait for a task built on Walk, say).
 
@@ -139,8 +156,8 @@ def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
         )
     if meta.get("obs_normalization_in_graph") or cfg.normalize_obs:
         raise ValueError(
-            f"init_from {cfg.init_from}: a shipped policy starts a run without normalize_obs, "
-            "and only one that normalises nothing itself"
+            f"init_from {cfg.init_from}: an exported policy starts a run without "
+            "normalize_obs, and only one that normalises nothing itself"
         )
     if meta.get("env_id") == cfg.env_id:
         options = recorded_env_options(meta)
@@ -150,10 +167,10 @@ def _over_pretrained_options(cfg: TrainConfig) -> TrainConfig:
     return cfg.merged(env_kwargs=with_policy_joints(meta, {**options, **cfg.env_kwargs}))
 
 
-def _start_from_pretrained(model, cfg: TrainConfig) -> None:
-    """Give a fresh ``model`` the actor of the shipped policy ``cfg.init_from``
-    (``pretrained:NAME``) and, where its description records it (``action_log_std``), its
-    action noise; its value network starts afresh (none is shipped).
+def _start_from_exported(model, cfg: TrainConfig) -> None:
+    """Give a fresh ``model`` the actor of the exported policy ``cfg.init_from``
+    (:func:`_init_policy`) and, where its description records it (``action_log_std``), its
+    action noise; its value network starts afresh (none is exported).
 
     Raises:
         ValueError: the policy's network does not fit the model's (its layers named).
@@ -418,7 +435,7 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
 
         from robocup_gym.train.vecenv import make_vec_env
 
-        from_run = cfg.init_from and not cfg.init_from.startswith("pretrained:")
+        from_run = cfg.init_from and not _from_exported(cfg.init_from)
         init = load_run(cfg.init_from) if start_from is None and from_run else None
         if init is not None and (init.vecnormalize_path is not None) != cfg.normalize_obs:
             raise ValueError(
@@ -496,7 +513,7 @@ def _setup(cfg: TrainConfig, path: Path, start_from: Path | None, console):
                 if init is not None:
                     _start_from_run(model, init, cfg)
                 elif cfg.init_from:
-                    _start_from_pretrained(model, cfg)
+                    _start_from_exported(model, cfg)
             else:
                 model = cls.load(start_from, env=venv, device=cfg.device)
                 rb = path / "checkpoints" / "replay_buffer.pkl"

@@ -470,7 +470,8 @@ def test_init_from_a_shipped_policy(tmp_path):
     for extra, message in (
         (["--init-from", "pretrained:no-such"], "no pretrained policy 'no-such'"),
         (["--hp", "policy_kwargs={net_arch: [32, 32]}"], "does not fit this run's policy"),
-        (["--init-from", tmp_path / "none"], "neither a run folder nor pretrained:NAME"),
+        (["--init-from", tmp_path / "none"], "neither a run folder, an exported policy"),
+        (["--init-from", tmp_path / "none.onnx"], "none.onnx: no such exported policy"),
         (["--env", "frame_stack=2"], "does not fit this run's policy"),
     ):
         args = ["train", "walk", *base[1:], *extra, "--out", tmp_path / "refused"]
@@ -480,12 +481,11 @@ def test_init_from_a_shipped_policy(tmp_path):
     assert not (tmp_path / "refused").exists() or not any((tmp_path / "refused").iterdir())
 
 
-def test_an_exported_policy_carries_its_action_noise_into_a_run_from_it(tmp_path, monkeypatch):
+def test_an_exported_policy_carries_its_action_noise_into_a_run_from_it(tmp_path):
     """An export records a PPO policy's action noise (``action_log_std``); a run that starts
-    from it as a shipped policy (``pretrained:NAME``) starts with that noise and acts as it."""
+    from the exported file (``--init-from POLICY.onnx``) starts with that noise and acts as it."""
     from stable_baselines3 import PPO
 
-    import robocup_gym.train.pretrained as pretrained
     from robocup_gym.train.export import export_onnx
 
     base = ["train", "walk", "--n-envs", 2, "--checkpoint-freq", 0, "--eval-freq", 0]
@@ -495,13 +495,11 @@ def test_an_exported_policy_carries_its_action_noise_into_a_run_from_it(tmp_path
     trained = PPO.load(source / "model.zip", device="cpu")
     log_std = trained.policy.log_std.detach().numpy()
     assert np.abs(log_std).max() > 1e-4  # moved from its initial 0
-    (tmp_path / "policies").mkdir()
-    meta = export_onnx(source, tmp_path / "policies" / "my-walk.onnx")
+    meta = export_onnx(source, tmp_path / "my-walk.onnx")
     np.testing.assert_allclose(meta["action_log_std"], log_std, atol=1e-7)
 
-    monkeypatch.setattr(pretrained, "POLICY_DIR", tmp_path / "policies")
     args = [*base, "--timesteps", 32, "--hp", "learning_rate=0.0"]
-    invoke([*args, "--init-from", "pretrained:my-walk", "--out", tmp_path / "b"])
+    invoke([*args, "--init-from", tmp_path / "my-walk.onnx", "--out", tmp_path / "b"])
     (run,) = list((tmp_path / "b").iterdir())
     tuned = PPO.load(run / "model.zip", device="cpu")
     np.testing.assert_allclose(tuned.policy.log_std.detach().numpy(), log_std, atol=1e-7)
