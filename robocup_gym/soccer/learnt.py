@@ -1,7 +1,7 @@
 """Teams played by a learnt policy: one policy shared by the team's players, each acting on its
 own observation (:mod:`robocup_gym.soccer.observations`) with skill actions (or, for a team
 trained with ``plays``, skill actions or the ball played along a direction:
-:mod:`robocup_gym.soccer.ball_play`).
+:mod:`robocup_gym.soccer.ball_play`; with ``over_scripted``, residuals over the scripted team).
 
 A :class:`PolicyTeam` comes from a team run's folder (``robocup-gym train game-2v2``), from its
 ONNX export (``robocup-gym export RUN --onnx FILE``, or a shipped team as ``pretrained:NAME``),
@@ -17,8 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.soccer.ball_play import BallPlay
-from robocup_gym.soccer.skills import fit_skill_actions
+from robocup_gym.soccer.team_view import team_actions
 
 __all__ = ["PolicyTeam", "team_task_error"]
 
@@ -53,9 +52,8 @@ class PolicyTeam:
         self.options = dict(options or {})
         self.task = task
         """The team scenario it was trained on (``soccer/game-2v2``; empty if unknown)."""
-        self._plays = BallPlay() if self.options.get("plays") else None
-        """Turns its ``plays`` actions into skill actions (``None``: it acts with skill
-        actions)."""
+        self._to_skills = team_actions(self.options)
+        """Turns its actions into skill actions (``None``: it acts with skill actions)."""
 
     @property
     def privileged(self) -> bool:
@@ -71,7 +69,7 @@ class PolicyTeam:
         options: Mapping[str, Any] | None = None,
     ) -> PolicyTeam:
         """A Stable-Baselines3 policy saved with ``policy.save`` (a self-play snapshot), trained
-        with the scenario options ``options`` (``plays``: it acts with plays actions)."""
+        with the scenario options ``options`` (``plays``, ``over_scripted``: how it acts)."""
         import torch
         from stable_baselines3.common.policies import ActorCriticPolicy
 
@@ -159,6 +157,6 @@ class PolicyTeam:
                 f"{x.shape[1]} (its robot types or observation options differ from training)"
             )
         actions = dict(zip(agents, np.asarray(self.act(x), dtype=float), strict=True))
-        if self._plays is not None:  # the ball played along a direction: skill actions
-            return fit_skill_actions(self._plays.skill_actions(env.team_view(agents), actions), env)
+        if self._to_skills is not None:  # plays actions, residuals: skill actions
+            return self._to_skills(env, agents, actions)
         return actions

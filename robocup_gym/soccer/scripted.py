@@ -12,6 +12,8 @@ the circle the referee keeps clear. A team reads the positions of the ball, its 
 the opponents and the play mode from what the game tells it (``team_view(agents)`` →
 :class:`TeamView`: ground truth in-process; on a server, each player's own estimate and what
 the team has seen, :mod:`robocup_gym.soccer.localisation`). :class:`StandingTeam` stands still.
+:class:`OverScripted` plays a learnt team that acts by correcting the scripted team (the team
+option ``over_scripted``: a residual added to each player's scripted skill action).
 
 A team is called with the game (an environment, or a team's connection to a server), the names
 of its agents and (optionally) their observations, and returns their skill actions (the
@@ -29,10 +31,11 @@ import numpy as np
 from robocup_gym.sim.field import FIELD_HALF_LENGTH
 from robocup_gym.sim.referee import restart_side
 from robocup_gym.soccer.ball_play import BallPlay, walk_to
-from robocup_gym.soccer.skills import fit_skill_actions, game_skill_labels
+from robocup_gym.soccer.skills import checked_action, fit_skill_actions, game_skill_labels
 
 __all__ = [
     "TEAMS",
+    "OverScripted",
     "ScriptedTeam",
     "StandingTeam",
     "TeamView",
@@ -153,6 +156,31 @@ class ScriptedTeam:
                 act = walk_to(pos, heading, support, ball)
             out[a] = act
         return fit_skill_actions(out, env)
+
+
+class OverScripted:
+    """Skill actions of a team that acts by correcting the scripted team: each player's action
+    (the game's skill action layout, each value in [-1, 1]) is added to what
+    :class:`ScriptedTeam` decides for it this cycle, and the sum clipped to [-1, 1]. A zero
+    action plays the scripted team: a policy learns a residual over it, as the shipped skills
+    learn one over their reference motions."""
+
+    def __init__(self) -> None:
+        self._team = ScriptedTeam()
+
+    def skill_actions(
+        self, env: Any, agents: list[str], actions: dict[str, np.ndarray]
+    ) -> dict[str, np.ndarray]:
+        """The skill actions of the residual ``actions`` of ``agents`` in ``env``.
+
+        Raises:
+            ValueError: an action of the wrong shape or with a value that is not finite.
+        """
+        labels = game_skill_labels(env)
+        what = "a residual over the scripted team's skill action: " + ", ".join(labels)
+        checked = {a: checked_action(a, actions[a], labels, what) for a in agents}
+        base = self._team(env, agents)
+        return {a: np.clip(base[a] + checked[a], -1.0, 1.0) for a in agents}
 
 
 TEAMS = {"scripted": ScriptedTeam, "standing": StandingTeam}

@@ -17,11 +17,13 @@ name             scenario                     the learning team       the oppone
 Observations are the scenario's per player (:mod:`robocup_gym.soccer.observations`) in the
 team's own frame, so a policy plays either side unchanged; actions are the scenario's (skill
 actions by default here: :data:`TEAM_DEFAULTS`), or, with ``plays``, skill actions or the ball
-played along a direction (:mod:`robocup_gym.soccer.ball_play`). Rewards are the scenario's,
-per player. When a game ends, ``infos[0]["game"]`` holds its result: ``opponent`` (its
-name), ``side``, ``goals_for``, ``goals_against`` and ``end`` (why it ended), and every
-player's info holds ``episode`` (``r``: its return, ``l``: steps, ``t``: wall-clock
-seconds), as Stable-Baselines3's ``Monitor`` writes it.
+played along a direction (:mod:`robocup_gym.soccer.ball_play`), or, with ``over_scripted``,
+residuals over the scripted team's skill actions
+(:class:`~robocup_gym.soccer.scripted.OverScripted`). Rewards are the scenario's, per player.
+When a game ends, ``infos[0]["game"]`` holds its result: ``opponent`` (its name), ``side``,
+``goals_for``, ``goals_against`` and ``end`` (why it ended), and every player's info holds
+``episode`` (``r``: its return, ``l``: steps, ``t``: wall-clock seconds), as
+Stable-Baselines3's ``Monitor`` writes it.
 """
 
 from __future__ import annotations
@@ -41,8 +43,10 @@ __all__ = [
     "TEAM_DEFAULTS",
     "TEAM_OPTIONS",
     "TEAM_SCENARIOS",
+    "TeamActions",
     "TeamView",
     "scenario_options",
+    "team_actions",
     "team_scenario",
 ]
 
@@ -54,6 +58,7 @@ TEAM_DEFAULTS: dict[str, Any] = {
     "privileged": True,
     "ball_progress": 0.1,
     "plays": False,
+    "over_scripted": False,
 }
 """Options a team scenario starts from, over the scenario's own: skill actions, the privileged
 observations (own and ball position and velocity from ground truth) and a small reward for
@@ -61,12 +66,39 @@ moving the ball toward the opponent goal (0.1 per metre; a goal pays 1). ``plays
 acts with ``plays`` actions (:data:`~robocup_gym.soccer.ball_play.PLAY_ACTION_LABELS`: a skill
 action, or the ball played along a direction), which
 :class:`~robocup_gym.soccer.ball_play.BallPlay` turns into skill actions; the scenario itself
-takes skill actions."""
+takes skill actions. ``over_scripted``: the team acts with residuals over the scripted team
+(:class:`~robocup_gym.soccer.scripted.OverScripted`: each player's action is added to the
+scripted team's skill action for it; a zero action plays the scripted team)."""
 
-TEAM_OPTIONS = ("plays",)
+TEAM_OPTIONS = ("plays", "over_scripted")
 """The options of the learning team, not of the scenario's environment."""
 
 _GAME = re.compile(r"^game-(\d+)v(\d+)$")
+
+TeamActions = Callable[[Any, list[str], dict[str, np.ndarray]], dict[str, np.ndarray]]
+"""``(game, agents, actions) → skill actions``: what turns a team's own actions into the
+game's skill actions (:func:`team_actions`)."""
+
+
+def team_actions(options: Mapping[str, Any]) -> TeamActions | None:
+    """What turns the actions of a team with the team options ``options`` into skill actions:
+    ``plays`` actions through :class:`~robocup_gym.soccer.ball_play.BallPlay`, residuals over
+    the scripted team (``over_scripted``) through
+    :class:`~robocup_gym.soccer.scripted.OverScripted`; ``None`` for a team that acts with
+    skill actions. Each call makes a new one (they remember the players' dribbles)."""
+    if options.get("plays"):
+        plays = BallPlay()
+
+        def played(game: Any, agents: list[str], actions: dict[str, np.ndarray]):
+            return fit_skill_actions(plays.skill_actions(game.team_view(agents), actions), game)
+
+        return played
+    if options.get("over_scripted"):
+        from robocup_gym.soccer.scripted import OverScripted
+
+        return OverScripted().skill_actions
+    return None
+
 
 Opponents = Callable[[np.random.Generator], Any]
 """Called at every reset with the game's random generator; returns the opponent team: a
@@ -120,6 +152,10 @@ def scenario_options(name: str, options: Mapping[str, Any] | None = None) -> dic
     for key in TEAM_OPTIONS:
         if not isinstance(merged[key], bool):
             raise ValueError(f"{name}: {key} must be true or false, got {merged[key]!r}")
+    if merged["plays"] and merged["over_scripted"]:
+        raise ValueError(
+            f"{name}: plays and over_scripted are two kinds of team action; choose one"
+        )
     out = {k: v for k, v in merged.items() if k in extra or k in TEAM_OPTIONS}
     for field, value in config.__dict__.items():
         out[field] = list(value) if isinstance(value, tuple) else value
@@ -161,8 +197,8 @@ class TeamView:
             opts[key] = tuple(opts[key])
         self.options = opts
         self.env = cls(**{k: v for k, v in opts.items() if k not in TEAM_OPTIONS})
-        self.plays = BallPlay() if opts["plays"] else None
-        """Turns the team's ``plays`` actions into skill actions (``None``: skill actions)."""
+        self.to_skills = team_actions(opts)
+        """Turns the team's actions into skill actions (``None``: it acts with them)."""
         self.opponents = opponents
         self._rng = np.random.default_rng(seed)
         c = self.env.config
@@ -173,7 +209,7 @@ class TeamView:
         first = self.env.possible_agents[0]
         self.observation_space: gym.spaces.Box = self.env.observation_space(first)
         self.action_space: gym.spaces.Box = self.env.action_space(first)
-        if self.plays is not None:
+        if opts["plays"]:
             self.action_space = gym.spaces.Box(-1.0, 1.0, (len(PLAY_ACTION_LABELS),), np.float32)
         for agent in self.env.possible_agents:
             if self.env.observation_space(agent).shape != self.observation_space.shape:
@@ -230,9 +266,8 @@ class TeamView:
             )
         mine, theirs = self.mine, self.theirs
         joint = dict(zip(mine, actions, strict=True))
-        if self.plays is not None:
-            played = self.plays.skill_actions(self.env.team_view(mine), joint)
-            joint = fit_skill_actions(played, self.env)
+        if self.to_skills is not None:
+            joint = self.to_skills(self.env, mine, joint)
         theirs_obs = {a: self._obs[a] for a in theirs}
         joint.update(self.opponent(self.env, theirs, theirs_obs) if theirs else {})
         self._obs, rewards, terms, truncs, infos = self.env.step(joint)

@@ -134,7 +134,8 @@ class OpponentPool:
         self.pool_dir = None if pool_dir is None else str(pool_dir)
         self.settings = settings
         self.team_options = dict(team_options or {})
-        """The learning team's own options (``plays``), which its snapshots play with."""
+        """The learning team's own options (``plays``, ``over_scripted``), which its snapshots
+        play with."""
         self._loaded: dict[str, Any] = {}
         self._scripted: Any = None
 
@@ -512,8 +513,10 @@ def team_observations(
         rows = [obs]
         for _ in range(steps - 1):
             acts = scripted(view.env, view.mine)
-            if view.plays is not None:
+            if view.options["plays"]:
                 acts = {a: as_play_action(act) for a, act in acts.items()}
+            elif view.options["over_scripted"]:  # no correction: the scripted team
+                acts = {a: np.zeros_like(act) for a, act in acts.items()}
             obs, _, terminated, truncated, _ = view.step(np.stack([acts[a] for a in view.mine]))
             rows.append(obs)
             if terminated or truncated:
