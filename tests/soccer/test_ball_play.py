@@ -129,10 +129,15 @@ def test_a_team_with_plays_actions_trains_and_plays_against_its_snapshots(tmp_pa
 
 
 @needs_ode
-def test_a_team_with_plays_actions_plays_the_ball_on_serve():
-    """A team that acts with plays actions (here: always the ball straight at the goal) plays
-    through ``robocup-gym serve`` from its own perceptors: its plays become skill actions from
-    what the team sees, and the ball goes toward the other goal."""
+@pytest.mark.parametrize(
+    ("option", "action"),
+    [("plays", [0.0, 0.0, 0.0, -1.0, 1.0, 0.0]), ("over_scripted", [0.0, 0.0, 0.0, 0.0])],
+)
+def test_a_team_with_plays_actions_plays_the_ball_on_serve(option, action):
+    """A team that acts with plays actions (here: always the ball straight at the goal), or
+    with residuals over the scripted team (here: none), plays through ``robocup-gym serve``
+    from its own perceptors: its actions become skill actions from what the team sees, and the
+    ball goes toward the other goal."""
     import threading
 
     from robocup_gym.protocol import trainer as trainer_cmds
@@ -144,9 +149,9 @@ def test_a_team_with_plays_actions_plays_the_ball_on_serve():
     seen: list[np.ndarray] = []
 
     def at_the_goal(x: np.ndarray) -> np.ndarray:
-        return np.tile([0.0, 0.0, 0.0, -1.0, 1.0, 0.0], (len(x), 1))
+        return np.tile(action, (len(x), 1))
 
-    policy = PolicyTeam(at_the_goal, 1, "at-the-goal", {"plays": True})
+    policy = PolicyTeam(at_the_goal, 1, "at-the-goal", {option: True})
 
     class Watched:
         """The policy team, noting where its team sees the ball at each decision."""
