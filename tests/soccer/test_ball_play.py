@@ -1,5 +1,6 @@
 """Playing the ball along a direction (``robocup_gym.soccer.ball_play``): the scripted chaser's
-dribble, and the ``plays`` actions of a learning team."""
+dribble, and the ``plays`` actions of a learning team (beside its residuals over the scripted
+team, ``over_scripted``, where both go the same way: the self-play pool, serve)."""
 
 from __future__ import annotations
 
@@ -92,10 +93,22 @@ def test_a_team_option_plays_is_checked_and_gives_plays_actions():
         scenario_options("game-2v2", {"plays": "yes"})
 
 
+TEAM_ACTIONS = pytest.mark.parametrize(
+    ("option", "action"),
+    [("plays", [0.0, 0.0, 0.0, -1.0, 1.0, 0.0]), ("over_scripted", [0.0, 0.0, 0.0, 0.0])],
+)
+"""A team's own kinds of action, each with an action of it: plays actions (the ball straight at
+the goal), residuals over the scripted team (none)."""
+
+
 @needs_ode
-def test_a_team_with_plays_actions_trains_and_plays_against_its_snapshots(tmp_path):
-    """A team game with ``plays`` takes six values a player; the pool's snapshots of such a
-    team act with them too (their actions become skill actions before the game takes them)."""
+@TEAM_ACTIONS
+def test_a_team_with_its_own_actions_trains_and_plays_against_its_snapshots(
+    tmp_path, option, action
+):
+    """A team game with ``plays`` takes six values a player, with ``over_scripted`` four; the
+    pool's snapshots of such a team act with them too (their actions become skill actions
+    before the game takes them)."""
     import gymnasium as gym
     from stable_baselines3.common.policies import ActorCriticPolicy
 
@@ -107,13 +120,14 @@ def test_a_team_with_plays_actions_trains_and_plays_against_its_snapshots(tmp_pa
         snapshot_policy,
     )
 
-    options = {"plays": True, "max_cycles": 200}
+    options = {option: True, "max_cycles": 200}
     game = TeamGame("game-1v1", lambda rng: StandingTeam(), options)
     obs_space = game.observation_space
-    assert game.action_space.shape == (len(PLAY_ACTION_LABELS),)
+    assert game.action_space.shape == (len(action),)
+    assert len(action) == (len(PLAY_ACTION_LABELS) if option == "plays" else 4)
     game.close()
     policy = ActorCriticPolicy(
-        obs_space, gym.spaces.Box(-1.0, 1.0, (6,), np.float32), lr_schedule=lambda _: 0.0
+        obs_space, gym.spaces.Box(-1.0, 1.0, (len(action),), np.float32), lr_schedule=lambda _: 0.0
     )
     snapshot_policy(policy, tmp_path, 100)
     pool = OpponentPool(tmp_path, SelfPlaySettings(scripted_share=0.0))
@@ -121,19 +135,17 @@ def test_a_team_with_plays_actions_trains_and_plays_against_its_snapshots(tmp_pa
     try:
         venv.reset()
         view = venv.block.envs[0]
-        assert isinstance(view.opponent, PolicyTeam) and view.opponent.options["plays"]
+        assert isinstance(view.opponent, PolicyTeam) and view.opponent.options[option]
+        assert view.opponent._to_skills is not None  # its actions become skill actions
         for _ in range(5):
-            venv.step(np.tile([[0.0, 0.0, 0.0, -1.0, 1.0, 0.0]], (venv.num_envs, 1)))
+            venv.step(np.tile([action], (venv.num_envs, 1)))
     finally:
         venv.close()
 
 
 @needs_ode
-@pytest.mark.parametrize(
-    ("option", "action"),
-    [("plays", [0.0, 0.0, 0.0, -1.0, 1.0, 0.0]), ("over_scripted", [0.0, 0.0, 0.0, 0.0])],
-)
-def test_a_team_with_plays_actions_plays_the_ball_on_serve(option, action):
+@TEAM_ACTIONS
+def test_a_team_with_its_own_actions_plays_the_ball_on_serve(option, action):
     """A team that acts with plays actions (here: always the ball straight at the goal), or
     with residuals over the scripted team (here: none), plays through ``robocup-gym serve``
     from its own perceptors: its actions become skill actions from what the team sees, and the
