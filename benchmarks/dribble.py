@@ -75,7 +75,10 @@ def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_benchmark_options(parser, "Dribble", episodes=5)
     args = parser.parse_args(argv)
-    env, act = benchmark_policy_and_env(args, "RobocupGym/Dribble-v0")
+    # every episode ends at its one target (a Dribble-v1 policy goes on to the next in training)
+    env, act = benchmark_policy_and_env(
+        args, "RobocupGym/Dribble-v1", {"next_target_at_goal": False}
+    )
     out: dict = {
         "policy": args.policy,
         "robot_type": env.unwrapped.config.robot_type,

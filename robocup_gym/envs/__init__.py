@@ -92,6 +92,7 @@ _ENTRY_POINTS = {
     "RobocupGym/LongKick-v0": "robocup_gym.envs.tasks.long_kick:LongKick",
     "RobocupGym/LongKick-v1": "robocup_gym.envs.tasks.long_kick:LongKick",
     "RobocupGym/Dribble-v0": "robocup_gym.envs.tasks.dribble:Dribble",
+    "RobocupGym/Dribble-v1": "robocup_gym.envs.tasks.dribble:Dribble",
 }
 REGISTERED_IDS: tuple[str, ...] = tuple(_ENTRY_POINTS)
 """Every Gymnasium id this package registers."""
@@ -99,6 +100,7 @@ _ID_OPTIONS: dict[str, dict] = {
     "RobocupGym/GetUp-v1": {"self_collisions": True},
     "RobocupGym/Run-v1": SPRINT_OPTIONS,
     "RobocupGym/TargetKick-v1": {"kick_per_command": True, "ball_spawn_noise": 0.01},
+    "RobocupGym/Dribble-v1": {"next_target_at_goal": True},
     "RobocupGym/LongKick-v1": {
         "kick_keyframes": LONG_KICK_KEYFRAMES,
         "kick_keyframes_by_type": LONG_KICK_KEYFRAMES_BY_TYPE,

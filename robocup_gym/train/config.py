@@ -99,6 +99,7 @@ TASK_ALGO_DEFAULTS: dict[tuple[str, str], dict[str, Any]] = {
     ("RobocupGym/Run-v0", "ppo"): _RESIDUAL_PPO,
     ("RobocupGym/Run-v1", "ppo"): _RESIDUAL_PPO,
     ("RobocupGym/Dribble-v0", "ppo"): _RESIDUAL_PPO,
+    ("RobocupGym/Dribble-v1", "ppo"): _RESIDUAL_PPO,
     ("RobocupGym/TargetKick-v0", "ppo"): _KICK_RESIDUAL_PPO,
     ("RobocupGym/TargetKick-v1", "ppo"): _KICK_RESIDUAL_PPO,
     ("RobocupGym/LongKick-v0", "ppo"): _KICK_RESIDUAL_PPO,

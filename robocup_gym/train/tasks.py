@@ -137,6 +137,8 @@ def make_env(
             if config is not None:
                 kwargs = {k: v for k, v in kwargs.items() if k in _NOT_CONFIG}
                 kwargs["config"] = config
+                # gymnasium.make passes the id's own options too, which would go over config
+                kwargs.update({k: getattr(config, k) for k in _version_options(env_id)})
                 kwargs["max_episode_steps"] = int(config.max_episode_steps)
     elif backend != DEFAULT_ENGINE:
         raise ValueError(f"--backend/--engine only apply to RobocupGym tasks, not {env_id!r}")
@@ -152,9 +154,16 @@ _NOT_CONFIG = ("backend", "render_mode", "render_size", "config")
 """``gymnasium.make`` keywords of the tasks that are not config fields."""
 
 
+def _version_options(env_id: str) -> dict[str, Any]:
+    """The options the registered id ``env_id`` sets over its class's defaults (a version's,
+    ``RobocupGym/Run-v1``'s sprint, say)."""
+    return {k: v for k, v in (gym.registry[env_id].kwargs or {}).items() if k not in _NOT_CONFIG}
+
+
 def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
-    """The task's config with ``env_kwargs`` applied (validated), without starting any
-    simulator; ``None`` for an environment that is not a RobocupGym task with a config."""
+    """The task's config as the id ``env_id`` makes it (its version's options over the class's
+    defaults) with ``env_kwargs`` applied (validated), without starting any simulator; ``None``
+    for an environment that is not a RobocupGym task with a config."""
     if not is_robocup_task(env_id):
         return None
     _register_tasks()
@@ -172,7 +181,7 @@ def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
     options = {k: v for k, v in (env_kwargs or {}).items() if k not in _NOT_CONFIG}
     robot = options.get("robot", "nao")
     base = default_config(robot) if robot != "nao" else default_config()
-    return base.replace(**options)
+    return base.replace(**{**_version_options(env_id), **options})
 
 
 def resolved_env_config(env_id: str, env_kwargs: dict[str, Any] | None) -> dict[str, Any]:

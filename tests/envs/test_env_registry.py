@@ -30,6 +30,7 @@ def test_registry_lists_the_tasks():
         "RobocupGym/LongKick-v0",
         "RobocupGym/LongKick-v1",
         "RobocupGym/Dribble-v0",
+        "RobocupGym/Dribble-v1",
     }
     for env_id in rg_envs.REGISTERED_IDS:
         assert env_id in gym.registry

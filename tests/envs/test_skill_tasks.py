@@ -28,7 +28,7 @@ def test_the_cli_knows_the_skills():
     tasks = registered_tasks()
     assert tasks["target-kick"] == "RobocupGym/TargetKick-v1"
     assert tasks["long-kick"] == "RobocupGym/LongKick-v1"
-    assert tasks["dribble"] == "RobocupGym/Dribble-v0"
+    assert tasks["dribble"] == "RobocupGym/Dribble-v1"
 
 
 @pytest.mark.parametrize("speed", [1.5, 4.0])
@@ -209,6 +209,44 @@ def test_dribble_zero_actions_push_the_ball_toward_the_target():
         Dribble().reset(options={"dribble_target": (1.0, float("nan"))})
     with pytest.raises(EnvConfigError, match="target_distance_range"):
         Dribble(target_distance_range=(5.0, 2.0))
+
+
+def test_dribble_v1_draws_the_next_target_at_the_goal_and_goes_on():
+    """Dribble-v1 pays the goal, draws the next target within the task's ranges of the ball and
+    the robot's heading, and goes on; v0 ends the episode there."""
+    made = gym.make("RobocupGym/Dribble-v1")
+    assert made.unwrapped.config.next_target_at_goal
+    made.close()
+    v1 = Dribble(max_episode_steps=100, next_target_at_goal=True)
+    v0 = Dribble(max_episode_steps=100)
+    zero = np.zeros(v1.action_space.shape)
+    try:
+        for env in (v0, v1):
+            env.reset(seed=3)
+            start = env.episode_start.ball_pos[:2]
+            first = start + np.array([0.3, 0.0])
+            env.reset(seed=3, options={"dribble_target": first})
+            _, _, terminated, _, info = env.step(zero)
+            assert info["reward_terms"]["goal"] == 10.0 and info["goals"] == 1
+            assert terminated == (env is v0)
+        c = v1.config
+        gap = float(np.hypot(*(v1.target_pos - v1.ball_pos[:2])))
+        first_gained = 0.3 - float(np.hypot(*(first - v1.ball_pos[:2])))
+        assert c.target_distance_range[0] - 0.05 <= gap <= c.target_distance_range[1] + 0.05
+        while True:
+            _, _, terminated, truncated, info = v1.step(zero)
+            assert info["reward_terms"]["goal"] == 0.0  # paid once, at the goal
+            if terminated or truncated:
+                break
+        # the speed counts what the ball gained on the first target and then on the next
+        gained = first_gained + gap - info["ball_to_target_m"]
+        assert info["ball_speed_to_target_mps"] == pytest.approx(
+            gained / (v1.episode_step * 0.02), abs=1e-6
+        )
+        assert info["goals"] == 1 and not info["fallen"]
+    finally:
+        v0.close()
+        v1.close()
 
 
 @pytest.mark.parametrize(

@@ -120,6 +120,32 @@ def test_a_run_records_every_option_of_its_environment(tmp_path):
     assert legacy.env_options() == {"max_episode_steps": 50}
 
 
+@pytest.mark.parametrize(
+    ("task", "option", "version_value", "own_value"),
+    [
+        ("run", "w_progress", 3.0, 5.0),  # Run-v1's sprint
+        ("get-up", "self_collisions", True, False),  # GetUp-v1
+        ("dribble", "next_target_at_goal", True, False),  # Dribble-v1
+    ],
+)
+def test_a_run_records_and_runs_its_versions_options_under_its_own(
+    tmp_path, task, option, version_value, own_value
+):
+    """A version's options (over its class's defaults) are what a run records and runs; an
+    option the run sets goes over them, in the record and in the environment."""
+    from robocup_gym.train.tasks import make_env
+    from robocup_gym.train.trainer import prepare_run
+
+    for own, want in (({}, version_value), ({option: own_value}, own_value)):
+        cfg, _ = prepare_run(TrainConfig(task=task, env_kwargs=own), out=tmp_path)
+        assert cfg.env_config[option] == want
+        env = make_env(cfg.env_id, backend="ode", env_kwargs=cfg.env_options())
+        try:
+            assert getattr(env.unwrapped.config, option) == want
+        finally:
+            env.close()
+
+
 def test_hp_flags_read_exponent_notation():
     from robocup_gym.cli.common import _parse_assignments
 

@@ -52,6 +52,11 @@ class DribbleConfig(WalkConfig):
     """Paid every step the ball is within ``reach``."""
     goal_bonus: float = 10.0
     """Paid once when the ball reaches the target."""
+    next_target_at_goal: bool = False
+    """At the goal, draw the next target (as at the start, from the ball and the robot's
+    heading then) and go on, instead of ending the episode. Walk's per-step terms pay for
+    every step of an episode, so an episode that ends at the goal pays a slower dribble more;
+    going on pays reaching the target sooner."""
 
     def validate(self) -> None:
         super().validate()
@@ -128,14 +133,18 @@ class Dribble(Walk):
     ``goal``              10          once, the ball within ``goal_radius`` (0.5 m) of it
     ====================  ==========  =====================================================
 
-    The episode ends at the goal, at a fall, or after ``max_episode_steps`` (10 s). ``info``
-    gives ``losses`` (times the ball went beyond ``reach``), ``ball_to_target_m`` and, at the
-    end, ``ball_speed_to_target_mps`` (the distance the ball gained on the target over the
-    episode's time). ``reset(options={"dribble_target": (x, y)})`` fixes the target (world m).
+    The episode ends at the goal (with ``next_target_at_goal``: the next target is drawn from
+    there, and it goes on), at a fall, or after ``max_episode_steps`` (10 s). ``info`` gives
+    ``losses`` (times the ball went beyond ``reach``), ``goals`` (targets reached),
+    ``ball_to_target_m`` and, at the end, ``ball_speed_to_target_mps`` (the distance the ball
+    gained on its targets over the episode's time). ``reset(options={"dribble_target": (x,
+    y)})`` fixes the (first) target (world m).
 
     Version history:
 
     * v0: first release (robocup-gym 0.2.0).
+    * v1: ``next_target_at_goal``: at the goal the next target is drawn and the episode goes
+      on (v0 ended it: Walk's per-step terms then paid a slower dribble more).
     """
 
     config_class = DribbleConfig
@@ -143,7 +152,11 @@ class Dribble(Walk):
     task_reset_options = frozenset({"dribble_target"})
     losses = 0
     """Times this episode the ball went beyond ``reach`` of the torso."""
+    goals = 0
+    """Times this episode the ball reached a target."""
     _near = True
+    _at_goal = False
+    _gained = 0.0
     _start_gap = 0.0
 
     def _draw_command(self) -> None:
@@ -166,9 +179,24 @@ class Dribble(Walk):
             target = ball + distance * np.array([math.cos(angle), math.sin(angle)])
         self.target_pos = target
         self._start_gap = float(np.hypot(*(target - ball)))
+        self._gained = 0.0
         self.losses = 0
+        self.goals = 0
         self._near = True
+        self._at_goal = False
         return start
+
+    def _next_target(self, ball: np.ndarray, heading: tuple[float, float]) -> None:
+        """The target after a goal: drawn like the first, from the ball and the robot's
+        heading now."""
+        c, rng = self.config, self.np_random
+        self._gained += self._start_gap - self._ball_to_target()
+        angle = math.atan2(heading[1], heading[0]) + math.radians(
+            rng.uniform(*c.target_angle_range)
+        )
+        distance = rng.uniform(*c.target_distance_range)
+        self.target_pos = ball + distance * np.array([math.cos(angle), math.sin(angle)])
+        self._start_gap = float(distance)
 
     def _set_perception(self, p, cycles: int = 1, episode_over: bool = False) -> None:
         super()._set_perception(p, cycles, episode_over)
@@ -176,8 +204,15 @@ class Dribble(Walk):
         if gt is None or episode_over:
             return
         ball = gt.ball_pos[:2]
+        heading = heading_frame(gt.torso_quat)
+        # (a step's goal: the reset's perception counts none)
+        self._at_goal = self.episode_step > 0 and self._ball_to_target() <= self.config.goal_radius
+        if self._at_goal:
+            self.goals += 1
+            if self.config.next_target_at_goal:
+                self._next_target(ball, heading)
         self.velocity_command[:] = dribble_guide(
-            self.config, gt.torso_pos[:2], heading_frame(gt.torso_quat), ball, self.target_pos
+            self.config, gt.torso_pos[:2], heading, ball, self.target_pos
         )
         near = float(np.hypot(*(ball - gt.torso_pos[:2]))) <= self.config.reach
         if self._near and not near:
@@ -188,7 +223,8 @@ class Dribble(Walk):
         return float(np.hypot(*(self.target_pos - self.ball_pos[:2])))
 
     def _is_terminated(self) -> bool:
-        return super()._is_terminated() or self._ball_to_target() <= self.config.goal_radius
+        at_goal_ends = self._at_goal and not self.config.next_target_at_goal
+        return super()._is_terminated() or at_goal_ends
 
     def _reward_terms(self, action: np.ndarray) -> dict[str, float]:
         terms = super()._reward_terms(action)
@@ -198,7 +234,7 @@ class Dribble(Walk):
         toward = float(np.dot(self.ball_vel[:2], to_target) / gap) if gap > 1e-9 else 0.0
         terms["ball_progress"] = c.w_ball_progress * float(np.clip(toward, -1.0, 1.0))
         terms["near_ball"] = c.w_near_ball if self._near else 0.0
-        terms["goal"] = c.goal_bonus if gap <= c.goal_radius else 0.0
+        terms["goal"] = c.goal_bonus if self._at_goal else 0.0
         return terms
 
     def _info(self) -> dict[str, Any]:
@@ -206,9 +242,10 @@ class Dribble(Walk):
         if self.ground_truth is not None:
             gap = self._ball_to_target()
             info["losses"] = self.losses
+            info["goals"] = self.goals
             info["ball_to_target_m"] = gap
             if self.has_completed and self.episode_step:
-                info["ball_speed_to_target_mps"] = (self._start_gap - gap) / (
+                info["ball_speed_to_target_mps"] = (self._gained + self._start_gap - gap) / (
                     self.episode_step * CYCLE_S
                 )
         return info
