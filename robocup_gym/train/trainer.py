@@ -167,10 +167,16 @@ def _over_exported_options(cfg: TrainConfig) -> TrainConfig:
     return cfg.merged(env_kwargs=with_policy_joints(meta, {**options, **cfg.env_kwargs}))
 
 
+_FIRST_LAYER = "mlp_extractor.policy_net.0.weight"
+"""The actor's first layer in an SB3 ``MlpPolicy``: (units, observations)."""
+
+
 def _start_from_exported(model, cfg: TrainConfig) -> None:
     """Give a fresh ``model`` the actor of the exported policy ``cfg.init_from``
     (:func:`_init_policy`) and, where its description records it (``action_log_std``), its
-    action noise; its value network starts afresh (none is exported).
+    action noise; its value network starts afresh (none is exported). Where the run's task
+    observes more than the policy did (:func:`_widened_first_layer`), the added observations
+    start with zero weights: the run starts acting exactly as the policy.
 
     Raises:
         ValueError: the policy's network does not fit the model's (its layers named).
@@ -183,6 +189,9 @@ def _start_from_exported(model, cfg: TrainConfig) -> None:
     own = model.policy.state_dict()
     policy = _init_policy(cfg)
     weights = pretrained_weights(policy)
+    first = weights.get(_FIRST_LAYER)
+    if first is not None and _FIRST_LAYER in own and own[_FIRST_LAYER].shape[1] != first.shape[1]:
+        weights[_FIRST_LAYER] = _widened_first_layer(first, policy.metadata, cfg)
     if "action_log_std" in policy.metadata and "log_std" in own:
         weights["log_std"] = np.asarray(policy.metadata["action_log_std"], dtype=np.float32)
     misfit = [k for k, w in weights.items() if k not in own or tuple(own[k].shape) != w.shape]
@@ -193,6 +202,57 @@ def _start_from_exported(model, cfg: TrainConfig) -> None:
         )
     state = {k: torch.tensor(w, device=own[k].device) for k, w in weights.items()}
     model.policy.load_state_dict(state, strict=False)
+
+
+def _widened_first_layer(weight, meta: dict, cfg: TrainConfig):
+    """The exported actor's first layer ``weight`` (units × its observations) for this run's
+    observations: each of the policy's observations (by label, with the same normalisation
+    bounds) keeps its column, every other observation of the run gets a column of zeros.
+
+    Raises:
+        ValueError: the policy does not record its observations, or one of them is not among
+            the run's or is normalised differently (named).
+    """
+    import numpy as np
+
+    from robocup_gym.train.tasks import make_env
+
+    labels = meta.get("observation_labels")
+    if not labels or "observation_raw_low" not in meta:
+        raise ValueError(
+            f"init_from {cfg.init_from}: its observations differ from this run's and it does "
+            "not record which they are"
+        )
+    env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options())
+    try:
+        base = env.unwrapped
+        mine = list(base.observation_labels)
+        lo, hi = (np.asarray(b, float) for b in base.raw_bounds)
+    finally:
+        env.close()
+    missing = [lab for lab in labels if lab not in mine]
+    if missing or len(mine) != len(lo):
+        named = ", ".join(missing[:3]) + (
+            f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+        )
+        raise ValueError(
+            f"init_from {cfg.init_from}: this run does not observe its "
+            f"{named or 'observations as one frame'} (observations and frame_stack must include "
+            "the policy's)"
+        )
+    widened = np.zeros((weight.shape[0], len(mine)), dtype=weight.dtype)
+    for i, lab in enumerate(labels):
+        j = mine.index(lab)
+        if not np.allclose(
+            (meta["observation_raw_low"][i], meta["observation_raw_high"][i]), (lo[j], hi[j])
+        ):
+            raise ValueError(
+                f"init_from {cfg.init_from}: its observation {lab} is normalised over "
+                f"[{meta['observation_raw_low'][i]}, {meta['observation_raw_high'][i]}], "
+                f"this run's over [{lo[j]}, {hi[j]}]"
+            )
+        widened[:, j] = weight[:, i]
+    return widened
 
 
 def _start_from_run(model, init, cfg: TrainConfig) -> None:

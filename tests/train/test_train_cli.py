@@ -440,6 +440,7 @@ def test_init_from_a_shipped_policy(tmp_path):
     from robocup_gym.envs.tasks.walk import WALK_OBSERVATIONS
     from robocup_gym.train.config import TrainConfig
     from robocup_gym.train.pretrained import describe, pretrained_policy
+    from robocup_gym.train.tasks import make_env
 
     base = ["train", "--n-envs", 1, "--timesteps", 32, "--checkpoint-freq", 0, "--eval-freq", 0]
     base += ["--no-progress", "--hp", "n_steps=16", "--hp", "batch_size=16", "--hp", "n_epochs=1"]
@@ -467,12 +468,28 @@ def test_init_from_a_shipped_policy(tmp_path):
     tuned = PPO.load(run / "model.zip", device="cpu").predict(obs, deterministic=True)[0]
     np.testing.assert_allclose(tuned, pretrained_policy("walk")(obs), atol=1e-5)
 
+    # Dribble observing the ball and the target too: those start with zero weights, so the
+    # run acts as the walk on the walk's observations whatever the ball's
+    invoke(["train", "dribble", *base[1:], "--out", tmp_path / "dribble-ball"])
+    (run,) = list((tmp_path / "dribble-ball").iterdir())
+    cfg = TrainConfig.load(run / "config.yaml")
+    env = make_env(cfg.env_id, backend="ode", env_kwargs=cfg.env_options())
+    mine = env.unwrapped.observation_labels
+    env.close()
+    walk_labels = describe("walk")["observation_labels"]
+    assert len(mine) > len(walk_labels) and "ball_rel/x" in mine
+    wide = np.random.default_rng(1).uniform(-1, 1, (64, len(mine))).astype(np.float32)
+    tuned = PPO.load(run / "model.zip", device="cpu").predict(wide, deterministic=True)[0]
+    walk_part = wide[:, [mine.index(lab) for lab in walk_labels]]
+    np.testing.assert_allclose(tuned, pretrained_policy("walk")(walk_part), atol=1e-5)
+
     for extra, message in (
         (["--init-from", "pretrained:no-such"], "no pretrained policy 'no-such'"),
         (["--hp", "policy_kwargs={net_arch: [32, 32]}"], "does not fit this run's policy"),
         (["--init-from", tmp_path / "none"], "neither a run folder, an exported policy"),
         (["--init-from", tmp_path / "none.onnx"], "none.onnx: no such exported policy"),
-        (["--env", "frame_stack=2"], "does not fit this run's policy"),
+        (["--env", "frame_stack=2"], "this run does not observe its joint_pos/"),
+        (["--env", "observations=[joint_pos, gyro]"], "does not observe its joint_vel/"),
     ):
         args = ["train", "walk", *base[1:], *extra, "--out", tmp_path / "refused"]
         bad = CliRunner().invoke(app, [str(a) for a in args])
