@@ -164,7 +164,6 @@ class Dribble(Walk):
 
     def _initial_state(self, options):
         start = super()._initial_state({k: v for k, v in options.items() if k != "dribble_target"})
-        c, rng = self.config, self.np_random
         ball = start.ball_pos[:2]
         if "dribble_target" in options:
             target = np.asarray(options["dribble_target"], dtype=float)
@@ -174,9 +173,7 @@ class Dribble(Walk):
                     f"{options['dribble_target']!r}"
                 )
         else:
-            distance = rng.uniform(*c.target_distance_range)
-            angle = math.radians(start.pose.heading_deg + rng.uniform(*c.target_angle_range))
-            target = ball + distance * np.array([math.cos(angle), math.sin(angle)])
+            target = self._draw_target(ball, math.radians(start.pose.heading_deg))
         self.target_pos = target
         self._start_gap = float(np.hypot(*(target - ball)))
         self._gained = 0.0
@@ -186,17 +183,20 @@ class Dribble(Walk):
         self._at_goal = False
         return start
 
-    def _next_target(self, ball: np.ndarray, heading: tuple[float, float]) -> None:
-        """The target after a goal: drawn like the first, from the ball and the robot's
-        heading now."""
+    def _draw_target(self, ball: np.ndarray, heading_rad: float) -> np.ndarray:
+        """A target ``target_distance_range`` from ``ball`` within ``target_angle_range`` of
+        the heading ``heading_rad``."""
         c, rng = self.config, self.np_random
-        self._gained += self._start_gap - self._ball_to_target()
-        angle = math.atan2(heading[1], heading[0]) + math.radians(
-            rng.uniform(*c.target_angle_range)
-        )
         distance = rng.uniform(*c.target_distance_range)
-        self.target_pos = ball + distance * np.array([math.cos(angle), math.sin(angle)])
-        self._start_gap = float(distance)
+        angle = heading_rad + math.radians(rng.uniform(*c.target_angle_range))
+        return ball + distance * np.array([math.cos(angle), math.sin(angle)])
+
+    def _next_target(self, ball: np.ndarray, heading: tuple[float, float]) -> None:
+        """The target after a goal, drawn like the first from the ball and the robot's heading
+        now."""
+        self._gained += self._start_gap - self._ball_to_target()
+        self.target_pos = self._draw_target(ball, math.atan2(heading[1], heading[0]))
+        self._start_gap = float(np.hypot(*(self.target_pos - ball)))
 
     def _set_perception(self, p, cycles: int = 1, episode_over: bool = False) -> None:
         super()._set_perception(p, cycles, episode_over)
