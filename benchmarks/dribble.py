@@ -12,8 +12,10 @@ target):
 
 ``--robot-type N`` runs another Nao type; ``--backend rcssserver3d`` runs on a real server,
 ``--backend serve`` on a ``robocup-gym serve`` of its own.
-Prints one line per target and, last, one JSON object (``ball_speed_to_target_mps``,
-``losses_per_10s``, ``falls``, ``goal_rate``, ``meets_target``: speed ≥ 0.6 m/s).
+Prints one line per target and, last, one JSON object (``ball_speed_to_target_mps`` and its
+95 % interval ``ball_speed_to_target_ci95``, ``losses_per_10s``, ``falls``, ``goal_rate``,
+``meets_target``: speed ≥ 0.6 m/s). The touches make single episodes chaotic: two policies
+that differ by less than the interval are not told apart by these episodes.
 
     python benchmarks/dribble.py runs/dribble-ppo-<time> --episodes 5
 """
@@ -60,9 +62,13 @@ def episode(env, act, seed: int, direction_deg: float) -> dict:
 
 
 def summary(rows: list[dict]) -> dict:
+    from robocup_gym.train.metrics import mean_ci95
+
+    speeds = [r["ball_speed_to_target_mps"] for r in rows]
     return {
         "episodes": len(rows),
-        "ball_speed_to_target_mps": float(np.mean([r["ball_speed_to_target_mps"] for r in rows])),
+        "ball_speed_to_target_mps": float(np.mean(speeds)),
+        "ball_speed_to_target_ci95": mean_ci95(speeds),
         "losses_per_10s": float(np.mean([r["losses_per_10s"] for r in rows])),
         "falls": int(sum(r["fell"] for r in rows)),
         "goal_rate": float(np.mean([r["goal"] for r in rows])),

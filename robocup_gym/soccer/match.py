@@ -88,12 +88,10 @@ class MatchResult:
 
     @property
     def summary(self) -> dict[str, Any]:
+        from robocup_gym.train.metrics import mean_ci95
+
         diffs = np.array([g.goals_for - g.goals_against for g in self.games], float)
         n = len(diffs)
-        ci = None
-        if n >= 2:
-            half = 1.96 * float(diffs.std(ddof=1)) / math.sqrt(n)
-            ci = [round(float(diffs.mean()) - half, 3), round(float(diffs.mean()) + half, 3)]
         return {
             "team_a": self.team_a,
             "team_b": self.team_b,
@@ -104,7 +102,7 @@ class MatchResult:
             "goals_for": int(sum(g.goals_for for g in self.games)),
             "goals_against": int(sum(g.goals_against for g in self.games)),
             "goal_difference_mean": round(float(diffs.mean()), 3) if n else None,
-            "goal_difference_ci95": ci,
+            "goal_difference_ci95": mean_ci95(diffs),
             "diverged_games": int(sum(g.diverged for g in self.games)),
             **({"video": self.video} if self.video is not None else {}),
         }

@@ -109,6 +109,16 @@ def episode_record(info: Mapping[str, Any], ep_return: float, ep_length: int) ->
     return rec
 
 
+def mean_ci95(values: Sequence[float]) -> list[float] | None:
+    """The 95 % interval of the mean of ``values`` (normal approximation: mean ± 1.96 standard
+    errors), rounded to 3 decimals; ``None`` for fewer than two values."""
+    v = np.asarray(values, dtype=float)
+    if len(v) < 2:
+        return None
+    half = 1.96 * float(v.std(ddof=1)) / math.sqrt(len(v))
+    return [round(float(v.mean()) - half, 3), round(float(v.mean()) + half, 3)]
+
+
 def summarize(records: Iterable[Mapping[str, float]]) -> dict[str, float | int | None]:
     """Mean/std summary of episode records (keys absent from all episodes are ``None``)."""
     records = list(records)

@@ -319,3 +319,5 @@ def test_the_dribble_benchmark_prints_json_last(run_benchmark):
     assert res["episodes"] == 3 and len(lines) == 3
     assert res["ball_speed_to_target_mps"] > 0.15 and res["falls"] == 0
     assert res["meets_target"] == (res["ball_speed_to_target_mps"] >= 0.6)
+    low, high = res["ball_speed_to_target_ci95"]
+    assert low < res["ball_speed_to_target_mps"] < high
