@@ -37,7 +37,7 @@ from robocup_gym.backends import (
 )
 from robocup_gym.robot.types import ROBOT_TYPES, is_type_number
 from robocup_gym.train.algos import ALGOS
-from robocup_gym.train.tasks import is_team_task, resolve_task
+from robocup_gym.train.tasks import is_team_task, resolve_task, with_version_options
 from robocup_gym.types import reject_unknown_fields
 
 PPO_PAPER_DEFAULTS: dict[str, Any] = {
@@ -445,7 +445,12 @@ class TrainConfig:
             raise ValueError(
                 f"{path}: a config file must hold a mapping, got {type(data).__name__}"
             )
-        return cls.from_dict(data)
+        config = cls.from_dict(data)
+        if config.env_id and config.env_config:
+            config.env_config = with_version_options(
+                config.env_id, config.env_config, config.env_kwargs
+            )
+        return config
 
     def env_options(self, **overrides: Any) -> dict[str, Any]:
         """The options to build this run's environment with: :attr:`env_config`, then

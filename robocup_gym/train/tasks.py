@@ -8,6 +8,8 @@ environments and lets its tests run on a tiny one.
 
 from __future__ import annotations
 
+import functools
+import json
 import re
 import warnings
 from typing import Any
@@ -160,10 +162,9 @@ def _version_options(env_id: str) -> dict[str, Any]:
     return {k: v for k, v in (gym.registry[env_id].kwargs or {}).items() if k not in _NOT_CONFIG}
 
 
-def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
-    """The task's config as the id ``env_id`` makes it (its version's options over the class's
-    defaults) with ``env_kwargs`` applied (validated), without starting any simulator; ``None``
-    for an environment that is not a RobocupGym task with a config."""
+def _class_defaults(env_id: str, robot: str = "nao"):
+    """The config of the task class behind ``env_id`` with its class's defaults (no version's
+    options); ``None`` for an environment that is not a RobocupGym task with a config."""
     if not is_robocup_task(env_id):
         return None
     _register_tasks()
@@ -178,10 +179,43 @@ def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
     default_config = getattr(cls, "default_config", None)
     if default_config is None:
         return None
+    return default_config(robot) if robot != "nao" else default_config()
+
+
+def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
+    """The task's config as the id ``env_id`` makes it (its version's options over the class's
+    defaults) with ``env_kwargs`` applied (validated), without starting any simulator; ``None``
+    for an environment that is not a RobocupGym task with a config."""
     options = {k: v for k, v in (env_kwargs or {}).items() if k not in _NOT_CONFIG}
-    robot = options.get("robot", "nao")
-    base = default_config(robot) if robot != "nao" else default_config()
+    base = _class_defaults(env_id, options.get("robot", "nao"))
+    if base is None:
+        return None
     return base.replace(**{**_version_options(env_id), **options})
+
+
+def with_version_options(
+    env_id: str, env_config: dict[str, Any], env_kwargs: dict[str, Any]
+) -> dict[str, Any]:
+    """A run's recorded ``env_config`` with its version's own options where the record kept
+    the class's default instead (as a record written by an earlier robocup-gym did): an option
+    the version sets, that the run did not set itself (``env_kwargs``) and that holds the
+    class's default, takes the version's value, which the run's environment had."""
+    if not env_config or env_id not in gym.registry:
+        return env_config
+    version = _version_options(env_id)
+    base = _class_defaults(env_id, env_kwargs.get("robot", "nao")) if version else None
+    if base is None:
+        return env_config
+    defaults = base.to_dict()
+    plain = functools.partial(json.dumps, sort_keys=True, default=list)
+    out = dict(env_config)
+    for key, value in version.items():
+        default = defaults.get(key)
+        if key in env_kwargs or key not in out or plain(value) == plain(default):
+            continue
+        if plain(out[key]) == plain(default):
+            out[key] = value
+    return out
 
 
 def resolved_env_config(env_id: str, env_kwargs: dict[str, Any] | None) -> dict[str, Any]:

@@ -123,7 +123,7 @@ def test_a_run_records_every_option_of_its_environment(tmp_path):
 @pytest.mark.parametrize(
     ("task", "option", "version_value", "own_value"),
     [
-        ("run", "w_progress", 3.0, 5.0),  # Run-v1's sprint
+        ("run", "w_progress", 3.0, 0.0),  # Run-v1's sprint (0: Run's default)
         ("get-up", "self_collisions", True, False),  # GetUp-v1
         ("dribble", "next_target_at_goal", True, False),  # Dribble-v1
     ],
@@ -132,18 +132,29 @@ def test_a_run_records_and_runs_its_versions_options_under_its_own(
     tmp_path, task, option, version_value, own_value
 ):
     """A version's options (over its class's defaults) are what a run records and runs; an
-    option the run sets goes over them, in the record and in the environment."""
+    option the run sets (here to the class's default, ``own_value``) goes over them, in the
+    record and in the environment."""
+    import yaml
+
     from robocup_gym.train.tasks import make_env
     from robocup_gym.train.trainer import prepare_run
 
     for own, want in (({}, version_value), ({option: own_value}, own_value)):
-        cfg, _ = prepare_run(TrainConfig(task=task, env_kwargs=own), out=tmp_path)
+        cfg, path = prepare_run(TrainConfig(task=task, env_kwargs=own), out=tmp_path)
         assert cfg.env_config[option] == want
         env = make_env(cfg.env_id, backend="ode", env_kwargs=cfg.env_options())
         try:
             assert getattr(env.unwrapped.config, option) == want
         finally:
             env.close()
+        assert TrainConfig.load(path / "config.yaml").env_config[option] == want
+    # a record that kept the class's default for the version's option (an earlier robocup-gym
+    # wrote that) is read with the version's, which the run's environment had
+    data = yaml.safe_load((path / "config.yaml").read_text())
+    data["env_kwargs"] = {}
+    data["env_config"][option] = own_value  # here the class's default
+    (path / "config.yaml").write_text(yaml.safe_dump(data))
+    assert TrainConfig.load(path / "config.yaml").env_config[option] == version_value
 
 
 def test_hp_flags_read_exponent_notation():
