@@ -191,7 +191,7 @@ def _start_from_exported(model, cfg: TrainConfig) -> None:
     weights = pretrained_weights(policy)
     first = weights.get(_FIRST_LAYER)
     if first is not None and _FIRST_LAYER in own and own[_FIRST_LAYER].shape[1] != first.shape[1]:
-        weights[_FIRST_LAYER] = _widened_first_layer(first, policy.metadata, cfg)
+        weights[_FIRST_LAYER] = _widened_first_layer(first, policy.metadata, cfg, model.get_env())
     if "action_log_std" in policy.metadata and "log_std" in own:
         weights["log_std"] = np.asarray(policy.metadata["action_log_std"], dtype=np.float32)
     misfit = [k for k, w in weights.items() if k not in own or tuple(own[k].shape) != w.shape]
@@ -204,10 +204,11 @@ def _start_from_exported(model, cfg: TrainConfig) -> None:
     model.policy.load_state_dict(state, strict=False)
 
 
-def _widened_first_layer(weight, meta: dict, cfg: TrainConfig):
-    """The exported actor's first layer ``weight`` (units × its observations) for this run's
-    observations: each of the policy's observations (by label, with the same normalisation
-    bounds) keeps its column, every other observation of the run gets a column of zeros.
+def _widened_first_layer(weight, meta: dict, cfg: TrainConfig, venv):
+    """The exported actor's first layer ``weight`` (units × its observations) for the
+    observations of the run's environments ``venv`` (read from its first): each of the
+    policy's observations (by label, with the same normalisation bounds) keeps its column,
+    every other observation of the run gets a column of zeros.
 
     Raises:
         ValueError: the policy does not record its observations, or one of them is not among
@@ -215,21 +216,14 @@ def _widened_first_layer(weight, meta: dict, cfg: TrainConfig):
     """
     import numpy as np
 
-    from robocup_gym.train.tasks import make_env
-
     labels = meta.get("observation_labels")
     if not labels or "observation_raw_low" not in meta:
         raise ValueError(
             f"init_from {cfg.init_from}: its observations differ from this run's and it does "
             "not record which they are"
         )
-    env = make_env(cfg.env_id, backend=cfg.backend, env_kwargs=cfg.env_options())
-    try:
-        base = env.unwrapped
-        mine = list(base.observation_labels)
-        lo, hi = (np.asarray(b, float) for b in base.raw_bounds)
-    finally:
-        env.close()
+    mine = list(venv.get_attr("observation_labels", [0])[0])
+    lo, hi = (np.asarray(b, float) for b in venv.get_attr("raw_bounds", [0])[0])
     missing = [lab for lab in labels if lab not in mine]
     if missing or len(mine) != len(lo):
         named = ", ".join(missing[:3]) + (
