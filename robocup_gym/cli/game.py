@@ -322,6 +322,13 @@ def team(
             "5 s, to wait for a starting server)."
         ),
     ] = 10.0,
+    seed: Annotated[
+        int | None,
+        typer.Option(
+            help="Seeds the team's skills: on a server in sync mode started with a seed, "
+            "the same game every time (default: fresh randomness)."
+        ),
+    ] = None,
 ) -> None:
     """Play a team on a server (robocup-gym serve or rcssserver3d): each player its own
     agent connection, acting on its own perceptors (it places itself from the landmarks it
@@ -345,7 +352,7 @@ def team(
         if check is not None:
             check("game", players, penalties=False)
         with ServerTeam(
-            chosen, host, port, team_name, players, robot_types, timeout=timeout
+            chosen, host, port, team_name, players, robot_types, timeout=timeout, seed=seed
         ) as playing:
             console.print(
                 f"{team_name}: {players} player(s) on {host}:{port}, playing "

@@ -171,7 +171,8 @@ def run_team(
     """
     names = nao_model(0).effector_names
     stop = threading.Event()
-    joined = threading.Barrier(n_agents + 1)
+    everyone_in = threading.Event()
+    joined: list[int] = []
     counts = [0] * n_agents
     errors: list[BaseException] = []
     window: list[float] = []
@@ -183,7 +184,13 @@ def run_team(
                 agent.handshake(side, k + 1, i % 5, syn=True)
                 agent.send(f"(beam {-1.0 - 1.5 * (k % 4):.2f} {-7.5 + 1.4 * k:.2f} 0)(syn)")
                 parse_perception(agent.recv(), i % 5)
-                joined.wait()
+                joined.append(i)
+                # answering every percept while the others join: a sync-mode server waits for
+                # this agent once its first cycles are past, and the others join only while
+                # cycles run
+                while not everyone_in.is_set() and not stop.is_set():
+                    agent.send("(syn)")
+                    agent.recv()
                 while not stop.is_set():
                     v = 0.5 * math.sin(counts[i] * 0.05)
                     msg = "".join(
@@ -195,20 +202,21 @@ def run_team(
         except BaseException as exc:  # reported by the caller
             errors.append(exc)
             stop.set()
-            joined.abort()
 
     threads = [threading.Thread(target=agent_main, args=(i,), daemon=True) for i in range(n_agents)]
     for t in threads:
         t.start()
     try:
-        joined.wait(timeout=120.0)
-        time.sleep(0.5)  # warm-up
-        c0, t0 = counts[0], time.perf_counter()
-        time.sleep(seconds)
-        c1, t1 = counts[0], time.perf_counter()
-        window.extend((c1 - c0, t1 - t0))
-    except threading.BrokenBarrierError:
-        pass
+        deadline = time.monotonic() + 120.0
+        while len(joined) < n_agents and not stop.is_set() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if len(joined) == n_agents:
+            everyone_in.set()
+            time.sleep(0.5)  # warm-up
+            c0, t0 = counts[0], time.perf_counter()
+            time.sleep(seconds)
+            c1, t1 = counts[0], time.perf_counter()
+            window.extend((c1 - c0, t1 - t0))
     finally:
         stop.set()
         for t in threads:

@@ -396,6 +396,13 @@ class SimServer(AgentMessages, TrainerCommands):
             else:
                 self.monitors.append(MonitorState(conn))
             log.info("%r connected", conn)
+            # what came with the connection is read now, not at the next poll: a read phase that
+            # ends with this poll (the last awaited (syn) in the same batch) takes a scene or a
+            # trainer command sent before that (syn) in every case, not only when the server
+            # happened to see the connection a poll earlier
+            conn.receive()
+            if not conn.alive:
+                self._unregister(conn)
 
     def _wait_until(self, deadline: float) -> None:
         while not self._stop.is_set():

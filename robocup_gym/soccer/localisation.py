@@ -331,12 +331,16 @@ class Estimator:
         # the feet in the torso frame: the joints alone move them (not the estimate's jitter)
         z, feet = resting_height_and_feet(self.model.robot_type.index, p.joint_angles_deg, quat)
         omega = rot @ np.radians(np.asarray(p.gyro, dtype=float))  # world, rad/s
-        if self._feet is not None and t > self._feet[0] + 1e-9:
+        # whole cycles since the last percept: the clock's difference itself would differ in
+        # its last bits with the clock's value (the same motion would read differently when a
+        # game started a cycle later)
+        cycles = round((t - self._feet[0]) / CYCLE_S) if self._feet is not None else 0
+        if cycles >= 1:
             force = [_force(p, "lf"), _force(p, "rf")]
             if max(force) > 0.0:
                 # the foot that carries the robot stays put: 0 = d/dt (torso + R r)
                 k = int(force[1] > force[0])
-                r_dot = (feet[k] - self._feet[1][k]) / (t - self._feet[0])
+                r_dot = (feet[k] - self._feet[1][k]) / (cycles * CYCLE_S)
                 self.vel = -(rot @ r_dot) - np.cross(omega, rot @ feet[k])
         self._feet = (t, feet)
         if loc.cycles_since_fix == 0:

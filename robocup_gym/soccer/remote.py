@@ -53,6 +53,16 @@ from robocup_gym.types import AgentCommand, Perception
 __all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
 
 
+HEAD_TILT_DEG = -30.0
+"""Where a walking player on a server holds its head (``hj2``, deg; negative looks down). The
+camera's view cone reaches 60° either side of its axis: with the head level a ball closer than
+~0.3 m lies below it, and a player walking onto the ball would steer by an estimate that no
+longer sees it; tilted 30° down, the ball at the feet stays in view and so do the landmarks on
+the horizon."""
+HEAD_GAIN = 10.0
+"""The head's joint velocity (rad/s) per radian from :data:`HEAD_TILT_DEG`."""
+
+
 class ServerGoneError(ConnectionError):
     """The server closed a player's connection or stopped answering."""
 
@@ -105,6 +115,11 @@ class RemotePlayer:
             self.stage = "ready"
         self._send("")
 
+    def answer(self) -> None:
+        """Answer the percept read last with ``(syn)`` alone (a joined player before the
+        game)."""
+        self._send("")
+
     def _send(self, text: str) -> None:
         if not text.endswith("(syn)"):
             text += "(syn)"
@@ -154,6 +169,22 @@ class RemotePlayer:
 
     def send(self, command: AgentCommand) -> None:
         self._send(format_command(command, self.robot_type, sync=True))
+
+    def holding_the_head(self, command: AgentCommand) -> AgentCommand:
+        """``command`` (a walk's, which leaves the head alone) with the head turned to the
+        front and tilted to :data:`HEAD_TILT_DEG`."""
+        v = command.joint_velocities
+        if not isinstance(v, np.ndarray):  # by name: into the canonical order
+            names = [j.effector for j in self.model.joints]
+            v = np.array([float(v.get(n, 0.0)) for n in names])
+        v = np.array(v, dtype=float)
+        names = [j.effector for j in self.model.joints]
+        for effector, target in (("he1", 0.0), ("he2", HEAD_TILT_DEG)):
+            i = names.index(effector)
+            j = self.model.joints[i]
+            now = self.last.joint(j.perceptor) if self.last is not None else 0.0
+            v[i] = np.clip(HEAD_GAIN * np.radians(target - now), -j.max_speed, j.max_speed)
+        return AgentCommand(v, command.joint_pd, command.beam, command.say)
 
     def beam(self, x: float, y: float, heading_deg: float) -> AgentCommand:
         """The command that beams to ``(x, y, heading)`` (own team's frame) and standing still
@@ -211,6 +242,9 @@ class ServerTeam:
         decision_cycles: Cycles between the team's decisions (the skill actions' 10).
         timeout: Seconds to wait for a percept before the server counts as gone (and, up to
             5 s, for a server that is still starting to take the connection).
+        seed: Seeds the skills (each start of play draws its skills' seeds from it); with a
+            server in sync mode started with a seed, a game is then the same every time on one
+            machine. ``None``: fresh randomness.
     """
 
     def __init__(
@@ -224,6 +258,7 @@ class ServerTeam:
         *,
         decision_cycles: int = 10,
         timeout: float = 10.0,
+        seed: int | None = None,
     ) -> None:
         if not 1 <= int(players) <= 11:
             raise ValueError(f"a team has 1-11 players, got {players}")
@@ -233,9 +268,11 @@ class ServerTeam:
         self.team = team
         self.name = name
         self.decision_cycles = int(decision_cycles)
+        self._rng = np.random.default_rng(seed)
         self.players: list[RemotePlayer] = []
         try:
             for k in range(players):  # one at a time: see _handshake
+                waiting = self._hold()
                 self.players.append(
                     RemotePlayer(
                         host,
@@ -247,6 +284,8 @@ class ServerTeam:
                         connect_s=min(float(timeout), 5.0),
                     )
                 )
+                for p in waiting:
+                    p.answer()
                 self._handshake(timeout)
         except BaseException:
             self.close()
@@ -262,6 +301,15 @@ class ServerTeam:
     def skill_action_labels(self) -> tuple[str, ...]:
         """The values of the team's skill actions (the walk's, then its motion skills')."""
         return self.skills.action_labels
+
+    def _hold(self) -> list[RemotePlayer]:
+        """Read the joined players' next percept and leave it unanswered: a server in sync mode
+        then waits for them, so a player that connects now joins in that cycle on every machine
+        and under any load (answered at once, the server would run on meanwhile, and the cycle
+        in which the next player's ``scene`` lands would vary, and with it the whole game)."""
+        for p in self.players:
+            p.perceive()
+        return list(self.players)
 
     def _handshake(self, timeout: float) -> None:
         """Answer every player's percepts as they come (a server in sync mode waits for each
@@ -385,9 +433,14 @@ class ServerTeam:
         self,
         seconds: float | None = None,
         on_event: Callable[[str], None] | None = None,
+        on_cycle: Callable[[Perception], None] | None = None,
     ) -> TeamResult:
         """Play until ``GameOver``, ``seconds`` of game time (from the first percept) or the
-        server's going; returns the result (the connections stay open: :meth:`close`)."""
+        server's going; returns the result (the connections stay open: :meth:`close`).
+
+        ``on_event`` is told the goals as text; ``on_cycle`` gets the first player's percept
+        every cycle before the team answers it (on a server in sync mode a trainer command it
+        sends is read in that cycle: with a monitor interval of 1 it takes effect there)."""
         result = TeamResult(self.name, self.side)
 
         def event(text: str) -> None:
@@ -405,6 +458,8 @@ class ServerTeam:
             while True:
                 perceptions = {k: p.perceive() for k, p in enumerate(self.players)}
                 first = perceptions[0]
+                if on_cycle is not None:
+                    on_cycle(first)
                 g = first.game
                 result.side = self.side
                 if start_time is None:
@@ -441,7 +496,7 @@ class ServerTeam:
                     if not stopped:
                         beamed_in = None
                     if not started:
-                        self.skills.reset(perceptions)
+                        self.skills.reset(perceptions, int(self._rng.integers(2**31)))
                         started = True
                 if started:
                     before = self.skills.modes()
@@ -465,7 +520,10 @@ class ServerTeam:
                                 self.skills.action_what,
                             )
                             self.skills.decide(k, actions[k])
+                    modes = self.skills.modes()
                     for k, c in self.skills.commands().items():
+                        if modes[k] == "walk":
+                            c = self.players[k].holding_the_head(c)
                         commands.setdefault(k, c)
                 for k, p in enumerate(self.players):
                     p.send(commands.get(k, AgentCommand()))

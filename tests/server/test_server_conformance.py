@@ -235,7 +235,10 @@ def test_a_robot_moved_while_it_moves_falls_where_it_is_put(make_server):
     """A robot that is not at rest (here: just created, falling to its start) is awake when the
     trainer moves it: it falls from where it was put and lands two cycles later, as on
     rcssserver3d."""
-    server = make_server()
+    # a trainer command acts in the cycle it comes before (with the default of every second
+    # cycle, whether that is the next cycle or the one after turns on the cycle in which the
+    # agent happened to connect, which the server's idle pacing leaves to the clock)
+    server = make_server(monitor_interval=1)
     with (
         AgentClient(HOST, server.agent_port, timeout=3.0) as c,
         MonitorClient(HOST, server.monitor_port, timeout=3.0) as m,

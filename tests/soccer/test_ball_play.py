@@ -13,6 +13,7 @@ import pytest
 
 from robocup_gym.sim.engines.ode import available as ode_available
 from robocup_gym.soccer.ball_play import PLAY_ACTION_LABELS, BallPlay, as_play_action
+from robocup_gym.soccer.remote import HEAD_TILT_DEG
 from robocup_gym.soccer.scripted import ScriptedTeam, StandingTeam, TeamView
 from robocup_gym.soccer.team_view import TeamView as TeamGame
 from robocup_gym.soccer.team_view import scenario_options
@@ -149,9 +150,39 @@ def test_a_team_with_its_own_actions_plays_the_ball_on_serve(option, action):
     """A team that acts with plays actions (here: always the ball straight at the goal), or
     with residuals over the scripted team (here: none), plays through ``robocup-gym serve``
     from its own perceptors: its actions become skill actions from what the team sees, and the
-    ball goes toward the other goal."""
-    import threading
+    ball goes toward the other goal. The game is the same on every run of one machine (a sync
+    server and the team seeded, the kick-off sent in a fixed cycle)."""
+    seen = _play_on_serve(option, action, seed=0, heads=(heads := []))
+    assert len(seen) == 125, len(seen)  # 25 s of play, a decision every 10 cycles
+    # a walking player holds its head tilted down (the ball at its feet stays in view)
+    assert abs(np.median(heads) - HEAD_TILT_DEG) < 2.0, np.median(heads)
+    # the ball pushed toward the right team's goal (+x): 9.6 m (plays) and 4.1 m (residuals)
+    # here; 1.0-12.8 m over team seeds 0-8 for each (with the head held level instead of
+    # tilted down: 0.07-11.4 m, the ball lost from view at the feet)
+    farthest = max(b[0] for b in seen)
+    assert farthest - seen[0][0] > 0.3, seen
 
+
+@needs_ode
+def test_a_seeded_team_plays_the_same_game_twice_on_a_seeded_sync_serve():
+    """The players join in fixed cycles whatever the machine's load, and the skills draw from
+    the team's seed: the same game twice, to the last bit of what the team sees."""
+    action = [0.0, 0.0, 0.0, -1.0, 1.0, 0.0]
+    first = _play_on_serve("plays", action, seed=1)
+    again = _play_on_serve("plays", action, seed=1)
+    assert len(first) == len(again) == 125
+    np.testing.assert_array_equal(np.array(first), np.array(again))
+    other = _play_on_serve("plays", action, seed=2)
+    assert not np.array_equal(np.array(first), np.array(other))  # the seed matters
+
+
+def _play_on_serve(
+    option: str, action: list[float], seed: int, heads: list[float] | None = None
+) -> list[np.ndarray]:
+    """Where a team of two (keeper and field player) that always takes ``action`` sees the
+    ball at each of its decisions in the first 25 s of play on a seeded ``serve`` in sync mode,
+    alone on the field, kick-off sent after 50 cycles; the walking players' head pitch (deg)
+    at those decisions into ``heads``."""
     from robocup_gym.protocol import trainer as trainer_cmds
     from robocup_gym.protocol.framing import connect, send_frame
     from robocup_gym.server.bench import start_server_process, stop_server_process
@@ -174,51 +205,36 @@ def test_a_team_with_its_own_actions_plays_the_ball_on_serve(option, action):
             view = env.team_view(agents)
             if view.play_mode == "PlayOn":
                 seen.append(np.asarray(view.ball, dtype=float).copy())
+                if heads is not None:
+                    heads.extend(
+                        p.last.joint("hj2")
+                        for p, mode in zip(env.players, env.skills.modes(), strict=True)
+                        if mode == "walk"
+                    )
             return policy(env, agents, obs)
 
-    team = Watched()
+    proc, agent_port, monitor_port = start_server_process(
+        "--sync", "--no-real-time", "--seed", "5", "--monitor-interval", "1"
+    )
+    monitor = None
+    cycles = 0
 
-    proc, agent_port, monitor_port = start_server_process("--sync", "--no-real-time", "--seed", "5")
-    teams: dict[str, ServerTeam] = {}
-    errors: list[BaseException] = []
+    def kickoff_after_50(_) -> None:
+        nonlocal cycles
+        cycles += 1
+        if cycles == 50:  # before the team answers: the server reads it in this cycle
+            send_frame(monitor, trainer_cmds.play_mode("PlayOn"))
 
-    def play(which, name: str) -> None:
-        try:
-            with ServerTeam(which, port=agent_port, name=name, players=2) as t:
-                teams[name] = t
-                t.play(seconds=60.0)
-        except BaseException as exc:  # reported on the test's thread
-            errors.append(exc)
-
-    threads = [
-        threading.Thread(target=play, args=(team, "A")),
-        threading.Thread(target=play, args=(StandingTeam(), "B")),
-    ]
     try:
-        threads[0].start()
-        while "A" not in teams and not errors:
-            threading.Event().wait(0.05)
-        threads[1].start()
-        while len(teams) < 2 and not errors:
-            threading.Event().wait(0.05)
-        sock = connect("127.0.0.1", monitor_port)
-        send_frame(sock, trainer_cmds.play_mode("PlayOn"))  # no kick-off rules: play at once
-        sock.close()
-        for t in threads:
-            t.join(120.0)
+        monitor = connect("127.0.0.1", monitor_port)
+        with ServerTeam(Watched(), port=agent_port, name="A", players=2, seed=seed) as team:
+            assert team.side == "left"
+            team.play(seconds=26.5, on_cycle=kickoff_after_50)
     finally:
+        if monitor is not None:
+            monitor.close()
         stop_server_process(proc)
-    assert not errors, errors
-    assert teams["A"].side == "left"
-    # the ball pushed toward the right team's goal (+x) over the first 25 s of play (the play
-    # mode is sent once both teams are in, after a number of cycles that varies with the
-    # machine's speed: the 60 s of game time leave it 35 s); how far varies from run to run
-    # with the players' estimates of where they are (2-11 m over 12 runs here, half of them
-    # two at a time; the in-process test measures the play itself)
-    play = seen[: int(25.0 / 0.2)]  # a decision every 10 cycles
-    assert len(play) == 125, len(play)
-    farthest = max(b[0] for b in play)
-    assert farthest - play[0][0] > 0.3, play
+    return seen[:125]
 
 
 @needs_ode

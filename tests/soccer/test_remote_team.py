@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import re
+import select
 import socket
 import subprocess
 import sys
@@ -129,7 +130,9 @@ def _team_cli(*args: str) -> subprocess.Popen[str]:
 
 def test_the_team_command_plays_and_prints_json_last(server):
     _, agent_port, monitor_port = server
-    proc = _team_cli("standing", "--port", str(agent_port), "--players", "1", "--seconds", "3")
+    proc = _team_cli(
+        "standing", "--port", str(agent_port), "--players", "1", "--seconds", "3", "--seed", "4"
+    )
     try:
         assert "waiting for the kick-off" in proc.stdout.readline()
         _kick_off(monitor_port, lambda: True)
@@ -303,8 +306,9 @@ def test_a_player_takes_its_side_from_a_percept_it_skips():
 def test_a_team_joins_with_every_player_on_the_same_cycle():
     """A sync-mode server sends the next percept once every player has answered this one, and
     the team answers all its players together: so it has joined only when every player has
-    answered the same cycle, even when one player's percept of that cycle comes late. (A fake
-    server in sync mode; percepts captured from a real rcssserver3d.)"""
+    answered the same cycle, even when one player's percept of that cycle comes late. Each next
+    player connects while the server waits for the others' answers (so it joins in a fixed
+    cycle). (A fake server in sync mode; percepts captured from a real rcssserver3d.)"""
     percepts = (DATA / "perceptor_messages.txt").read_text().splitlines()
     plain, told = percepts[3], percepts[2]
 
@@ -315,6 +319,7 @@ def test_a_team_joins_with_every_player_on_the_same_cycle():
     listener = socket.create_server(("127.0.0.1", 0))
     listener.settimeout(5.0)
     got: dict[int, list[str]] = {1: [], 2: []}
+    pending_first: list[bool] = []
 
     def fake_server() -> None:
         conns, decs = {}, {}
@@ -332,18 +337,26 @@ def test_a_team_joins_with_every_player_on_the_same_cycle():
         reply(1)  # init
         send_frame(conns[1], at(told, 1.02, 1))
         reply(1)
+        # player 2 connects once the next cycle's percept has come (not while the server runs
+        # the cycle: its scene would land in one cycle or the next with the machine's load) ...
+        pending_first.append(bool(select.select([listener], [], [], 0.3)[0]))
+        send_frame(conns[1], at(plain, 1.04))  # the next cycle: the server waits for player 1
+        # ... and before player 1 answers it
+        ready = select.select([listener, conns[1]], [], [], 5.0)[0]
+        pending_first.append(listener in ready)
         join(2)
+        reply(1)
         for k in (1, 2):
-            send_frame(conns[k], at(plain, 1.04))
+            send_frame(conns[k], at(plain, 1.06))
         for k in (1, 2):
             reply(k)  # player 2: init
-        send_frame(conns[2], at(told, 1.06, 2))  # player 2 is told first ...
+        send_frame(conns[2], at(told, 1.08, 2))  # player 2 is told first ...
         time.sleep(0.3)
-        send_frame(conns[1], at(plain, 1.06))  # ... player 1's percept of that cycle comes late
+        send_frame(conns[1], at(plain, 1.08))  # ... player 1's percept of that cycle comes late
         for k in (1, 2):
             reply(k)
         for k in (1, 2):
-            send_frame(conns[k], at(plain, 1.08))
+            send_frame(conns[k], at(plain, 1.10))
         for k in (1, 2):
             reply(k)
         for c in conns.values():
@@ -364,9 +377,10 @@ def test_a_team_joins_with_every_player_on_the_same_cycle():
         team.close()
     finally:
         listener.close()
-    assert joined == [("left", 1, pytest.approx(1.06)), ("left", 2, pytest.approx(1.06))]
-    # player 1: scene, init, 4 cycles answered; player 2: scene, init, 2 cycles
-    assert [len(got[k]) for k in (1, 2)] == [6, 4]
+    assert pending_first == [False, True]
+    assert joined == [("left", 1, pytest.approx(1.08)), ("left", 2, pytest.approx(1.08))]
+    # player 1: scene, init, 5 cycles answered; player 2: scene, init, 2 cycles
+    assert [len(got[k]) for k in (1, 2)] == [7, 4]
 
 
 def test_the_join_benchmark_reports_joins_and_failures(run_benchmark):
