@@ -254,8 +254,9 @@ def play_server_match(
 
     Args:
         server: ``"serve"`` (``robocup-gym serve`` in sync mode, real time off, on ``engine``,
-            game k's noise seeded with ``seed + k``) or ``"rcssserver3d"`` (a real one in sync
-            mode, real time off: ``binary``, else ``RCSSSERVER3D`` or ``PATH``).
+            game k's noise and the teams' skills seeded from ``seed + k``: the same games on
+            every run of one machine) or ``"rcssserver3d"`` (a real one in sync mode, real
+            time off: ``binary``, else ``RCSSSERVER3D`` or ``PATH``).
         players, seconds, robot_types: as :func:`play_match` (1–11 players, default 120 s).
 
     Raises:
@@ -272,7 +273,8 @@ def play_server_match(
     for k in range(games):
         order = ("A", "B") if k % 2 == 0 else ("B", "A")
         with _GameServer(server, engine, seed + k, binary) as ports:
-            played = _server_game(teams, order, ports, types, seconds)
+            settle = SETTLE_CYCLES if server == "serve" else 0
+            played = _server_game(teams, order, ports, types, seconds, seed + k, settle)
         a = played["A"]
         game = GameResult(a.side, int(a.goals_for), int(a.goals_against), seconds)
         result.games.append(game)
@@ -281,57 +283,87 @@ def play_server_match(
     return result
 
 
+SETTLE_CYCLES = 50
+"""Monitor frames (cycles: ``serve`` runs with a monitor interval of 1 here) a match waits for
+on a fresh ``serve`` before its teams join."""
+KICKOFF_AFTER_CYCLES = 10
+"""Cycles of the teams' play before a match's trainer kicks off on a server (each player
+beams to its place in the first and stands)."""
+
+
 def _server_game(
     teams: dict[str, Team],
     order: tuple[str, str],
     ports: tuple[int, int],
     types: tuple[int, ...],
     seconds: float,
+    seed: int | None = None,
+    settle_cycles: int = 0,
 ) -> dict[str, Any]:
     """One game on a running server: ``teams[order[0]]`` joins first (and plays left), then
-    the other; a trainer kicks off; returns each team's :class:`TeamResult` by name."""
+    the other beside it; a trainer kicks off once both have stood in their formation for
+    :data:`KICKOFF_AFTER_CYCLES` cycles; returns each team's :class:`TeamResult` by name.
+
+    Both teams join from this thread in fixed cycles (the second holds the first's players
+    while it joins), the kick-off is sent in a fixed cycle of theirs (before the first team
+    answers it: on a ``serve`` that reads trainer commands every cycle it acts in the next), and
+    the teams' skills are seeded from ``seed``. With ``settle_cycles`` the first team joins
+    only after the trainer's connection has seen that many monitor frames (the ball settles on
+    the centre spot and sleeps within ~25 cycles of a server's start; a team that joined
+    before that played another game). On ``serve`` seeded with ``seed``, in sync mode, the
+    game is then the same every time on one machine."""
     import threading
 
     from robocup_gym.protocol import trainer as trainer_cmds
-    from robocup_gym.protocol.framing import connect, send_frame
+    from robocup_gym.protocol.framing import FrameDecoder, connect, recv_frame, send_frame
     from robocup_gym.soccer.remote import ServerTeam
 
     agent_port, monitor_port = ports
-    joined: dict[str, Any] = {}
     played: dict[str, Any] = {}
     errors: list[BaseException] = []
-    changed = threading.Condition()
-
-    def play(name: str) -> None:
-        try:
-            with ServerTeam(
-                teams[name], port=agent_port, name=f"Team{name}", players=len(types),
-                robot_types=types, timeout=60.0,
-            ) as team:  # fmt: skip
-                with changed:
-                    joined[name] = team
-                    changed.notify_all()
-                played[name] = team.play(seconds)
-        except BaseException as exc:  # raised on the caller's thread
-            with changed:
-                errors.append(exc)
-                changed.notify_all()
-
-    threads = []
-    for n, name in enumerate(order):
-        threads.append(threading.Thread(target=play, args=(name,), daemon=True))
-        threads[-1].start()
-        with changed:  # the first team in plays left: the second waits for it
-            changed.wait_for(lambda n=n: len(joined) > n or errors, timeout=120.0)
-        if errors or len(joined) <= n:
-            raise errors[0] if errors else RuntimeError("a team did not join in 120 s")
+    joined: list[ServerTeam] = []
     trainer = connect("127.0.0.1", monitor_port, retry_s=10.0)
+    decoder = FrameDecoder()
+    for _ in range(settle_cycles):
+        recv_frame(trainer, decoder, 10.0)
+    cycles = 0
+
+    def kick_off(p) -> None:  # the first team's percepts, before it answers them
+        nonlocal cycles
+        cycles += 1
+        if cycles == KICKOFF_AFTER_CYCLES:
+            send_frame(trainer, trainer_cmds.kick_off("Left"))
+
+    def play(name: str, team: ServerTeam, on_cycle) -> None:
+        try:
+            played[name] = team.play(seconds, on_cycle=on_cycle)
+        except BaseException as exc:  # raised on the caller's thread
+            errors.append(exc)
+
     try:
-        send_frame(trainer, trainer_cmds.kick_off("Left"))
+        for i, name in enumerate(order):
+            joined.append(
+                ServerTeam(
+                    teams[name], port=agent_port, name=f"Team{name}", players=len(types),
+                    robot_types=types, timeout=60.0,
+                    seed=None if seed is None else 2 * seed + i,
+                    alongside=joined[0] if joined else None,
+                )
+            )  # fmt: skip
+        threads = [
+            threading.Thread(
+                target=play, args=(name, team, kick_off if i == 0 else None), daemon=True
+            )
+            for i, (name, team) in enumerate(zip(order, joined, strict=True))
+        ]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
     finally:
+        for team in joined:
+            team.close()
         trainer.close()
-    for t in threads:
-        t.join()
     if errors:
         raise errors[0]
     return played
@@ -350,7 +382,10 @@ class _GameServer:
         if self.server == "serve":
             from robocup_gym.server.bench import start_server_process
 
-            args = ("--sync", "--no-real-time", "--engine", self.engine, "--seed", str(self.seed))
+            args = (
+                "--sync", "--no-real-time", "--engine", self.engine, "--seed", str(self.seed),
+                "--monitor-interval", "1",  # a trainer command acts in the next cycle
+            )  # fmt: skip
             self._proc, agent_port, monitor_port = start_server_process(*args)
             return agent_port, monitor_port
         from robocup_gym.backends.process import ServerProcess

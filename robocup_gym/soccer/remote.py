@@ -245,6 +245,9 @@ class ServerTeam:
         seed: Seeds the skills (each start of play draws its skills' seeds from it); with a
             server in sync mode started with a seed, a game is then the same every time on one
             machine. ``None``: fresh randomness.
+        alongside: A team already on the server that this one joins beside, from the same
+            thread (its players are held and answered while this team's join, so that both
+            teams are in fixed cycles: it must not play meanwhile).
     """
 
     def __init__(
@@ -259,6 +262,7 @@ class ServerTeam:
         decision_cycles: int = 10,
         timeout: float = 10.0,
         seed: int | None = None,
+        alongside: ServerTeam | None = None,
     ) -> None:
         if not 1 <= int(players) <= 11:
             raise ValueError(f"a team has 1-11 players, got {players}")
@@ -270,6 +274,7 @@ class ServerTeam:
         self.decision_cycles = int(decision_cycles)
         self._rng = np.random.default_rng(seed)
         self.players: list[RemotePlayer] = []
+        self._alongside = list(alongside.players) if alongside is not None else []
         try:
             for k in range(players):  # one at a time: see _handshake
                 waiting = self._hold()
@@ -307,9 +312,10 @@ class ServerTeam:
         then waits for them, so a player that connects now joins in that cycle on every machine
         and under any load (answered at once, the server would run on meanwhile, and the cycle
         in which the next player's ``scene`` lands would vary, and with it the whole game)."""
-        for p in self.players:
+        held = self.players + self._alongside
+        for p in held:
             p.perceive()
-        return list(self.players)
+        return held
 
     def _handshake(self, timeout: float) -> None:
         """Answer every player's percepts as they come (a server in sync mode waits for each
@@ -328,11 +334,13 @@ class ServerTeam:
         players together."""
         deadline = time.monotonic() + timeout
 
+        everyone = self.players + self._alongside
+
         def behind() -> list[RemotePlayer]:
-            if any(p.stage != "ready" for p in self.players):
-                return self.players
-            newest = max(p.last.time for p in self.players)
-            return [p for p in self.players if p.last.time < newest]
+            if any(p.stage != "ready" for p in everyone):
+                return everyone
+            newest = max(p.last.time for p in everyone)
+            return [p for p in everyone if p.last.time < newest]
 
         while players := behind():
             left = deadline - time.monotonic()
