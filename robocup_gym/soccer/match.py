@@ -312,6 +312,8 @@ def _server_game(
     the centre spot and sleeps within ~25 cycles of a server's start; a team that joined
     before that played another game). On ``serve`` seeded with ``seed``, in sync mode, the
     game is then the same every time on one machine."""
+    import contextlib
+    import socket
     import threading
 
     from robocup_gym.protocol import trainer as trainer_cmds
@@ -323,10 +325,12 @@ def _server_game(
     errors: list[BaseException] = []
     joined: list[ServerTeam] = []
     trainer = connect("127.0.0.1", monitor_port, retry_s=10.0)
-    decoder = FrameDecoder()
-    for _ in range(settle_cycles):
-        recv_frame(trainer, decoder, 10.0)
     cycles = 0
+
+    def drain() -> None:  # the trainer's monitor frames, read so that no server waits on them
+        with contextlib.suppress(OSError):
+            while trainer.recv(1 << 16):
+                pass
 
     def kick_off(p) -> None:  # the first team's percepts, before it answers them
         nonlocal cycles
@@ -341,6 +345,10 @@ def _server_game(
             errors.append(exc)
 
     try:
+        decoder = FrameDecoder()
+        for _ in range(settle_cycles):
+            recv_frame(trainer, decoder, 10.0)
+        threading.Thread(target=drain, daemon=True).start()
         for i, name in enumerate(order):
             joined.append(
                 ServerTeam(
@@ -363,6 +371,8 @@ def _server_game(
     finally:
         for team in joined:
             team.close()
+        with contextlib.suppress(OSError):
+            trainer.shutdown(socket.SHUT_RDWR)  # ends the drain
         trainer.close()
     if errors:
         raise errors[0]

@@ -97,6 +97,8 @@ class RemotePlayer:
         self.decoder = FrameDecoder()
         self.side: str | None = None
         self.model = nao_model(self.robot_type)
+        effectors = [j.effector for j in self.model.joints]
+        self._head = (effectors.index("he1"), effectors.index("he2"))
         self.estimator = Estimator(self.model)
         self.last: Perception | None = None
         self.stage = "scene"
@@ -173,17 +175,16 @@ class RemotePlayer:
     def holding_the_head(self, command: AgentCommand) -> AgentCommand:
         """``command`` (a walk's, which leaves the head alone) with the head turned to the
         front and tilted to :data:`HEAD_TILT_DEG`."""
+        joints = self.model.joints
         v = command.joint_velocities
-        if not isinstance(v, np.ndarray):  # by name: into the canonical order
-            names = [j.effector for j in self.model.joints]
-            v = np.array([float(v.get(n, 0.0)) for n in names])
-        v = np.array(v, dtype=float)
-        names = [j.effector for j in self.model.joints]
-        for effector, target in (("he1", 0.0), ("he2", HEAD_TILT_DEG)):
-            i = names.index(effector)
-            j = self.model.joints[i]
-            now = self.last.joint(j.perceptor) if self.last is not None else 0.0
-            v[i] = np.clip(HEAD_GAIN * np.radians(target - now), -j.max_speed, j.max_speed)
+        if isinstance(v, np.ndarray):
+            v = np.array(v, dtype=float)
+        else:  # by name: into the canonical order
+            v = np.array([float(v.get(j.effector, 0.0)) for j in joints])
+        for i, target in ((self._head[0], 0.0), (self._head[1], HEAD_TILT_DEG)):
+            now = self.last.joint(joints[i].perceptor) if self.last is not None else 0.0
+            limit = joints[i].max_speed
+            v[i] = np.clip(HEAD_GAIN * np.radians(target - now), -limit, limit)
         return AgentCommand(v, command.joint_pd, command.beam, command.say)
 
     def beam(self, x: float, y: float, heading_deg: float) -> AgentCommand:
@@ -333,7 +334,6 @@ class ServerTeam:
         the server sends only once the other has answered, and the team answers all its
         players together."""
         deadline = time.monotonic() + timeout
-
         everyone = self.players + self._alongside
 
         def behind() -> list[RemotePlayer]:
