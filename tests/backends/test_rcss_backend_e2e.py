@@ -212,15 +212,15 @@ def test_launch_mode_backend_garbage_collected(fake_server):
 
 
 class _BurstyMonitorServer:
-    """Makes a running server deliver its monitor frames in bursts ~40 ms apart, as a real
-    rcssserver3d does to a client whose ACKs the kernel delays (it sets no TCP_NODELAY): the
-    agent's percepts keep coming every ~1 ms in sync mode, the monitor lags behind."""
+    """Makes a running server deliver its monitor frames in bursts every 20 cycles (~40 ms on
+    a quiet machine), as a real rcssserver3d does to a client whose ACKs the kernel delays (it
+    sets no TCP_NODELAY): the agent's percepts keep coming every ~1-2 ms in sync mode, the
+    monitor lags behind. (Counted in cycles, not on the clock: on a loaded machine whose
+    cycles take 40 ms each, a clock's bursts would not lag at all.)"""
 
-    def __init__(self, server, period_s: float = 0.04) -> None:
-        import time
-
+    def __init__(self, server, period_cycles: int = 20) -> None:
         held: dict[int, list[bytes]] = {}
-        last = [time.monotonic()]
+        cycles = [0]
         original = server._send_monitor_frames
 
         def send_in_bursts() -> None:
@@ -234,8 +234,8 @@ class _BurstyMonitorServer:
                 for m in server.monitors:
                     if id(m) in real:
                         m.conn.send = real[id(m)]
-            if time.monotonic() - last[0] >= period_s:
-                last[0] = time.monotonic()
+            cycles[0] += 1
+            if cycles[0] % period_cycles == 0:
                 for m in server.monitors:
                     for frame in held.pop(id(m), []):
                         m.conn.send(frame)
