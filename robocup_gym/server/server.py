@@ -360,10 +360,7 @@ class SimServer(AgentMessages, TrainerCommands):
         for key, _ in sel.select(timeout):
             kind, obj = key.data
             if kind == "conn":
-                conn: Connection = obj
-                conn.receive()
-                if not conn.alive:
-                    self._unregister(conn)
+                self._receive(obj)
             elif kind == "listen":
                 self._accept(key.fileobj, obj)  # type: ignore[arg-type]
             else:  # wake-up
@@ -372,6 +369,12 @@ class SimServer(AgentMessages, TrainerCommands):
                         pass
                 except OSError:
                     pass
+
+    def _receive(self, conn: Connection) -> None:
+        """Read what ``conn`` has; a connection that closed leaves the selector."""
+        conn.receive()
+        if not conn.alive:
+            self._unregister(conn)
 
     def _unregister(self, conn: Connection) -> None:
         if self._sel is None:
@@ -400,9 +403,7 @@ class SimServer(AgentMessages, TrainerCommands):
             # ends with this poll (the last awaited (syn) in the same batch) takes a scene or a
             # trainer command sent before that (syn) in every case, not only when the server
             # happened to see the connection a poll earlier
-            conn.receive()
-            if not conn.alive:
-                self._unregister(conn)
+            self._receive(conn)
 
     def _wait_until(self, deadline: float) -> None:
         while not self._stop.is_set():

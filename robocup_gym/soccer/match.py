@@ -291,6 +291,33 @@ KICKOFF_AFTER_CYCLES = 10
 beams to its place in the first and stands)."""
 
 
+def _wait_frames(trainer, frames: int) -> None:
+    """Read ``frames`` monitor frames from a trainer's connection (each one cycle of a server
+    whose monitor interval is 1)."""
+    from robocup_gym.protocol.framing import FrameDecoder, recv_frame
+
+    decoder = FrameDecoder()
+    for _ in range(frames):
+        recv_frame(trainer, decoder, 10.0)
+
+
+def _sends_at_cycle(trainer, cycle: int, message: str) -> Callable[[Any], None]:
+    """An ``on_cycle`` for :meth:`ServerTeam.play <robocup_gym.soccer.remote.ServerTeam.play>`
+    that sends the trainer command ``message`` before the team answers its ``cycle``-th
+    percept (on a sync server whose monitor interval is 1 it acts in the next cycle)."""
+    from robocup_gym.protocol.framing import send_frame
+
+    seen = 0
+
+    def on_cycle(_) -> None:
+        nonlocal seen
+        seen += 1
+        if seen == cycle:
+            send_frame(trainer, message)
+
+    return on_cycle
+
+
 def _server_game(
     teams: dict[str, Team],
     order: tuple[str, str],
@@ -317,7 +344,7 @@ def _server_game(
     import threading
 
     from robocup_gym.protocol import trainer as trainer_cmds
-    from robocup_gym.protocol.framing import FrameDecoder, connect, recv_frame, send_frame
+    from robocup_gym.protocol.framing import connect
     from robocup_gym.soccer.remote import ServerTeam
 
     agent_port, monitor_port = ports
@@ -325,18 +352,13 @@ def _server_game(
     errors: list[BaseException] = []
     joined: list[ServerTeam] = []
     trainer = connect("127.0.0.1", monitor_port, retry_s=10.0)
-    cycles = 0
+    # the first team's percepts, before it answers them
+    kick_off = _sends_at_cycle(trainer, KICKOFF_AFTER_CYCLES, trainer_cmds.kick_off("Left"))
 
     def drain() -> None:  # the trainer's monitor frames, read so that no server waits on them
         with contextlib.suppress(OSError):
             while trainer.recv(1 << 16):
                 pass
-
-    def kick_off(p) -> None:  # the first team's percepts, before it answers them
-        nonlocal cycles
-        cycles += 1
-        if cycles == KICKOFF_AFTER_CYCLES:
-            send_frame(trainer, trainer_cmds.kick_off("Left"))
 
     def play(name: str, team: ServerTeam, on_cycle) -> None:
         try:
@@ -345,9 +367,7 @@ def _server_game(
             errors.append(exc)
 
     try:
-        decoder = FrameDecoder()
-        for _ in range(settle_cycles):
-            recv_frame(trainer, decoder, 10.0)
+        _wait_frames(trainer, settle_cycles)
         threading.Thread(target=drain, daemon=True).start()
         for i, name in enumerate(order):
             joined.append(

@@ -115,7 +115,7 @@ class RemotePlayer:
             return
         if self.stage == "init" and self.side is not None and p.game.play_mode:
             self.stage = "ready"
-        self._send("")
+        self.answer()
 
     def answer(self) -> None:
         """Answer the percept read last with ``(syn)`` alone (a joined player before the

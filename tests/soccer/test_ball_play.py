@@ -188,10 +188,10 @@ def _play_on_serve(
     sync mode, alone on the field (joined once the ball has settled), kick-off sent after 50
     cycles; the walking players' head pitch (deg) at those decisions into ``heads``."""
     from robocup_gym.protocol import trainer as trainer_cmds
-    from robocup_gym.protocol.framing import FrameDecoder, connect, recv_frame, send_frame
+    from robocup_gym.protocol.framing import connect
     from robocup_gym.server.bench import start_server_process, stop_server_process
     from robocup_gym.soccer.learnt import PolicyTeam
-    from robocup_gym.soccer.match import SETTLE_CYCLES
+    from robocup_gym.soccer.match import SETTLE_CYCLES, _sends_at_cycle, _wait_frames
     from robocup_gym.soccer.remote import ServerTeam
 
     seen: list[np.ndarray] = []
@@ -222,19 +222,10 @@ def _play_on_serve(
         "--sync", "--no-real-time", "--seed", "5", "--monitor-interval", "1"
     )
     monitor = None
-    cycles = 0
-
-    def kickoff_after_50(_) -> None:
-        nonlocal cycles
-        cycles += 1
-        if cycles == 50:  # before the team answers: the server reads it in this cycle
-            send_frame(monitor, trainer_cmds.play_mode("PlayOn"))
-
     try:
         monitor = connect("127.0.0.1", monitor_port)
-        decoder = FrameDecoder()
-        for _ in range(SETTLE_CYCLES):  # the ball settles and sleeps before the team joins
-            recv_frame(monitor, decoder, 10.0)
+        _wait_frames(monitor, SETTLE_CYCLES)  # the ball settles and sleeps before the team joins
+        kickoff_after_50 = _sends_at_cycle(monitor, 50, trainer_cmds.play_mode("PlayOn"))
         with ServerTeam(Watched(), port=agent_port, name="A", players=2, seed=seed) as team:
             assert team.side == "left"
             team.play(seconds=seconds + 1.5, on_cycle=kickoff_after_50)
