@@ -15,13 +15,18 @@ Units (as on the rcssserver3d wire):
 * vision: polar ``(distance m, horizontal deg, vertical deg)`` relative to the head;
 * ground truth: world frame (origin field centre, x towards the right team's goal, z up), metres,
   m/s, rad/s, quaternions ``(w, x, y, z)``.
+
+The checks every configuration dataclass shares (unknown fields, values of the wrong kind) are
+here too.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import numbers
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field, fields
+from typing import Any
 
 import numpy as np
 
@@ -36,6 +41,10 @@ __all__ = [
     "Perception",
     "SeenPlayer",
     "Vision",
+    "check_field_kinds",
+    "is_integer",
+    "is_names",
+    "is_number",
     "reject_unknown_fields",
 ]
 
@@ -268,3 +277,74 @@ def reject_unknown_fields(
     unknown = sorted(set(names) - known)
     if unknown:
         raise error(f"unknown {what}(s) {', '.join(unknown)}; {plural}: {', '.join(sorted(known))}")
+
+
+def is_number(v: Any) -> bool:
+    """Whether ``v`` is a real number (Python's or numpy's), not a flag."""
+    return isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+
+
+def is_names(v: Any) -> bool:
+    """Whether ``v`` is a sequence of names (a list or tuple of texts, not one text)."""
+    return (
+        not isinstance(v, str | bytes)
+        and isinstance(v, Sequence)
+        and all(isinstance(x, str) for x in v)
+    )
+
+
+def _numbers(n: int) -> Callable[[Any], bool]:
+    def check(v: Any) -> bool:
+        if isinstance(v, str | bytes) or not isinstance(v, Sequence | np.ndarray):
+            return False
+        return len(v) == n and all(is_number(x) for x in v)
+
+    return check
+
+
+def is_integer(v: Any) -> bool:
+    """Whether ``v`` is an integer (Python's or numpy's), not a flag."""
+    return is_number(v) and isinstance(v, numbers.Integral)
+
+
+FIELD_KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
+    "float": ("a number", is_number),
+    "float | None": ("a number or None", lambda v: v is None or is_number(v)),
+    "int": ("an integer", is_integer),
+    "bool": ("true or false", lambda v: isinstance(v, bool | np.bool_)),
+    "str": ("a name", lambda v: isinstance(v, str)),
+    "str | None": ("a name or None", lambda v: v is None or isinstance(v, str)),
+    "tuple[float, float]": ("2 numbers", _numbers(2)),
+    "tuple[float, float, float]": ("3 numbers", _numbers(3)),
+    "tuple[str, ...]": ("a list of names", is_names),
+    "tuple[str, ...] | None": ("a list of names or None", lambda v: v is None or is_names(v)),
+    "float | Mapping[str, float]": (
+        "a number or a mapping of names to numbers",
+        lambda v: (
+            is_number(v)
+            or (isinstance(v, Mapping) and is_names(list(v)) and all(map(is_number, v.values())))
+        ),
+    ),
+    "Mapping[str, Any]": ("a mapping of names to values", lambda v: isinstance(v, Mapping)),
+    "dict[str, Any]": ("a mapping of names to values", lambda v: isinstance(v, Mapping)),
+}
+"""What a dataclass field of each annotation (as written) holds, and how an error names it;
+:func:`check_field_kinds` checks the fields of these annotations (the others are their class's
+to check)."""
+
+
+def check_field_kinds(
+    obj: Any, error: type[Exception] = ValueError, skip: Collection[str] = ()
+) -> None:
+    """Raise ``error`` for the first field of the dataclass ``obj`` that holds a value of
+    another kind than its annotation says (:data:`FIELD_KINDS`; annotations in ``skip`` are
+    left to the class): ``{field} must be {kind}, got {value!r}``. A text where a number
+    belongs (``--env guide_speed=fast``, a config file's ``timesteps: 1e6``), say, or the text
+    ``"false"`` for a flag, which would read as true."""
+    for f in fields(obj):
+        annotation = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "")
+        if annotation in skip:
+            continue
+        kind = FIELD_KINDS.get(annotation)
+        if kind is not None and not kind[1](getattr(obj, f.name)):
+            raise error(f"{f.name} must be {kind[0]}, got {getattr(obj, f.name)!r}")

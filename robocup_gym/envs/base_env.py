@@ -15,6 +15,7 @@ they want, :meth:`~BaseEnv._is_terminated`, :meth:`~BaseEnv._is_truncated` and
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import warnings
@@ -55,7 +56,7 @@ from robocup_gym.envs.observations import (
 from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.types import AgentCommand, GroundTruth, Perception
 
-__all__ = ["BaseEnv", "EpisodeStart"]
+__all__ = ["BaseEnv", "EpisodeStart", "reset_numbers"]
 
 _RESET_OPTIONS = frozenset(
     {"robot_pos", "robot_heading_deg", "joint_angles_deg", "ball_pos", "ball_vel", "kick_target"}
@@ -467,6 +468,8 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         """
         self._refuse_if_closed("reset")
         super().reset(seed=seed)
+        if options is not None and not isinstance(options, Mapping):
+            raise ValueError(f"reset options must map option names to values, got {options!r}")
         options = dict(options or {})
         valid = _RESET_OPTIONS | self.task_reset_options
         bad = sorted(set(options) - valid)
@@ -640,31 +643,24 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
         heading = cfg.robot_start_heading_deg
         ball_vel = np.array(cfg.ball_start_vel, dtype=float)
         if "robot_pos" in options:
-            x, y = (float(v) for v in options["robot_pos"])
+            x, y = reset_numbers(options, "robot_pos", (2,), "be (x, y) in m").tolist()
         if "robot_heading_deg" in options:
-            heading = float(options["robot_heading_deg"])
+            what = "be a number of degrees"
+            (heading,) = reset_numbers(options, "robot_heading_deg", (1,), what).tolist()
         if "joint_angles_deg" in options:
             given = options["joint_angles_deg"]
             if isinstance(given, Mapping):
                 angles = resolve_angles(self.robot_model, given, "joint_angles_deg")
             else:
-                angles = np.asarray(given, dtype=float)
-                if angles.shape != (len(self.robot_model.joints),):
-                    raise ValueError(
-                        f"joint_angles_deg must have shape ({len(self.robot_model.joints)},), "
-                        f"got {angles.shape}"
-                    )
+                n = len(self.robot_model.joints)
+                angles = reset_numbers(options, "joint_angles_deg", (n,), f"have shape ({n},)")
         if "ball_pos" in options:
-            b = np.asarray(options["ball_pos"], dtype=float)
-            if b.shape == (2,):
-                b = np.array([b[0], b[1], cfg.ball_start[2]])
-            if b.shape != (3,):
-                raise ValueError(f"ball_pos must be (x, y) or (x, y, z), got {b.shape}")
-            ball = b
+            b = reset_numbers(options, "ball_pos", (2, 3), "be (x, y) or (x, y, z) in m")
+            ball = np.array([b[0], b[1], cfg.ball_start[2]]) if len(b) == 2 else b
         if "ball_vel" in options:
-            ball_vel = np.asarray(options["ball_vel"], dtype=float).reshape(3)
+            ball_vel = reset_numbers(options, "ball_vel", (3,), "be (x, y, z) in m/s")
         if "kick_target" in options:
-            target = np.asarray(options["kick_target"], dtype=float).reshape(2)
+            target = reset_numbers(options, "kick_target", (2,), "be (distance m, direction deg)")
         self._check_start(x, y, heading, angles, ball, ball_vel, target)
         return EpisodeStart(
             pose=RobotPose(x=x, y=y, heading_deg=heading, joint_angles_deg=angles),
@@ -886,3 +882,22 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
             f"robot_type={self.config.robot_type}, obs={self.observation_space.shape}, "
             f"act={self.action_space.shape}, mode={self.config.action_mode.value!r})"
         )
+
+
+def reset_numbers(
+    options: Mapping[str, Any], name: str, sizes: tuple[int, ...], what: str
+) -> np.ndarray:
+    """Reset option ``name`` as a flat float array of one of ``sizes`` values.
+
+    Raises:
+        ValueError: naming the option and what it must do (``what``: "be (x, y) in m"), for
+            text, a value that is not numbers, or another number of them.
+    """
+    value = options[name]
+    out = None
+    if not isinstance(value, str | bytes):
+        with contextlib.suppress(TypeError, ValueError):
+            out = np.asarray(value, dtype=float).reshape(-1)
+    if out is None or len(out) not in sizes:
+        raise ValueError(f"{name} must {what}, got {value!r}")
+    return out

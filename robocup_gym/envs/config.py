@@ -25,6 +25,7 @@ from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.robot.types import is_type_number
 from robocup_gym.sim.field import FIELD_LENGTH, FIELD_WIDTH
 from robocup_gym.sim.physics import BALL_REST_Z
+from robocup_gym.types import check_field_kinds, is_names, is_number
 
 __all__ = [
     "BALL_REST_Z",
@@ -144,6 +145,11 @@ class Normalisation(str, enum.Enum):
 
     def __str__(self) -> str:
         return self.value
+
+
+_CHECKED_IN_VALIDATE = frozenset({"int"})
+"""Annotations whose fields :meth:`EnvConfig.validate` checks with messages of their own
+(``robot_type must be one of the integers 0, 1, 2, 3, 4``)."""
 
 
 def _enum_value(enum_cls: type[enum.Enum], value: Any, what: str) -> Any:
@@ -342,6 +348,10 @@ class EnvConfig:
             raise EnvConfigError(
                 f"self_collisions must be true or false, got {self.self_collisions!r}"
             )
+        if not is_names(self.observations):
+            raise EnvConfigError(
+                f"observations must be a list of component names, got {self.observations!r}"
+            )
         self.observations = tuple(self.observations)
         try:
             pos = tuple(float(v) for v in self.ball_start_pos)
@@ -362,6 +372,7 @@ class EnvConfig:
                 setattr(self, name, tuple(v))
         self.normalise = _enum_value(Normalisation, self.normalise, "normalisation")
         self.action_mode = _enum_value(ActionMode, self.action_mode, "action mode")
+        check_field_kinds(self, EnvConfigError, skip=_CHECKED_IN_VALIDATE)
         self.validate()
 
     # ---------------------------------------------------------------- helpers
@@ -618,6 +629,8 @@ def resolve_angles(
                 f"unknown joint {n!r} in {what} for {model.label}; valid "
                 f"effector names: {', '.join(model.effector_names)}"
             )
+        if not is_number(v):
+            raise EnvConfigError(f"{what}[{n!r}] must be a number of degrees, got {v!r}")
         v = float(v)
         if not math.isfinite(v):
             raise EnvConfigError(f"{what}[{n!r}] must be finite, got {v}")

@@ -64,6 +64,7 @@ option                default  meaning
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
@@ -93,7 +94,7 @@ from robocup_gym.soccer.skills import (
     checked_action,
     skill_action_labels,
 )
-from robocup_gym.types import reject_unknown_fields
+from robocup_gym.types import check_field_kinds, is_integer, is_number, reject_unknown_fields
 
 __all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel", "random_start"]
 
@@ -130,7 +131,7 @@ class SoccerConfig:
     def __post_init__(self) -> None:
         for name in ("left_types", "right_types"):
             value = getattr(self, name)
-            if isinstance(value, int) or not isinstance(value, Sequence):
+            if not isinstance(value, Sequence) or not all(map(is_integer, value)):
                 raise ValueError(f"{name} must be a sequence of Nao types 0-4, got {value!r}")
             object.__setattr__(self, name, tuple(int(t) for t in value))
             for t in getattr(self, name):
@@ -147,12 +148,9 @@ class SoccerConfig:
                 f"action_mode must be one of {_ACTION_MODES}, got {self.action_mode!r}"
             )
         Rules.of(self.rules)  # an unknown rule or a value that is not a bool: a clear error
-        for name in (
-            "self_collisions", "contact_fouls", "first_touch_plays_on", "walk_faces_x",
-            "random_start",
-        ):  # fmt: skip
-            if not isinstance(getattr(self, name), bool):
-                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        # the flags ("no" is not false); the other fields are checked here with messages of
+        # their own
+        check_field_kinds(self, skip=("int", "float", "str", "tuple[int, ...]", "tuple[str, ...]"))
         if not isinstance(self.walk, str) or not self.walk:
             raise ValueError(f"walk must be the name of a shipped walk, got {self.walk!r}")
         if self.actions not in ("joints", "skills"):
@@ -164,7 +162,7 @@ class SoccerConfig:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
         for name in ("target_gain", "reward_goal", "ball_progress", "possession"):
             value = getattr(self, name)
-            if not np.isfinite(float(value)):
+            if not (is_number(value) and math.isfinite(value)):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
 
     @property

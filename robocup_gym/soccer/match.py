@@ -28,6 +28,7 @@ import numpy as np
 from robocup_gym.soccer import game_v1, penalty_v1
 from robocup_gym.soccer.scripted import TEAMS
 from robocup_gym.soccer.skills import runs_a_command_loop, skills_of_teams
+from robocup_gym.types import is_integer
 
 __all__ = ["SERVERS", "GameResult", "MatchResult", "make_team", "play_match", "play_server_match"]
 
@@ -151,7 +152,7 @@ def play_match(
     seconds = (10.0 if penalty else 120.0) if seconds is None else float(seconds)
     if penalty and players != 1:
         raise ValueError(f"a penalty has 1 player a side, got {players!r}")
-    a, b, types = _match_setup(team_a, team_b, scenario, games, players, seconds, robot_types)
+    a, b, types = _match_setup(team_a, team_b, scenario, games, players, seconds, robot_types, seed)
     cycles = round(seconds / 0.02)
     result = MatchResult(team_a, team_b)
     recorder = None
@@ -213,15 +214,18 @@ def _match_setup(
     players: int,
     seconds: float,
     robot_types: Sequence[int] | None,
+    seed: int,
 ) -> tuple[Team, Team, tuple[int, ...]]:
     """The two teams and the robot types of a match, its numbers checked.
 
     Raises:
-        ValueError: a count, duration or robot types that cannot be played, an unknown team, or
-            a learnt team made for another scenario or size.
+        ValueError: a count, duration, seed or robot types that cannot be played, an unknown
+            team, or a learnt team made for another scenario or size.
     """
     if isinstance(games, bool) or not isinstance(games, int) or games < 1:
         raise ValueError(f"games must be a positive integer, got {games!r}")
+    if not (is_integer(seed) and seed >= 0):
+        raise ValueError(f"seed must be an integer >= 0 (game k plays seed + k), got {seed!r}")
     if not 1 <= int(players) <= 11:
         raise ValueError(f"players must be 1-11 a side, got {players!r}")
     if not (math.isfinite(seconds) and seconds > 0):
@@ -267,7 +271,7 @@ def play_server_match(
     if server not in SERVERS:
         raise ValueError(f"server must be one of {', '.join(SERVERS)}, got {server!r}")
     seconds = float(seconds)
-    a, b, types = _match_setup(team_a, team_b, "game", games, players, seconds, robot_types)
+    a, b, types = _match_setup(team_a, team_b, "game", games, players, seconds, robot_types, seed)
     teams = {"A": a, "B": b}
     result = MatchResult(team_a, team_b)
     for k in range(games):

@@ -19,6 +19,7 @@ import numpy as np
 
 from robocup_gym.soccer.env import SoccerConfig, SoccerParallelEnv, scenario_functions
 from robocup_gym.soccer.game import CycleReport, Start
+from robocup_gym.types import is_number
 
 __all__ = ["BALL_SPOT", "SPREAD_M", "PenaltyEnv", "env", "parallel_env", "raw_env"]
 
@@ -38,7 +39,7 @@ class PenaltyEnv(SoccerParallelEnv):
         for side in ("left_types", "right_types"):
             if side in options and len(options[side]) != 1:
                 raise ValueError(f"{side}: a penalty has one player a side, got {options[side]!r}")
-        if not np.isfinite(float(start_noise)) or start_noise < 0:
+        if not (is_number(start_noise) and np.isfinite(start_noise) and start_noise >= 0):
             raise ValueError(f"start_noise must be a finite distance >= 0, got {start_noise!r}")
         self.start_noise = float(start_noise)
         super().__init__(render_mode, **options)

@@ -25,7 +25,7 @@ import copy
 import functools
 import os
 import re
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +38,7 @@ from robocup_gym.backends import (
 from robocup_gym.robot.types import ROBOT_TYPES, is_type_number
 from robocup_gym.train.algos import ALGOS
 from robocup_gym.train.tasks import is_team_task, resolve_task, with_version_options
-from robocup_gym.types import reject_unknown_fields
+from robocup_gym.types import check_field_kinds, reject_unknown_fields
 
 PPO_PAPER_DEFAULTS: dict[str, Any] = {
     "learning_rate": 1e-4,
@@ -315,6 +315,11 @@ class TrainConfig:
     defaults."""
 
     def __post_init__(self) -> None:
+        for f in fields(self):  # "timesteps: 2.0e6" in a config file: a whole number
+            value = getattr(self, f.name)
+            if f.type == "int" and isinstance(value, float) and value.is_integer():
+                setattr(self, f.name, int(value))
+        check_field_kinds(self)  # "timesteps: 1e6" (a text in YAML 1.1), say
         self.algo = self.algo.lower()
         if self.algo not in ALGOS:
             raise ValueError(f"unknown algorithm {self.algo!r}; choose one of {', '.join(ALGOS)}")

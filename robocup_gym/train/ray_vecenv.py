@@ -28,6 +28,7 @@ the model and stops.
 from __future__ import annotations
 
 import contextlib
+import socket
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -60,6 +61,32 @@ def import_ray():
     except ImportError as e:
         raise ImportError(RAY_MISSING) from e
     return ray
+
+
+CLUSTER_PROBE_S = 5.0
+"""Seconds a ``HOST:PORT`` cluster address has to accept a connection before a run is refused
+(Ray itself retries an address where nothing listens for minutes)."""
+
+
+def check_cluster_address(address: str, timeout: float = CLUSTER_PROBE_S) -> None:
+    """Refuse at once a ``HOST:PORT`` Ray cluster address where nothing accepts a connection
+    (``"auto"`` and other forms are left to Ray).
+
+    Raises:
+        ConnectionError: naming the address, what the connection got, and how to start a
+            cluster.
+    """
+    host, sep, port = address.rpartition(":")
+    if not sep or not host or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            pass
+    except OSError as e:
+        raise ConnectionError(
+            f"could not join the Ray cluster at {address!r}: nothing answers there ({e}); "
+            "start it with `ray start --head`, or leave out --ray-address for Ray on this machine"
+        ) from None
 
 
 class _BlockActor:
@@ -150,6 +177,7 @@ class RayVecEnv(BlockVecEnv):
                 "log_to_driver": True,
             }
             if address:
+                check_cluster_address(address)
                 kwargs["address"] = address
             else:
                 kwargs["num_cpus"] = here

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from robocup_gym.train.vecenv import EnvBlock
-from robocup_gym.types import reject_unknown_fields
+from robocup_gym.types import is_number, reject_unknown_fields
 
 __all__ = [
     "SELFPLAY_FIELDS",
@@ -75,7 +75,7 @@ class SelfPlaySettings:
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"selfplay {name} must be a positive integer, got {value!r}")
         share = self.scripted_share
-        if isinstance(share, bool) or not (0.0 <= float(share) <= 1.0):
+        if not (is_number(share) and 0.0 <= share <= 1.0):
             raise ValueError(f"selfplay scripted_share must be within 0 and 1, got {share!r}")
 
     @classmethod

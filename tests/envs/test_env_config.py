@@ -114,6 +114,19 @@ def test_joint_names_in_any_naming(make_env):
         ({"observations": ("toe_force",)}, r"type 4"),
         ({"render_mode": "human"}, r"render_mode"),
         ({"wait_step": 3}, r"unknown option\(s\) 'wait_step'.*valid options:.*wait_steps"),
+        # a value of the wrong kind (from --env KEY=VALUE or a config file) is named, never read
+        # as something else: the text "false" is not a true flag
+        ({"observation_noise_std": "high"}, r"observation_noise_std must be a number, got 'high'"),
+        ({"obs_clip": "none"}, r"obs_clip must be a number or None, got 'none'"),
+        ({"randomise_kick_target": "false"}, r"randomise_kick_target must be true or false"),
+        ({"kick_target_distance_range": "3-10"}, r"kick_target_distance_range must be 2 numbers"),
+        ({"kick_target_angle_range": (-45.0, "45")}, r"kick_target_angle_range must be 2 numbers"),
+        ({"observations": "joint_pos"}, r"observations must be a list of component names"),
+        ({"observations": None}, r"observations must be a list of component names, got None"),
+        ({"observed_joints": ("rle3", 4)}, r"observed_joints must be a list of names or None"),
+        ({"joint_start_noise_deg": "big"}, r"joint_start_noise_deg must be a number or a mapping"),
+        ({"joint_start_noise_deg": {"rle3": "1"}}, r"joint_start_noise_deg must be a number or"),
+        ({"backend_options": "fast"}, r"backend_options must be a mapping of names to values"),
     ],
 )
 def test_bad_config_is_a_clear_error(options, match):
@@ -129,6 +142,15 @@ def test_bad_config_is_a_clear_error(options, match):
         ({"joint_angles_deg": {"lae1": 500.0}}, r"lae1 .* = 500° is outside its range"),
         ({"kick_target": (float("inf"), 0.0)}, r"kick_target must be finite"),
         ({"robot_heading_deg": float("nan")}, r"robot_heading_deg must be finite"),
+        # values of the wrong kind name the option (text is never read as numbers)
+        ({"robot_pos": "centre"}, r"robot_pos must be \(x, y\) in m, got 'centre'"),
+        ({"robot_pos": (1.0, 2.0, 3.0)}, r"robot_pos must be \(x, y\) in m, got \(1.0, 2.0, 3.0\)"),
+        ({"robot_heading_deg": "90"}, r"robot_heading_deg must be a number of degrees, got '90'"),
+        ({"ball_pos": "spot"}, r"ball_pos must be \(x, y\) or \(x, y, z\) in m, got 'spot'"),
+        ({"ball_vel": (1.0, 0.0)}, r"ball_vel must be \(x, y, z\) in m/s"),
+        ({"kick_target": "far"}, r"kick_target must be \(distance m, direction deg\)"),
+        ({"joint_angles_deg": "bent"}, r"joint_angles_deg must have shape \(22,\), got 'bent'"),
+        ({"joint_angles_deg": {"lae1": "x"}}, r"joint_angles_deg\['lae1'\] must be a number"),
     ],
 )
 def test_bad_reset_options_are_clear_errors_and_the_env_goes_on(options, match):
@@ -138,6 +160,17 @@ def test_bad_reset_options_are_clear_errors_and_the_env_goes_on(options, match):
         with pytest.raises(ValueError, match=match):
             env.reset(options=options)
         env.reset(seed=1)  # nothing broke: the next episode starts normally
+        env.step(np.zeros(env.action_space.shape))
+    finally:
+        env.close()
+
+
+def test_reset_options_that_are_not_a_mapping_are_a_clear_error():
+    env = BaseEnv()
+    try:
+        with pytest.raises(ValueError, match="reset options must map option names to values"):
+            env.reset(options=["robot_pos", (0.0, 0.0)])
+        env.reset(seed=1)
         env.step(np.zeros(env.action_space.shape))
     finally:
         env.close()

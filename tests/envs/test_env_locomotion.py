@@ -361,6 +361,8 @@ def test_the_command_is_observed_and_changes_mid_episode():
     assert not np.array_equal(commands[3], commands[5])  # a new command after 5 steps
     with pytest.raises(ValueError, match="velocity_command must be 3 finite numbers"):
         env.reset(options={"velocity_command": (math.nan, 0.0, 0.0)})
+    with pytest.raises(ValueError, match=r"velocity_command must be 3 finite numbers.*got 'fast'"):
+        env.reset(options={"velocity_command": "fast"})
     env.close()
 
 

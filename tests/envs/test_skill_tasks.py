@@ -207,6 +207,8 @@ def test_dribble_zero_actions_push_the_ball_toward_the_target():
         env.close()
     with pytest.raises(ValueError, match="dribble_target"):
         Dribble().reset(options={"dribble_target": (1.0, float("nan"))})
+    with pytest.raises(ValueError, match=r"dribble_target must be \(x, y\) m, got 'goal'"):
+        Dribble().reset(options={"dribble_target": "goal"})
     with pytest.raises(EnvConfigError, match="target_distance_range"):
         Dribble(target_distance_range=(5.0, 2.0))
 

@@ -124,6 +124,17 @@ def test_unknown_options_and_bad_values_are_refused():
         penalty_v1.parallel_env(left_types=(0, 0))
     with pytest.raises(ValueError, match="action_mode"):
         keepaway_v1.parallel_env(action_mode="torque")
+    # a value of the wrong kind is named (from --env ball_progress=lots, say)
+    with pytest.raises(ValueError, match="ball_progress must be a finite number, got 'lots'"):
+        game_v1.parallel_env(ball_progress="lots")
+    with pytest.raises(ValueError, match="reward_goal must be a finite number, got True"):
+        game_v1.parallel_env(reward_goal=True)
+    with pytest.raises(ValueError, match="privileged must be true or false, got 'no'"):
+        game_v1.parallel_env(privileged="no")
+    with pytest.raises(ValueError, match="left_types must be a sequence of Nao types 0-4"):
+        game_v1.parallel_env(left_types=(0, "1"))
+    with pytest.raises(ValueError, match="start_noise must be a finite distance >= 0, got 'x'"):
+        penalty_v1.parallel_env(start_noise="x")
 
 
 def test_a_penalty_goal_ends_the_episode_and_pays_the_striker(make):

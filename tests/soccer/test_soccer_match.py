@@ -44,6 +44,8 @@ def test_unknown_teams_and_set_ups_are_refused():
         play_match("scripted", "standing", players=12)
     with pytest.raises(ValueError, match="2 players need 2 robot types"):
         play_match("scripted", "standing", players=2, robot_types=[0])
+    with pytest.raises(ValueError, match=r"seed must be an integer >= 0 \(game k plays seed"):
+        play_match("scripted", "standing", seed=-1)
 
 
 def _chaser_alone(robot_type: int, ball: tuple[float, float], cycles: int):

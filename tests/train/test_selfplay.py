@@ -59,6 +59,8 @@ def test_selfplay_settings_are_checked():
         SelfPlaySettings.of({"pool": 3})
     with pytest.raises(ValueError, match="scripted_share must be within 0 and 1"):
         SelfPlaySettings.of({"scripted_share": 1.5})
+    with pytest.raises(ValueError, match="scripted_share must be within 0 and 1, got 'half'"):
+        SelfPlaySettings.of({"scripted_share": "half"})
     with pytest.raises(ValueError, match="snapshot_every must be a positive integer"):
         TrainConfig(task="game-2v2", selfplay={"snapshot_every": 0})
 

@@ -191,6 +191,15 @@ def test_hp_flags_read_exponent_notation():
         ({"robot_types": [3, 4]}, "type 4 .toes. has two joints more"),
         ({"task": "game-2v2", "robot_types": [0, 1]}, "single-robot task"),
         ({"robot_types": [0], "env_kwargs": {"robot": "T1"}}, "this run's robot is 'T1'"),
+        # values of the wrong kind (a config file's text, a flag's "false") are named
+        ({"timesteps": "1e6"}, "timesteps must be an integer, got '1e6'"),
+        ({"n_envs": 2.5}, "n_envs must be an integer, got 2.5"),
+        ({"seed": "x"}, "seed must be an integer, got 'x'"),
+        ({"normalize_obs": "false"}, "normalize_obs must be true or false, got 'false'"),
+        ({"checkpoint_every_s": "soon"}, "checkpoint_every_s must be a number, got 'soon'"),
+        ({"env_kwargs": 3}, "env_kwargs must be a mapping of names to values, got 3"),
+        ({"algo_kwargs": [1]}, r"algo_kwargs must be a mapping of names to values, got \[1\]"),
+        ({"backend": 3}, "backend must be a name or None, got 3"),
     ],
 )
 def test_invalid_config(kwargs, match):
@@ -204,6 +213,13 @@ def test_every_registered_backend_is_a_valid_choice():
 
     for name in available_backends():
         assert TrainConfig(backend=name).backend == name
+
+
+def test_a_whole_number_written_as_a_float_is_an_integer(tmp_path):
+    (tmp_path / "c.yaml").write_text("timesteps: 2.0e+6\nn_envs: 4.0\n")
+    config = TrainConfig.load(tmp_path / "c.yaml")
+    assert config.timesteps == 2_000_000 and type(config.timesteps) is int
+    assert config.n_envs == 4 and type(config.n_envs) is int
 
 
 def test_unknown_config_key(tmp_path):

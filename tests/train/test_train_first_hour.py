@@ -247,8 +247,13 @@ def test_bad_options_fail_in_one_line_and_leave_no_run_folder(tmp_path):
     for args, expected in (
         (["--env", "nosuch=1"], "unknown option(s) 'nosuch' for VelocityKickConfig"),
         (["--hp", "nosuch=1"], "unknown PPO hyperparameter(s) 'nosuch'"),
+        (["--hp", "learning_rate=fast"], "learning_rate must be a number >= 0, got 'fast'"),
+        (["--hp", "gamma=2"], "PPO hyperparameter gamma must be a number in [0, 1], got 2"),
+        (["--hp", "n_steps=0"], "PPO hyperparameter n_steps must be an integer >= 1, got 0"),
         (["--env", "robot_start_pos=[100, 100]"], "robot_start_pos (100, 100) is off the field"),
         (["--env", "play_mode=NoSuchMode"], "unknown play_mode 'NoSuchMode'"),
+        (["--env", "fall_penalty=high"], "fall_penalty must be a number, got 'high'"),
+        (["--env", "observations=joint_pos"], "observations must be a list of component names"),
     ):
         out = tmp_path / "runs"
         res = CliRunner().invoke(

@@ -88,6 +88,23 @@ def test_ray_address_without_ray_vec_env_is_refused():
         TrainConfig(vec_env="threads")
 
 
+def test_a_cluster_address_where_nothing_listens_is_refused_at_once():
+    """Ray retries such an address for minutes; the run is refused before Ray is asked."""
+    import socket
+
+    from robocup_gym.train.ray_vecenv import check_cluster_address
+
+    with socket.socket() as bound, socket.socket() as listening:
+        bound.bind(("127.0.0.1", 0))  # bound, not listening: a connection is refused
+        port = bound.getsockname()[1]
+        with pytest.raises(ConnectionError, match=rf"Ray cluster at '127.0.0.1:{port}'.*ray start"):
+            check_cluster_address(f"127.0.0.1:{port}")
+        listening.bind(("127.0.0.1", 0))
+        listening.listen()
+        check_cluster_address(f"127.0.0.1:{listening.getsockname()[1]}")  # something answers
+    check_cluster_address("auto")  # Ray's own forms are Ray's to resolve
+
+
 def test_train_on_ray_from_the_command_line_and_resume_on_local_workers(tmp_path):
     from .train_helpers import TINY_PPO, invoke
 

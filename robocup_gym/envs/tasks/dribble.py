@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from robocup_gym.envs.base_env import reset_numbers
 from robocup_gym.envs.config import EnvConfigError
 from robocup_gym.envs.observations import heading_frame, in_heading_frame, turn_to_deg
 from robocup_gym.envs.tasks.walk import WALK_OBSERVATIONS, Walk, WalkConfig
@@ -166,8 +167,8 @@ class Dribble(Walk):
         start = super()._initial_state({k: v for k, v in options.items() if k != "dribble_target"})
         ball = start.ball_pos[:2]
         if "dribble_target" in options:
-            target = np.asarray(options["dribble_target"], dtype=float)
-            if target.shape != (2,) or not np.isfinite(target).all():
+            target = reset_numbers(options, "dribble_target", (2,), "be (x, y) m")
+            if not np.isfinite(target).all():
                 raise ValueError(
                     "reset option dribble_target must be (x, y) m, got "
                     f"{options['dribble_target']!r}"

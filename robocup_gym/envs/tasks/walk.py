@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from robocup_gym.envs.base_env import BaseEnv
+from robocup_gym.envs.base_env import BaseEnv, reset_numbers
 from robocup_gym.envs.config import (
     PAPER_STANDING_POSE_DEG,
     ActionMode,
@@ -475,12 +475,10 @@ class Walk(BaseEnv):
         if command is None:
             self._draw_command()
         else:
-            cmd = np.asarray(command, dtype=float)
-            if cmd.shape != (3,) or not np.isfinite(cmd).all():
-                raise ValueError(
-                    "reset option velocity_command must be 3 finite numbers (forward m/s, left "
-                    f"m/s, turn deg/s), got {command!r}"
-                )
+            what = "be 3 finite numbers (forward m/s, left m/s, turn deg/s)"
+            cmd = reset_numbers(options, "velocity_command", (3,), what)
+            if not np.isfinite(cmd).all():
+                raise ValueError(f"reset option velocity_command must {what}, got {command!r}")
             self.velocity_command[:] = cmd
         self._loop_command[:] = np.nan  # the loop starts afresh at the first perception
         # with a loop the policy is told a command of its own; without, the given one (read
