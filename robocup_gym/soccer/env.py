@@ -96,7 +96,13 @@ from robocup_gym.soccer.skills import (
 )
 from robocup_gym.types import check_field_kinds, is_integer, is_number, reject_unknown_fields
 
-__all__ = ["SoccerConfig", "SoccerParallelEnv", "aec_from_parallel", "random_start"]
+__all__ = [
+    "ActionsChecked",
+    "SoccerConfig",
+    "SoccerParallelEnv",
+    "aec_from_parallel",
+    "random_start",
+]
 
 _ACTION_MODES = ("velocity", "target_angle")
 
@@ -440,12 +446,7 @@ class SoccerParallelEnv(ParallelEnv):
         for name in self.agents:
             if name not in actions:
                 raise KeyError(f"no action for {name!r} (every agent acts every step)")
-            if self.skills is not None:
-                labels, what = self.skills.action_labels, self.skills.action_what
-            else:
-                labels = self._mappers[name].labels()
-                what = f"one value per joint of its type-{self._type(name)} robot"
-            checked[name] = checked_action(name, actions[name], labels, what)
+            checked[name] = self.check_action(name, actions[name])
         commands: dict[int, np.ndarray] = {}
         for name, a in checked.items():  # nothing is changed before every action is checked
             if self.skills is not None:
@@ -453,6 +454,20 @@ class SoccerParallelEnv(ParallelEnv):
             else:
                 commands[self.game.index(name)] = self._mappers[name].command(a, self._angles[name])
         return commands
+
+    def check_action(self, name: str, action: Any) -> np.ndarray:
+        """Agent ``name``'s ``action`` as it acts (clipped to [-1, 1]).
+
+        Raises:
+            ValueError: naming the agent and what its action must be (one value per joint of
+                its robot, or a skill action's values), or the value that is not finite.
+        """
+        if self.skills is not None:
+            labels, what = self.skills.action_labels, self.skills.action_what
+        else:
+            labels = self._mappers[name].labels()
+            what = f"one value per joint of its type-{self._type(name)} robot"
+        return checked_action(name, action, labels, what)
 
     def goalkeepers(self) -> set[str]:
         """The agents that play goalkeeper (for scripted teams): uniform number 1 of a team of
@@ -598,10 +613,30 @@ def scenario_functions(cls: type, scenario: str):
 
 
 def aec_from_parallel(parallel: SoccerParallelEnv):
-    """The AEC form of a soccer environment (PettingZoo's own conversion and checks)."""
+    """The AEC form of a soccer environment (PettingZoo's own conversion and checks, and each
+    action checked at its agent's own step: :class:`ActionsChecked`)."""
     env = parallel_to_aec(parallel)
+    env = ActionsChecked(env, parallel)
     env = wrappers.OrderEnforcingWrapper(env)
     return env
+
+
+class ActionsChecked(wrappers.BaseWrapper):
+    """Checks an agent's action at the agent's own step of an AEC soccer environment
+    (:meth:`SoccerParallelEnv.check_action`). PettingZoo's conversion keeps the actions until
+    the last agent of a cycle acts: a bad action would fail only there, named by that agent's
+    step, and stay kept, failing every step after. Refused here, it is never kept: the agent
+    acts again."""
+
+    def __init__(self, env, parallel: SoccerParallelEnv) -> None:
+        super().__init__(env)
+        self._parallel = parallel
+
+    def step(self, action: Any) -> None:
+        agent = self.agent_selection
+        if not (self.terminations.get(agent) or self.truncations.get(agent)):
+            self._parallel.check_action(agent, action)
+        self.env.step(action)
 
 
 def teams_of(config: SoccerConfig) -> dict[str, list[str]]:

@@ -43,12 +43,13 @@ from robocup_gym.protocol.framing import (
 )
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import nao_model
+from robocup_gym.robot.types import is_type_number
 from robocup_gym.sim.referee import BEAM_MODES, next_kickoff_side
 from robocup_gym.soccer.formation import kickoff_positions
 from robocup_gym.soccer.localisation import Estimator, level_offsets
 from robocup_gym.soccer.scripted import TeamView
 from robocup_gym.soccer.skills import SkillSet, checked_action, skills_of_teams
-from robocup_gym.types import AgentCommand, Perception
+from robocup_gym.types import AgentCommand, Perception, is_integer
 
 __all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
 
@@ -265,10 +266,12 @@ class ServerTeam:
         seed: int | None = None,
         alongside: ServerTeam | None = None,
     ) -> None:
-        if not 1 <= int(players) <= 11:
-            raise ValueError(f"a team has 1-11 players, got {players}")
+        if not (is_integer(players) and 1 <= players <= 11):
+            raise ValueError(f"a team has 1-11 players, got {players!r}")
+        if not (is_integer(port) and 1 <= port <= 65535):
+            raise ValueError(f"port must be a port number 1-65535, got {port!r}")
         types = list(robot_types) if robot_types is not None else [k % 4 for k in range(players)]
-        if len(types) != players or not all(0 <= int(t) <= 4 for t in types):
+        if len(types) != players or not all(map(is_type_number, types)):
             raise ValueError(f"give {players} robot types of 0-4, got {robot_types!r}")
         self.team = team
         self.name = name

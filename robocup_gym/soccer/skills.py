@@ -137,10 +137,16 @@ def checked_action(agent: str, action: Any, labels: Sequence[str], what: str) ->
     """``action`` of ``agent`` as floats clipped to [-1, 1], one value per label.
 
     Raises:
-        ValueError: the wrong shape (naming ``what`` was expected) or a value that is not
-            finite (naming its label).
+        ValueError: not numbers or the wrong shape (naming ``what`` was expected), or a value
+            that is not finite (naming its label).
     """
-    a = np.asarray(action, dtype=float)
+    try:
+        a = np.asarray(action, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or isinstance(action, str | bytes):
+        shown = repr(action) if len(repr(action)) <= 60 else repr(action)[:57] + "..."
+        raise ValueError(f"{agent}: action must be numbers ({what}), got {shown}")
     if a.shape != (len(labels),):
         raise ValueError(f"{agent}: action of shape {a.shape}, expected ({len(labels)},) ({what})")
     if not np.isfinite(a).all():

@@ -21,6 +21,7 @@ import numpy as np
 
 from robocup_gym.backends import DEFAULT_ENGINE
 from robocup_gym.envs.config import nao_type
+from robocup_gym.robot.types import is_type_number
 from robocup_gym.train.episodes import run_episodes
 from robocup_gym.train.metrics import summarize
 from robocup_gym.train.onnx_policy import OnnxPolicy
@@ -90,9 +91,12 @@ def pretrained_path(name: str, robot_type: int | None = None) -> Path:
     else the shared one.
 
     Raises:
-        ValueError: no such policy (the message lists the shipped ones).
+        ValueError: no such policy (the message lists the shipped ones), or a ``robot_type``
+            that is not a Nao type.
     """
     n = _shipped_name(name)
+    if robot_type is not None and not is_type_number(robot_type):
+        raise ValueError(f"robot_type must be a Nao type 0-4, got {robot_type!r}")
     if robot_type is not None:
         own = POLICY_DIR / f"{n}{_TYPE_TAG}{int(robot_type)}.onnx"
         if own.is_file():

@@ -12,6 +12,7 @@ import functools
 import json
 import re
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import gymnasium as gym
@@ -124,6 +125,8 @@ def make_env(
     A task's ``max_episode_steps`` reaches its config (``gymnasium.make`` would take it as its
     own ``TimeLimit`` and leave the task's episode length, after which it computes its final
     reward, as it was); the ``TimeLimit`` gets the same number."""
+    if env_kwargs is not None and not isinstance(env_kwargs, Mapping):
+        raise ValueError(f"env_kwargs must map option names to values, got {env_kwargs!r}")
     kwargs = dict(env_kwargs or {})
     if is_team_task(env_id):
         raise ValueError(

@@ -183,6 +183,20 @@ def test_the_team_command_refuses_what_it_cannot_play(args, message):
     assert message in err and "Traceback" not in err, err
 
 
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"port": "3100"}, "port must be a port number 1-65535, got '3100'"),
+        ({"port": 70000}, "port must be a port number 1-65535, got 70000"),
+        ({"players": "two"}, "a team has 1-11 players, got 'two'"),
+        ({"players": 2, "robot_types": [0, "1"]}, r"give 2 robot types of 0-4, got \[0, '1'\]"),
+    ],
+)
+def test_a_team_refuses_options_it_cannot_play_before_connecting(options, message):
+    with pytest.raises(ValueError, match=message):
+        ServerTeam("scripted", **options)
+
+
 def test_a_learnt_team_plays_on_its_players_observations(server):
     """A policy team with the privileged part (as ``robocup-gym train game-1v1`` learns one)
     gets, every decision, an observation of the size the in-process game gives, filled from the

@@ -112,7 +112,33 @@ def test_bad_actions_name_the_agent_and_the_problem(make):
         env.step({**_zero(env), "left_7": np.zeros(22)})
     with pytest.raises(KeyError, match="no agent 'middle_1'"):
         env.action_space("middle_1")
+    acts = _zero(env)
+    acts["left_1"] = "kick"
+    with pytest.raises(ValueError, match=r"left_1: action must be numbers \(one value per joint"):
+        env.step(acts)
     env.step(_zero(env))  # nothing was broken by the refused steps
+
+
+def test_a_bad_action_in_the_aec_form_is_refused_at_its_agents_step():
+    """PettingZoo's conversion keeps a cycle's actions until its last agent acts: a bad one is
+    refused at its own agent's step, is not kept, and the agent acts again."""
+    env = game_v1.env(max_cycles=20)
+    try:
+        env.reset(seed=0)
+        first = env.agent_selection
+        shape = env.action_space(first).shape
+        with pytest.raises(ValueError, match=rf"{first}: action value 3 \(\w+\) is nan"):
+            env.step(np.where(np.arange(shape[0]) == 3, np.nan, 0.0))
+        with pytest.raises(ValueError, match=rf"{first}: action must be numbers"):
+            env.step("kick")
+        assert env.agent_selection == first
+        acted = []
+        for _ in range(2 * len(env.agents)):  # two whole cycles go on from there
+            acted.append(env.agent_selection)
+            env.step(np.zeros(env.action_space(env.agent_selection).shape))
+        assert acted[0] == first and len(set(acted)) == len(env.possible_agents)
+    finally:
+        env.close()
 
 
 def test_unknown_options_and_bad_values_are_refused():

@@ -38,6 +38,15 @@ def test_the_get_up_is_shipped_and_describes_itself():
     assert len(meta["action_labels"]) == 10 and meta["training"]["n_envs"] == 16
 
 
+def test_a_policy_for_a_robot_type_that_does_not_exist_is_refused():
+    assert pretrained_policy("run", np.int64(1)).path.name == "run.type1.onnx"
+    for bad in (9, "1", True):
+        with pytest.raises(ValueError, match=f"robot_type must be a Nao type 0-4, got {bad!r}"):
+            pretrained_policy("run", bad)
+    with pytest.raises(ValueError, match="env_kwargs must map option names to values"):
+        make_env("RobocupGym/Walk-v0", env_kwargs="robot_type=1")
+
+
 @pytest.mark.skipif(not available(), reason="no libode")
 @pytest.mark.parametrize("side", ["front", "back"])
 def test_the_get_up_lifts_the_robot_within_80_cycles(side):
