@@ -109,7 +109,9 @@ def benchmark_policy_and_env(args, env_id: str, env_overrides: dict[str, Any] | 
     ``zero``), ``--env`` and ``--robot-type`` among the overrides.
 
     Raises:
-        SystemExit: ``--episodes`` below 1, or an ``--env`` without ``=`` (named).
+        SystemExit: ``--episodes`` below 1, an ``--env`` without ``=``, or a policy or option
+            that cannot be run (a shipped policy that does not exist, a run folder that is
+            not one, an option's bad value): one line naming it, as the CLI's errors.
     """
     from robocup_gym.train.config import parse_assignments
 
@@ -124,9 +126,12 @@ def benchmark_policy_and_env(args, env_id: str, env_overrides: dict[str, Any] | 
         extra["robot_type"] = args.robot_type
     if getattr(args, "self_collisions", False):
         extra["self_collisions"] = True
-    if args.backend != "serve":
-        return policy_and_env(args.policy, env_id, args.backend, extra)
-    return _on_serve(args.policy, env_id, extra)
+    try:
+        if args.backend != "serve":
+            return policy_and_env(args.policy, env_id, args.backend, extra)
+        return _on_serve(args.policy, env_id, extra)
+    except (ValueError, FileNotFoundError) as exc:  # EnvConfigError is a ValueError
+        raise SystemExit(f"error: {exc}") from None
 
 
 def _on_serve(policy: str, env_id: str, extra: dict[str, Any]):

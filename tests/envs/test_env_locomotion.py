@@ -723,6 +723,29 @@ def test_the_locomotion_benchmarks_print_json_last(script, run_benchmark):
         assert res["pose_from"] == 20 and res["robot_type"] == 0
 
 
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["pretrained:nosuch"], "error: no pretrained policy 'nosuch'; shipped:"),
+        (["zero", "--env", "gait_frequency_hz=fast"], "error: gait_frequency_hz must be a number"),
+    ],
+)
+def test_a_skill_benchmark_names_what_it_cannot_run_in_one_line(args, message):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    walk = Path(__file__).resolve().parents[2] / "benchmarks" / "walk.py"
+    proc = subprocess.run(
+        [sys.executable, str(walk), *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 1 and len(lines) == 1 and lines[0].startswith(message), proc.stderr
+
+
 def test_the_walk_benchmark_measures_the_omnidirectional_targets(run_benchmark):
     """``benchmarks/walk.py --tracking``: the reference gait alone (zero actions) falls short of
     0.8 m/s, 0.4 m/s sideways and 60 deg/s (its largest amplitudes give ~0.55, ~0.3 and ~33),
