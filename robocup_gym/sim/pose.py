@@ -5,6 +5,7 @@ SimSpark's rigid moves of a robot's bodies (:func:`rigid_move`, what the trainer
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Mapping, Sequence
 
@@ -13,8 +14,10 @@ import numpy as np
 from robocup_gym.robot.nao import NaoModel
 from robocup_gym.sim.kinematics import resting_torso_height
 from robocup_gym.sim.rotations import yaw_quat
+from robocup_gym.types import is_number
 
 __all__ = [
+    "ball_placement",
     "heading_to_quat",
     "joint_angles_array",
     "joint_index",
@@ -44,12 +47,40 @@ def placement_quat(
             numbers (or is zero).
     """
     for name, v in (("x", x), ("y", y), ("z", z), ("heading_deg", heading_deg)):
-        if v is not None and not math.isfinite(v):
-            raise ValueError(f"robot placement {name} must be finite, got {v}")
+        if v is not None and not (is_number(v) and math.isfinite(v)):
+            raise ValueError(f"robot placement {name} must be a finite number, got {v!r}")
     q = np.asarray(quat, float) if quat is not None else heading_to_quat(heading_deg)
     if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
         raise ValueError(f"quat must be 4 finite numbers, got {quat!r}")
     return q / np.linalg.norm(q)
+
+
+def ball_placement(
+    pos: object, vel: object, angular_vel: object
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ball placement a ``place_ball`` asks for, as arrays: ``pos`` (x, y[, z]) m, ``vel``
+    m/s and ``angular_vel`` rad/s (3 each); both engines' ``place_ball`` check here, before
+    they change anything.
+
+    Raises:
+        ValueError: naming what is not 2 or 3 (the position) or 3 (each velocity) finite
+            numbers.
+    """
+    out = []
+    for name, value, sizes in (
+        ("ball position", pos, (2, 3)),
+        ("ball velocity", vel, (3,)),
+        ("ball angular velocity", angular_vel, (3,)),
+    ):
+        a = None
+        if not isinstance(value, str | bytes):
+            with contextlib.suppress(TypeError, ValueError):
+                a = np.asarray(value, float)
+        if a is None or a.ndim != 1 or len(a) not in sizes or not np.isfinite(a).all():
+            want = " or ".join(map(str, sizes))
+            raise ValueError(f"{name} must be {want} finite numbers, got {value!r}")
+        out.append(a)
+    return out[0], out[1], out[2]
 
 
 def joint_index(model: NaoModel, name: str) -> int:

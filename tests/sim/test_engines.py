@@ -53,6 +53,26 @@ def test_placement_puts_the_robot_where_asked(engine):
     np.testing.assert_allclose(w.torso_up(0), [0.0, 0.0, 1.0], atol=1e-9)
 
 
+@pytest.mark.parametrize(
+    ("place", "message"),
+    [
+        (lambda w: w.place_robot(0, "1.0", 0.0), "robot placement x must be a finite number"),
+        (lambda w: w.place_ball("centre"), "ball position must be 2 or 3 finite numbers"),
+        (lambda w: w.place_ball((0.0, 0.0), (1.0, 2.0)), "ball velocity must be 3 finite numbers"),
+        (lambda w: w.place_ball((0.0, 0.0), (0, 0, 0), "spin"), "ball angular velocity must be"),
+    ],
+)
+def test_a_placement_of_the_wrong_kind_is_named_and_changes_nothing(engine, place, message):
+    w = make_world(engine)
+    _stand(w)
+    w.place_ball((1.0, 2.0))
+    before = (w.torso_position(0).copy(), w.ball_position().copy())
+    with pytest.raises(ValueError, match=message):
+        place(w)
+    np.testing.assert_array_equal(w.torso_position(0), before[0])
+    np.testing.assert_array_equal(w.ball_position(), before[1])
+
+
 def test_both_engines_place_identically():
     if not available():
         pytest.skip("no libode here")

@@ -44,7 +44,12 @@ from robocup_gym.sim.engines.mujoco.scene import (
 from robocup_gym.sim.engines.mujoco.sleep import AUTO_DISABLE_SPEED, AutoDisable
 from robocup_gym.sim.memory import release_free_memory
 from robocup_gym.sim.physics import CYCLE_S, PhysicsConfig
-from robocup_gym.sim.pose import joint_angles_array, placement_quat, rigid_move
+from robocup_gym.sim.pose import (
+    ball_placement,
+    joint_angles_array,
+    placement_quat,
+    rigid_move,
+)
 from robocup_gym.sim.senses import Senses
 from robocup_gym.sim.vision import VisionConfig
 from robocup_gym.types import (
@@ -479,17 +484,7 @@ class World(WorldLayout, WorldCommands, AutoDisable, OdeRowsNumpy, WorldReadings
         """Put the ball at ``pos`` (x, y[, z]; z defaults to resting on the ground) with linear
         velocity ``vel`` (m/s) and angular velocity ``angular_vel`` (rad/s, world frame).
         ``forward``: as in :meth:`place_robot`."""
-        p = np.asarray(pos, float)
-        if p.shape not in ((2,), (3,)) or not np.all(np.isfinite(p)):
-            raise ValueError(f"ball position must be 2 or 3 finite numbers, got {pos!r}")
-        v = np.asarray(vel, float)
-        w = np.asarray(angular_vel, float)
-        if (
-            v.shape != (3,)
-            or w.shape != (3,)
-            or not (np.isfinite(v).all() and np.isfinite(w).all())
-        ):
-            raise ValueError("ball velocities must be 3 finite numbers each")
+        p, v, w = ball_placement(pos, vel, angular_vel)
         z = p[2] if p.shape == (3,) else phys.BALL_RADIUS - phys.SURFACE_LAYER
         a = self._ball_qpos
         self.data.qpos[a : a + 3] = (p[0], p[1], z)

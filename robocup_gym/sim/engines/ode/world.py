@@ -47,7 +47,12 @@ from robocup_gym.sim.engines.ode.motors import OdeMotors
 from robocup_gym.sim.engines.ode.readings import OdeReadings
 from robocup_gym.sim.engines.ode.robot import build_robot, kinematics
 from robocup_gym.sim.field import GOAL_BOXES, WALLS
-from robocup_gym.sim.pose import joint_angles_array, placement_quat, rigid_move
+from robocup_gym.sim.pose import (
+    ball_placement,
+    joint_angles_array,
+    placement_quat,
+    rigid_move,
+)
 from robocup_gym.sim.rotations import axis_angle_quat, quat_to_matrix
 from robocup_gym.sim.senses import AgentState, Senses
 from robocup_gym.sim.vision import VisionConfig
@@ -359,15 +364,7 @@ class OdeWorld(OdeMotors, OdeContacts, OdeReadings, Senses):
         """Put the ball at ``pos`` (x, y[, z]; z defaults to 1 mm into the ground, as the MuJoCo
         world's default) with velocity ``vel`` (m/s) and ``angular_vel`` (rad/s)."""
         lib = self._lib
-        p, v, w = (np.asarray(a, float) for a in (pos, vel, angular_vel))
-        if p.shape not in ((2,), (3,)) or not np.isfinite(p).all():
-            raise ValueError(f"ball position must be 2 or 3 finite numbers, got {pos!r}")
-        if (
-            v.shape != (3,)
-            or w.shape != (3,)
-            or not (np.isfinite(v).all() and np.isfinite(w).all())
-        ):
-            raise ValueError("ball velocities must be 3 finite numbers each")
+        p, v, w = ball_placement(pos, vel, angular_vel)
         z = p[2] if len(p) > 2 else phys.BALL_RADIUS - phys.SURFACE_LAYER
         lib.dBodySetPosition(self._ball, float(p[0]), float(p[1]), float(z))
         lib.dBodySetRotation(self._ball, _mat3(np.eye(3)))
