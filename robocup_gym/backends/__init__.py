@@ -18,6 +18,7 @@ only when asked for. Adding a backend is one line here (or one call to :func:`re
 from __future__ import annotations
 
 import importlib
+import inspect
 from collections.abc import Callable
 from typing import Any
 
@@ -118,6 +119,7 @@ def make_backend(name: str, **kwargs: Any) -> Backend:
     Raises:
         BackendNotAvailableError: unknown name, or a backend that is planned but not implemented;
             the message names it and lists the available ones.
+        TypeError: an option the backend does not take (named, with the ones it takes).
     """
     entry = _REGISTRY.get(name)
     if entry is None:
@@ -134,4 +136,13 @@ def make_backend(name: str, **kwargs: Any) -> Backend:
     if isinstance(entry, str):
         module_name, _, attr = entry.partition(":")
         entry = getattr(importlib.import_module(module_name), attr)
+    params = inspect.signature(entry).parameters.values()
+    if not any(p.kind is p.VAR_KEYWORD for p in params):
+        names = [p.name for p in params if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
+        unknown = sorted(set(kwargs) - set(names))
+        if unknown:
+            raise TypeError(
+                f"unknown option(s) {', '.join(map(repr, unknown))} for the {name!r} backend; "
+                f"options: {', '.join(names)}"
+            )
     return entry(**kwargs)

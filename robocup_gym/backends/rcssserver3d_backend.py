@@ -56,7 +56,7 @@ from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.robot.nao import NaoModel, nao_model
 from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.sim.rotations import matrix_to_quat
-from robocup_gym.types import AgentCommand, GroundTruth, Perception
+from robocup_gym.types import AgentCommand, GroundTruth, Perception, is_integer
 
 __all__ = ["GroundTruthSnapshot", "Rcssserver3dBackend", "ResetStats"]
 
@@ -176,6 +176,9 @@ class Rcssserver3dBackend(ServerReset, Backend):
         """``"left"`` or ``"right"``."""
         self.server: ServerProcess | None = None
         self.host = host or "127.0.0.1"
+        for what, port in (("agent_port", agent_port), ("monitor_port", monitor_port)):
+            if port is not None and not (is_integer(port) and 1 <= port <= 65535):
+                raise ValueError(f"{what} must be a port number 1-65535, got {port!r}")
         self.agent_port = int(agent_port) if agent_port is not None else DEFAULT_AGENT_PORT
         self.monitor_port = int(monitor_port) if monitor_port is not None else DEFAULT_MONITOR_PORT
         self.last_reset: ResetStats | None = None

@@ -35,6 +35,21 @@ def test_registry_builds_by_name_and_accepts_new_entries():
         make_backend("test-fake")
 
 
+def test_an_option_a_backend_does_not_take_is_named_with_the_ones_it_takes():
+    with pytest.raises(TypeError, match=r"unknown option\(s\) 'vison' for the 'ode' backend; "):
+        make_backend("ode", robot_type=0, vison=True)
+    with pytest.raises(TypeError, match=r"'ode' backend; options: robot_type, seed, vision"):
+        BaseEnv(backend="ode", backend_options={"vison": True})
+
+
+@pytest.mark.parametrize("port", ["3100", 0, 70000, 3100.0])
+def test_a_server_port_that_is_not_one_is_named(port):
+    from robocup_gym.backends.rcssserver3d_backend import Rcssserver3dBackend
+
+    with pytest.raises(ValueError, match=f"agent_port must be a port number 1-65535, got {port!r}"):
+        Rcssserver3dBackend(host="127.0.0.1", agent_port=port, monitor_port=3200)
+
+
 def test_planned_backend_error_names_it(monkeypatch, tmp_path):
     monkeypatch.delenv("RCSSSERVER3D", raising=False)  # (a machine with a real server)
     monkeypatch.setenv("PATH", str(tmp_path))
