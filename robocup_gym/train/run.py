@@ -160,7 +160,14 @@ def load_run(run: str | os.PathLike) -> RunInfo:
 
 
 def load_model(info: RunInfo, checkpoint: str | os.PathLike | None = None, env=None):
-    """The run's SB3 model (final model, or a given checkpoint), on the CPU."""
+    """The run's SB3 model (final model, or a given checkpoint), on the CPU.
+
+    Raises:
+        FileNotFoundError: naming the model or checkpoint file that is not there.
+    """
     cls = algo_class(info.config.algo)
     path = Path(checkpoint) if checkpoint is not None else info.model_path
+    if not path.is_file():  # (Stable-Baselines3 would look for the name with .zip added)
+        what = "checkpoint" if checkpoint is not None else "the run's model"
+        raise FileNotFoundError(f"{what} {path} does not exist")
     return cls.load(path, env=env, device="cpu")

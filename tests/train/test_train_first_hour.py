@@ -274,6 +274,9 @@ def test_eval_refuses_zero_episodes_and_names_the_file_it_writes(ppo_run):
 
     res = CliRunner().invoke(app, ["eval", str(ppo_run), "--episodes", "0"])
     assert res.exit_code == 1 and "error: episodes must be >= 1, got 0" in res.output
+    missing = ppo_run / "checkpoints" / "model_999_steps.zip"
+    res = CliRunner().invoke(app, ["eval", str(ppo_run), "--checkpoint", str(missing)])
+    assert res.exit_code == 1 and f"error: checkpoint {missing} does not exist" in res.output
     out = invoke(["eval", ppo_run, "--episodes", 1]).stdout
     assert f"written: {ppo_run / 'eval.json'}" in out
 
