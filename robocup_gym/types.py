@@ -42,6 +42,7 @@ __all__ = [
     "SeenPlayer",
     "Vision",
     "check_field_kinds",
+    "float_array",
     "is_integer",
     "is_names",
     "is_number",
@@ -282,6 +283,17 @@ def reject_unknown_fields(
 def is_number(v: Any) -> bool:
     """Whether ``v`` is a real number (Python's or numpy's), not a flag."""
     return isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+
+
+def float_array(v: Any) -> np.ndarray | None:
+    """``v`` as a float array, or ``None`` where it is text or not numbers (numpy would read
+    the text ``"1.5"`` as a number, and fail with its own words on others)."""
+    if isinstance(v, str | bytes):
+        return None
+    try:
+        return np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        return None
 
 
 def is_names(v: Any) -> bool:

@@ -15,7 +15,6 @@ they want, :meth:`~BaseEnv._is_terminated`, :meth:`~BaseEnv._is_truncated` and
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import math
 import warnings
@@ -54,7 +53,7 @@ from robocup_gym.envs.observations import (
     up_z,
 )
 from robocup_gym.sim.physics import CYCLE_S
-from robocup_gym.types import AgentCommand, GroundTruth, Perception
+from robocup_gym.types import AgentCommand, GroundTruth, Perception, float_array
 
 __all__ = ["BaseEnv", "EpisodeStart", "reset_numbers"]
 
@@ -885,19 +884,25 @@ class BaseEnv(gym.Env[np.ndarray, np.ndarray]):
 
 
 def reset_numbers(
-    options: Mapping[str, Any], name: str, sizes: tuple[int, ...], what: str
+    options: Mapping[str, Any],
+    name: str,
+    sizes: tuple[int, ...],
+    what: str,
+    *,
+    finite: bool = False,
 ) -> np.ndarray:
-    """Reset option ``name`` as a flat float array of one of ``sizes`` values.
+    """Reset option ``name`` as a flat float array of one of ``sizes`` values (with
+    ``finite``, each finite).
 
     Raises:
         ValueError: naming the option and what it must do (``what``: "be (x, y) in m"), for
-            text, a value that is not numbers, or another number of them.
+            text, a value that is not numbers, another number of them, or (``finite``) one
+            that is not finite.
     """
     value = options[name]
-    out = None
-    if not isinstance(value, str | bytes):
-        with contextlib.suppress(TypeError, ValueError):
-            out = np.asarray(value, dtype=float).reshape(-1)
-    if out is None or len(out) not in sizes:
+    out = float_array(value)
+    if out is not None:
+        out = out.reshape(-1)
+    if out is None or len(out) not in sizes or (finite and not np.isfinite(out).all()):
         raise ValueError(f"{name} must {what}, got {value!r}")
     return out

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
+from robocup_gym.types import is_integer
 
 #: Max speed of every hinge except the ankle joints: 351.77 °/s in rad/s, computed in the rsg
 #: with π = 3.14159265.
@@ -73,11 +73,7 @@ TYPE_NUMBERS: tuple[int, ...] = tuple(t.index for t in ROBOT_TYPES)
 def is_type_number(value: object) -> bool:
     """Whether ``value`` is a Nao type number: an integer (Python's or NumPy's, not a bool)
     among :data:`TYPE_NUMBERS`."""
-    return (
-        isinstance(value, int | np.integer)
-        and not isinstance(value, bool)
-        and int(value) in TYPE_NUMBERS
-    )
+    return is_integer(value) and int(value) in TYPE_NUMBERS
 
 
 def robot_type(index: int) -> RobotType:

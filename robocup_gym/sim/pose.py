@@ -5,7 +5,6 @@ SimSpark's rigid moves of a robot's bodies (:func:`rigid_move`, what the trainer
 
 from __future__ import annotations
 
-import contextlib
 import math
 from collections.abc import Mapping, Sequence
 
@@ -14,7 +13,7 @@ import numpy as np
 from robocup_gym.robot.nao import NaoModel
 from robocup_gym.sim.kinematics import resting_torso_height
 from robocup_gym.sim.rotations import yaw_quat
-from robocup_gym.types import is_number
+from robocup_gym.types import float_array, is_number
 
 __all__ = [
     "ball_placement",
@@ -72,10 +71,7 @@ def ball_placement(
         ("ball velocity", vel, (3,)),
         ("ball angular velocity", angular_vel, (3,)),
     ):
-        a = None
-        if not isinstance(value, str | bytes):
-            with contextlib.suppress(TypeError, ValueError):
-                a = np.asarray(value, float)
+        a = float_array(value)
         if a is None or a.ndim != 1 or len(a) not in sizes or not np.isfinite(a).all():
             want = " or ".join(map(str, sizes))
             raise ValueError(f"{name} must be {want} finite numbers, got {value!r}")

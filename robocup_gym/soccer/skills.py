@@ -42,7 +42,7 @@ from robocup_gym.soccer.motions import (
     checked_motion_skills,
     motion_skill,
 )
-from robocup_gym.types import AgentCommand, Perception
+from robocup_gym.types import AgentCommand, Perception, float_array
 
 __all__ = [
     "DEFAULT_MOTION_SKILLS",
@@ -140,11 +140,8 @@ def checked_action(agent: str, action: Any, labels: Sequence[str], what: str) ->
         ValueError: not numbers or the wrong shape (naming ``what`` was expected), or a value
             that is not finite (naming its label).
     """
-    try:
-        a = np.asarray(action, dtype=float)
-    except (TypeError, ValueError):
-        a = None
-    if a is None or isinstance(action, str | bytes):
+    a = float_array(action)
+    if a is None:
         shown = repr(action) if len(repr(action)) <= 60 else repr(action)[:57] + "..."
         raise ValueError(f"{agent}: action must be numbers ({what}), got {shown}")
     if a.shape != (len(labels),):

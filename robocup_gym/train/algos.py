@@ -81,7 +81,7 @@ _VALUES: dict[str, tuple[str, Callable[[Any], bool]]] = {
     "n_epochs": ("an integer >= 1", _whole(1)),
     "buffer_size": ("an integer >= 1", _whole(1)),
     "learning_starts": ("an integer >= 0", _whole(0)),
-    "gradient_steps": ("an integer", _whole(-1)),
+    "gradient_steps": ("an integer >= -1 (-1: as many as the rollout's steps)", _whole(-1)),
     "gamma": ("a number in [0, 1]", lambda v: _number(v) and 0 <= v <= 1),
     "gae_lambda": ("a number in [0, 1]", lambda v: _number(v) and 0 <= v <= 1),
     "tau": ("a number in [0, 1]", lambda v: _number(v) and 0 <= v <= 1),

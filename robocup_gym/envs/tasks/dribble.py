@@ -167,12 +167,7 @@ class Dribble(Walk):
         start = super()._initial_state({k: v for k, v in options.items() if k != "dribble_target"})
         ball = start.ball_pos[:2]
         if "dribble_target" in options:
-            target = reset_numbers(options, "dribble_target", (2,), "be (x, y) m")
-            if not np.isfinite(target).all():
-                raise ValueError(
-                    "reset option dribble_target must be (x, y) m, got "
-                    f"{options['dribble_target']!r}"
-                )
+            target = reset_numbers(options, "dribble_target", (2,), "be (x, y) m", finite=True)
         else:
             target = self._draw_target(ball, math.radians(start.pose.heading_deg))
         self.target_pos = target

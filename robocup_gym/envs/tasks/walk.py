@@ -476,9 +476,7 @@ class Walk(BaseEnv):
             self._draw_command()
         else:
             what = "be 3 finite numbers (forward m/s, left m/s, turn deg/s)"
-            cmd = reset_numbers(options, "velocity_command", (3,), what)
-            if not np.isfinite(cmd).all():
-                raise ValueError(f"reset option velocity_command must {what}, got {command!r}")
+            cmd = reset_numbers(options, "velocity_command", (3,), what, finite=True)
             self.velocity_command[:] = cmd
         self._loop_command[:] = np.nan  # the loop starts afresh at the first perception
         # with a loop the policy is told a command of its own; without, the given one (read
