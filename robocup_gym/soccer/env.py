@@ -293,6 +293,11 @@ class SoccerParallelEnv(ParallelEnv):
         n = len(self.skill_action_labels) if self.skills is not None else self._mapper(agent).size
         return gym.spaces.Box(-1.0, 1.0, (n,), np.float32)
 
+    def observation_labels(self, agent: str) -> list[str]:
+        """One label per value of ``agent``'s observation, in order
+        (:func:`~robocup_gym.soccer.observations.observation_labels`)."""
+        return list(self._observer(agent).labels)
+
     def _observer(self, agent: str) -> PlayerObserver:
         try:
             return self._observers[agent]

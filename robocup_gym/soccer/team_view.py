@@ -218,6 +218,10 @@ class TeamView:
                     f"{c.left_types} and {c.right_types}: type 4 has two more joints); one "
                     "policy takes one size: use types 0-3"
                 )
+        self.observation_labels: list[str] = self.env.observation_labels(first)
+        """One label per observation value
+        (:func:`~robocup_gym.soccer.observations.observation_labels`); every value comes
+        scaled to [-1, 1] by its fixed range."""
         self.side = "left"
         self.opponent: Any = None
         self._obs: dict[str, np.ndarray] = {}

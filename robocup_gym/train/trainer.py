@@ -207,8 +207,9 @@ def _start_from_exported(model, cfg: TrainConfig) -> None:
 def _widened_first_layer(weight, meta: dict, cfg: TrainConfig, venv):
     """The exported actor's first layer ``weight`` (units × its observations) for the
     observations of the run's environments ``venv`` (read from its first): each of the
-    policy's observations (by label, with the same normalisation bounds) keeps its column,
-    every other observation of the run gets a column of zeros.
+    policy's observations (by label, with the same normalisation bounds; a team's come scaled
+    by fixed ranges, without bounds) keeps its column, every other observation of the run gets
+    a column of zeros.
 
     Raises:
         ValueError: the policy does not record its observations, or one of them is not among
@@ -217,13 +218,19 @@ def _widened_first_layer(weight, meta: dict, cfg: TrainConfig, venv):
     import numpy as np
 
     labels = meta.get("observation_labels")
-    if not labels or "observation_raw_low" not in meta:
+    # a task normalises its observations over bounds that both record; a team's come scaled
+    # by fixed ranges (robocup_gym.soccer.observations) and neither records bounds
+    scaled = "observation_raw_low" not in meta and not venv.has_attr("raw_bounds")
+    if not labels or ("observation_raw_low" not in meta and not scaled):
         raise ValueError(
             f"init_from {cfg.init_from}: its observations differ from this run's and it does "
             "not record which they are"
         )
     mine = list(venv.get_attr("observation_labels", [0])[0])
-    lo, hi = (np.asarray(b, float) for b in venv.get_attr("raw_bounds", [0])[0])
+    if scaled:
+        lo = hi = np.zeros(len(mine))
+    else:
+        lo, hi = (np.asarray(b, float) for b in venv.get_attr("raw_bounds", [0])[0])
     missing = [lab for lab in labels if lab not in mine]
     if missing or len(mine) != len(lo):
         named = ", ".join(missing[:3]) + (
@@ -237,7 +244,7 @@ def _widened_first_layer(weight, meta: dict, cfg: TrainConfig, venv):
     widened = np.zeros((weight.shape[0], len(mine)), dtype=weight.dtype)
     for i, lab in enumerate(labels):
         j = mine.index(lab)
-        if not np.allclose(
+        if not scaled and not np.allclose(
             (meta["observation_raw_low"][i], meta["observation_raw_high"][i]), (lo[j], hi[j])
         ):
             raise ValueError(

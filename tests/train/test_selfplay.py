@@ -272,6 +272,47 @@ def test_a_team_trained_with_other_motion_skills_keeps_them_in_its_matches(tmp_p
     assert s["games"] == 1 and s["wins"] + s["draws"] + s["losses"] == 1
 
 
+@needs_ode
+def test_a_team_run_starts_from_a_team_policy_of_a_smaller_game(tmp_path):
+    """``--init-from pretrained:penalty-striker`` on a 2-against-2 game: each observation the
+    striker had (by label) keeps its weights, the game's others (the teammate, the second
+    opponent) start at zero, so with learning rate 0 the team acts as the striker on what it
+    saw."""
+    from stable_baselines3 import PPO
+
+    from robocup_gym.robot.nao import nao_model
+    from robocup_gym.soccer.observations import observation_labels
+    from robocup_gym.train.onnx_policy import OnnxPolicy
+    from robocup_gym.train.pretrained import describe, pretrained_path
+    from robocup_gym.train.trainer import train
+
+    cfg = TrainConfig(
+        task="game-2v2",
+        n_envs=1,
+        timesteps=64,
+        vec_env="dummy",
+        env_kwargs={"max_cycles": 60},
+        algo_kwargs={"n_steps": 32, "batch_size": 64, "n_epochs": 1, "learning_rate": 0.0},
+        init_from="pretrained:penalty-striker",
+        checkpoint_every_s=0,
+        checkpoint_freq=0,
+        eval_freq=0,
+    )
+    run = train(cfg, out=tmp_path, progress=False).run_dir
+    mine = observation_labels(nao_model(0), True, mates=1, opponents=2)
+    striker = describe("penalty-striker")["observation_labels"]
+    assert len(mine) == len(striker) + 4 and set(striker) < set(mine)
+    obs = np.random.default_rng(0).uniform(-1, 1, (64, len(mine))).astype(np.float32)
+    seen = obs[:, [mine.index(label) for label in striker]]
+    model = PPO.load(run / "model.zip", device="cpu")
+    tuned = model.predict(obs, deterministic=True)[0]
+    shipped = OnnxPolicy(pretrained_path("penalty-striker"))
+    np.testing.assert_allclose(tuned, shipped(seen), atol=1e-5)
+    first = model.policy.state_dict()["mlp_extractor.policy_net.0.weight"].numpy()
+    added = [mine.index(label) for label in mine if label not in striker]
+    assert not first[:, added].any() and first[:, [mine.index(striker[0])]].any()
+
+
 def test_a_team_plays_only_the_match_it_was_trained_for(team_run):
     run = str(team_run[0].run_dir)  # game-1v1
     with pytest.raises(
