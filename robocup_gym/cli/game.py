@@ -200,12 +200,13 @@ def match(
         ),
     ] = "in-process",
     walk: Annotated[
-        str,
+        str | None,
         typer.Option(
             help="In-process: the shipped walk of the players' skill actions: game-walk (the "
-            "game's, to which the scripted team is tuned) or walk (the omnidirectional one)."
+            "game's, to which the scripted team is tuned) or walk (the omnidirectional one). "
+            "Default: the one a learnt team was trained with, else game-walk."
         ),
-    ] = "game-walk",
+    ] = None,
 ) -> None:
     """Play two teams against each other, in-process (multi-agent soccer with skill
     actions) or on a server; a table, then one JSON object from the first team's side."""
@@ -220,7 +221,7 @@ def match(
         _fail(f"--on must be in-process, {', '.join(SERVERS)}; got {on!r}")
     if on != "in-process" and (scenario != "game" or video is not None):
         _fail(f"on {on} a match plays games (no --scenario penalty, no --video)")
-    if on != "in-process" and walk != "game-walk":
+    if on != "in-process" and walk not in (None, "game-walk"):
         _fail(f"on {on} the players walk with game-walk (--walk is for in-process matches)")
     robot_types = _robot_types(types)
     console = _console()

@@ -90,6 +90,7 @@ from robocup_gym.soccer.observations import PlayerObserver
 from robocup_gym.soccer.scripted import TeamView
 from robocup_gym.soccer.skills import (
     DEFAULT_MOTION_SKILLS,
+    DEFAULT_WALK,
     SkillSet,
     checked_action,
     skill_action_labels,
@@ -125,7 +126,7 @@ class SoccerConfig:
     contact_fouls: bool = False
     first_touch_plays_on: bool = True
     actions: str = "joints"
-    walk: str = "game-walk"
+    walk: str = DEFAULT_WALK
     walk_faces_x: bool = True
     random_start: bool = False
     skill_cycles: int = 10

@@ -27,7 +27,7 @@ import numpy as np
 
 from robocup_gym.soccer import game_v1, penalty_v1
 from robocup_gym.soccer.scripted import TEAMS
-from robocup_gym.soccer.skills import runs_a_command_loop, skills_of_teams
+from robocup_gym.soccer.skills import runs_a_command_loop, skills_of_teams, walk_of_teams
 from robocup_gym.types import is_integer
 
 __all__ = ["SERVERS", "GameResult", "MatchResult", "make_team", "play_match", "play_server_match"]
@@ -122,7 +122,7 @@ def play_match(
     on_game: Callable[[int, GameResult], None] | None = None,
     video: str | os.PathLike | None = None,
     scenario: str = "game",
-    walk: str = "game-walk",
+    walk: str | None = None,
 ) -> MatchResult:
     """Play ``games`` games of ``team_a`` against ``team_b``.
 
@@ -140,7 +140,8 @@ def play_match(
             of game time, from the side, following the ball (MuJoCo's renderer).
         walk: The shipped walk of both teams' skill actions: ``game-walk`` (the game's), or
             ``walk`` (the omnidirectional walk, which runs a command loop and so sees the
-            players as they face: ``walk_faces_x`` off).
+            players as they face: ``walk_faces_x`` off). Default: the walk a learnt team was
+            trained with, else ``game-walk`` (:func:`~robocup_gym.soccer.skills.walk_of_teams`).
 
     Raises:
         ValueError: an unknown team or an impossible set-up.
@@ -153,6 +154,7 @@ def play_match(
     if penalty and players != 1:
         raise ValueError(f"a penalty has 1 player a side, got {players!r}")
     a, b, types = _match_setup(team_a, team_b, scenario, games, players, seconds, robot_types, seed)
+    walk = walk_of_teams(a, b, asked=walk)
     cycles = round(seconds / 0.02)
     result = MatchResult(team_a, team_b)
     recorder = None
@@ -272,6 +274,9 @@ def play_server_match(
         raise ValueError(f"server must be one of {', '.join(SERVERS)}, got {server!r}")
     seconds = float(seconds)
     a, b, types = _match_setup(team_a, team_b, "game", games, players, seconds, robot_types, seed)
+    from robocup_gym.soccer.remote import check_server_walk
+
+    check_server_walk(a, b)
     teams = {"A": a, "B": b}
     result = MatchResult(team_a, team_b)
     for k in range(games):

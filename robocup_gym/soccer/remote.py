@@ -48,10 +48,31 @@ from robocup_gym.sim.referee import BEAM_MODES, next_kickoff_side
 from robocup_gym.soccer.formation import kickoff_positions
 from robocup_gym.soccer.localisation import Estimator, level_offsets
 from robocup_gym.soccer.scripted import TeamView
-from robocup_gym.soccer.skills import SkillSet, checked_action, skills_of_teams
+from robocup_gym.soccer.skills import (
+    DEFAULT_WALK,
+    SkillSet,
+    checked_action,
+    skills_of_teams,
+    walk_of_teams,
+)
 from robocup_gym.types import AgentCommand, Perception, is_integer
 
-__all__ = ["RemotePlayer", "ServerTeam", "TeamResult"]
+__all__ = ["RemotePlayer", "ServerTeam", "TeamResult", "check_server_walk"]
+
+
+def check_server_walk(*teams: Any) -> None:
+    """Refuse a team trained with a walk other than the one its players walk with on a
+    server (:data:`~robocup_gym.soccer.skills.DEFAULT_WALK`).
+
+    Raises:
+        ValueError: such a team (or two teams trained with different walks).
+    """
+    walk = walk_of_teams(*teams)
+    if walk != DEFAULT_WALK:
+        raise ValueError(
+            f"a team was trained with the walk {walk!r}; on a server the players walk with "
+            f"{DEFAULT_WALK} (play it in-process: robocup-gym match)"
+        )
 
 
 HEAD_TILT_DEG = -30.0
@@ -273,6 +294,7 @@ class ServerTeam:
         types = list(robot_types) if robot_types is not None else [k % 4 for k in range(players)]
         if len(types) != players or not all(map(is_type_number, types)):
             raise ValueError(f"give {players} robot types of 0-4, got {robot_types!r}")
+        check_server_walk(team)
         self.team = team
         self.name = name
         self.decision_cycles = int(decision_cycles)

@@ -46,6 +46,7 @@ from robocup_gym.types import AgentCommand, Perception, float_array
 
 __all__ = [
     "DEFAULT_MOTION_SKILLS",
+    "DEFAULT_WALK",
     "KICK_CYCLES",
     "MAX_FORWARD_MPS",
     "MAX_SIDEWAYS_MPS",
@@ -65,6 +66,7 @@ __all__ = [
     "skill_action_labels",
     "skill_action_what",
     "skills_of_teams",
+    "walk_of_teams",
 ]
 
 MAX_FORWARD_MPS = 0.8
@@ -75,6 +77,8 @@ MAX_TURN_DPS = 30.0
 """Counter-clockwise turn rate of a walk action of +1, deg/s."""
 DEFAULT_MOTION_SKILLS = ("kick",)
 """The motion skills of a game unless it says otherwise (``SoccerConfig.skills``)."""
+DEFAULT_WALK = "game-walk"
+"""The shipped walk of a game's skill actions unless it says otherwise (``SoccerConfig.walk``)."""
 
 
 def skill_action_labels(motions: Sequence[str] = DEFAULT_MOTION_SKILLS) -> tuple[str, ...]:
@@ -107,6 +111,33 @@ def skills_of_teams(*teams: Any) -> tuple[str, ...]:
             "plays one set"
         )
     return said.pop() if said else DEFAULT_MOTION_SKILLS
+
+
+def walk_of_teams(*teams: Any, asked: str | None = None) -> str:
+    """The shipped walk a game of ``teams`` plays with: the one its learnt teams were trained
+    with (their ``options["walk"]``; :data:`DEFAULT_WALK` for one that does not record it),
+    else ``asked``, else :data:`DEFAULT_WALK`. A policy acts on what its walk does with its
+    commands: under another walk it plays another game.
+
+    Raises:
+        ValueError: two teams trained with different walks, or ``asked`` is not the walk a
+            learnt team was trained with.
+    """
+    said = {
+        str(options.get("walk", DEFAULT_WALK))
+        for options in (getattr(t, "options", None) for t in teams)
+        if isinstance(options, dict)
+    }
+    if len(said) > 1:
+        raise ValueError(
+            f"the teams were trained with different walks ({sorted(said)}); a game plays one"
+        )
+    if said and asked is not None and asked not in said:
+        raise ValueError(
+            f"the walk {asked!r} was asked, but a team was trained with {said.pop()!r}; a "
+            "team plays with the walk it was trained with"
+        )
+    return said.pop() if said else (DEFAULT_WALK if asked is None else asked)
 
 
 def game_skill_labels(game: Any) -> tuple[str, ...]:
@@ -331,7 +362,7 @@ class SkillSet:
     def __init__(
         self,
         robot_types: Sequence[int],
-        walk: str = "game-walk",
+        walk: str = DEFAULT_WALK,
         getup: str = "get-up",
         self_collisions: bool = False,
         walk_faces_x: bool = True,

@@ -313,6 +313,61 @@ def test_a_team_run_starts_from_a_team_policy_of_a_smaller_game(tmp_path):
     assert not first[:, added].any() and first[:, [mine.index(striker[0])]].any()
 
 
+@needs_ode
+def test_a_team_plays_its_matches_with_the_walk_it_was_trained_with(tmp_path, monkeypatch):
+    """A team trained over the omnidirectional walk plays its matches over it (it played them
+    over the game's walk, whatever its policy had learnt); another walk asked for it, a team
+    of another walk against it, and a server (where players walk with game-walk) are refused,
+    each named."""
+    from robocup_gym.soccer import game_v1
+    from robocup_gym.soccer.learnt import PolicyTeam
+    from robocup_gym.soccer.match import play_server_match
+    from robocup_gym.soccer.remote import ServerTeam
+    from robocup_gym.soccer.skills import walk_of_teams
+    from robocup_gym.train.trainer import train
+
+    cfg = TrainConfig(
+        task="game-1v1",
+        n_envs=1,
+        timesteps=64,
+        vec_env="dummy",
+        env_kwargs={"max_cycles": 60, "walk": "walk", "walk_faces_x": False},
+        algo_kwargs={"n_steps": 32, "batch_size": 32, "n_epochs": 1},
+        checkpoint_every_s=0,
+        checkpoint_freq=0,
+        eval_freq=0,
+    )
+    run = str(train(cfg, out=tmp_path, progress=False).run_dir)
+    team = make_team(run)
+    assert walk_of_teams(team, ScriptedTeam()) == "walk"
+    assert walk_of_teams(ScriptedTeam()) == "game-walk"
+    assert walk_of_teams(ScriptedTeam(), asked="walk") == "walk"
+    games = []
+    made = game_v1.parallel_env
+
+    def spy(**options):
+        games.append(options)
+        return made(**options)
+
+    monkeypatch.setattr(game_v1, "parallel_env", spy)
+    kwargs = {"games": 1, "players": 1, "seconds": 0.4, "robot_types": [0]}
+    assert play_match(run, "scripted", **kwargs).summary["games"] == 1
+    assert games[-1]["walk"] == "walk" and games[-1]["walk_faces_x"] is False
+    play_match("scripted", "standing", **kwargs)
+    assert games[-1]["walk"] == "game-walk" and games[-1]["walk_faces_x"] is True
+    with pytest.raises(
+        ValueError, match="'game-walk' was asked, but a team was trained with 'walk'"
+    ):
+        play_match(run, "scripted", walk="game-walk", **kwargs)
+    game_walk_team = PolicyTeam(team.act, team.obs_size, "old", {"skills": ["kick"]})
+    with pytest.raises(ValueError, match=r"different walks \(\['game-walk', 'walk'\]\)"):
+        walk_of_teams(team, game_walk_team)
+    with pytest.raises(ValueError, match="on a server the players walk with game-walk"):
+        play_server_match(run, "scripted", server="serve", games=1, players=1)
+    with pytest.raises(ValueError, match="trained with the walk 'walk'"):
+        ServerTeam(team, port=9, players=1)
+
+
 def test_a_team_plays_only_the_match_it_was_trained_for(team_run):
     run = str(team_run[0].run_dir)  # game-1v1
     with pytest.raises(
