@@ -6,6 +6,7 @@ import random
 import re
 import socket
 import struct
+import threading
 import time
 from itertools import pairwise
 
@@ -84,15 +85,34 @@ def test_fc_portugal_handshake_without_syn(make_server, clients):
     assert GRACE_PERCEPTS == 1
 
 
-def test_init_rules(make_server):
+def test_init_rules(make_server, clients):
     server = make_server()
     # sides: the first team name that initialises is left, the second right (kept for good)
     assert "(unum 4) (team left)" in "".join(run_agents(server, [("A", 4, 0)], 1)[0])
     assert "(unum 1) (team right)" in "".join(run_agents(server, [("B", 0, 2)], 1)[0])
     # refused: a number that is taken (by whoever came first), a third team; the refused robot
-    # leaves the world and its connection is closed
-    with pytest.raises(ConnectionError):
-        run_agents(server, [("A", 3, 0), ("A", 3, 1)], 5)
+    # leaves the world and its connection is closed. The holder of A 3 stays in the game (and
+    # keeps the sync cycles going) for as long as the second A 3 tries.
+    holder = clients.agent(server)
+    holder.handshake("A", 3)
+    trying = threading.Event()
+    trying.set()
+
+    def keep_stepping() -> None:
+        while trying.is_set():
+            holder.send("(syn)")
+            holder.recv()
+
+    stepper = threading.Thread(target=keep_stepping, daemon=True)
+    stepper.start()
+    try:
+        with pytest.raises(ConnectionError):
+            run_agents(server, [("A", 3, 1)], 5)
+    finally:
+        trying.clear()
+        stepper.join(15)
+    assert not stepper.is_alive()
+    holder.close()
     with pytest.raises(ConnectionError):
         run_agents(server, [("C", 1, 0)], 3)
     assert "(unum 1) (team right)" in "".join(run_agents(server, [("B", 0, 4)], 2)[0])
