@@ -182,7 +182,14 @@ def test_a_rejected_player_leaves_the_world_and_is_told_so(sync_server, warnings
     done: dict = {}
 
     def twelfth() -> None:
-        time.sleep(0.5)  # the eleven are in
+        # the eleven are in first (however long their joining takes on a loaded machine)
+        teams = sync_server.referee.teams
+        deadline = time.monotonic() + 30.0
+        while time.monotonic() < deadline:
+            side = teams.side_of("Full")
+            if side is not None and len(teams.members[side]) == 11:
+                break
+            time.sleep(0.02)
         try:
             with AgentClient(HOST, sync_server.agent_port, timeout=5.0) as extra:
                 extra.send("(scene rsg/agent/nao/nao_hetero.rsg 3)(syn)")

@@ -97,7 +97,9 @@ def test_two_teams_play_on_serve_from_their_own_perceptors(server):
         threading.Thread(target=play, args=("standing", "B")),
     ]
     threads[0].start()
-    time.sleep(0.5)
+    deadline = time.monotonic() + 60.0  # A has its side (left) before B joins
+    while "A" not in teams and not errors and time.monotonic() < deadline:
+        time.sleep(0.05)
     threads[1].start()
     _kick_off(monitor_port, lambda: len(teams) == 2 or errors)
     for t in threads:
