@@ -288,15 +288,20 @@ def test_a_player_takes_its_side_from_a_percept_it_skips():
     assert percepts[3].startswith("(time (now 6.800))")
     listener = socket.create_server(("127.0.0.1", 0))
     got: list[str] = []
+    sent = threading.Event()
 
     def fake_server() -> None:
         conn, _ = listener.accept()
+        # each frame goes out as it is sent (Nagle's algorithm would hold the second back until
+        # the first is acknowledged, which the client may delay)
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         dec = FrameDecoder()
         got.append(decode_payload(recv_frame(conn, dec, 5.0)))  # scene
         send_frame(conn, percepts[0])
         got.append(decode_payload(recv_frame(conn, dec, 5.0)))  # init
         send_frame(conn, percepts[2])
         send_frame(conn, percepts[3])
+        sent.set()
         got.append(decode_payload(recv_frame(conn, dec, 5.0)))
         conn.close()
 
@@ -305,10 +310,7 @@ def test_a_player_takes_its_side_from_a_percept_it_skips():
     try:
         player = RemotePlayer("127.0.0.1", listener.getsockname()[1], "T", 1, 0, timeout=5.0)
         player.handshake_step()  # answers the first percept with init
-        deadline = time.monotonic() + 5.0
-        while len(got) < 2 and time.monotonic() < deadline:
-            time.sleep(0.01)
-        time.sleep(0.2)  # both later percepts are in the socket
+        assert sent.wait(5.0)  # both later percepts are in the socket
         player.handshake_step()
         thread.join(5.0)
         player.close()
@@ -342,6 +344,7 @@ def test_a_team_joins_with_every_player_on_the_same_cycle():
 
         def join(k: int) -> None:
             conns[k], _ = listener.accept()
+            conns[k].setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # as a server does
             decs[k] = FrameDecoder()
             reply(k)  # scene
 
