@@ -220,12 +220,19 @@ def _widened_first_layer(weight, meta: dict, cfg: TrainConfig, venv):
     labels = meta.get("observation_labels")
     # a task normalises its observations over bounds that both record; a team's come scaled
     # by fixed ranges (robocup_gym.soccer.observations) and neither records bounds
-    scaled = "observation_raw_low" not in meta and not venv.has_attr("raw_bounds")
-    if not labels or ("observation_raw_low" not in meta and not scaled):
+    bounded, run_bounded = "observation_raw_low" in meta, venv.has_attr("raw_bounds")
+    if not labels or (run_bounded and not bounded):
         raise ValueError(
             f"init_from {cfg.init_from}: its observations differ from this run's and it does "
             "not record which they are"
         )
+    if bounded and not run_bounded:
+        raise ValueError(
+            f"init_from {cfg.init_from}: a task's policy (its observations normalised over "
+            "its task's bounds) cannot start a team run (observations scaled by the game's "
+            "fixed ranges)"
+        )
+    scaled = not bounded
     mine = list(venv.get_attr("observation_labels", [0])[0])
     if scaled:
         lo = hi = np.zeros(len(mine))

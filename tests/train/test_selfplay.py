@@ -313,6 +313,35 @@ def test_a_team_run_starts_from_a_team_policy_of_a_smaller_game(tmp_path):
     assert not first[:, added].any() and first[:, [mine.index(striker[0])]].any()
 
 
+def test_a_policy_normalised_otherwise_than_the_run_does_not_start_it():
+    """A task's policy (observations over its task's bounds) does not start a team run
+    (observations scaled by fixed ranges), nor a team's a task run; each is named."""
+    from robocup_gym.train.trainer import _widened_first_layer
+
+    class Venv:
+        def __init__(self, bounded: bool) -> None:
+            self.bounded = bounded
+
+        def has_attr(self, name: str) -> bool:
+            return self.bounded and name == "raw_bounds"
+
+        def get_attr(self, name: str, indices=None) -> list:
+            return {"observation_labels": [["a", "b"]], "raw_bounds": [([0, 0], [1, 1])]}[name]
+
+    cfg = TrainConfig(task="game-2v2", init_from="policy.onnx")
+    weight = np.ones((4, 2), np.float32)
+    task = {"observation_labels": ["a", "b"], "observation_raw_low": [0, 0],
+            "observation_raw_high": [1, 1]}  # fmt: skip
+    team = {"observation_labels": ["a"]}
+    with pytest.raises(ValueError, match=r"a task's policy .* cannot start a team run"):
+        _widened_first_layer(weight, task, cfg, Venv(bounded=False))
+    with pytest.raises(ValueError, match="does not record which they are"):
+        _widened_first_layer(weight[:, :1], team, cfg, Venv(bounded=True))
+    assert _widened_first_layer(weight, task, cfg, Venv(bounded=True)).shape == (4, 2)
+    widened = _widened_first_layer(weight[:, :1], team, cfg, Venv(bounded=False))
+    np.testing.assert_array_equal(widened, [[1, 0]] * 4)
+
+
 @needs_ode
 def test_a_team_plays_its_matches_with_the_walk_it_was_trained_with(tmp_path, monkeypatch):
     """A team trained over the omnidirectional walk plays its matches over it (it played them
