@@ -16,7 +16,7 @@ import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -218,6 +218,19 @@ class EnvConfig:
     :class:`robocup_gym.envs.tasks.VelocityKickConfig`). All fields are plain values so a config
     can be copied, compared, pickled and logged (:meth:`to_dict`).
     """
+
+    policy_options: ClassVar[frozenset[str]] = frozenset(
+        {
+            "robot", "observed_joints", "normalise", "obs_clip", "frame_stack",
+            "controlled_joints", "action_mode", "pd_saturation_deg", "pd_damping_s",
+            "target_gain", "target_stop_margin_deg", "target_around_start_deg",
+            "mirror_actions", "joint_start_deg",
+        }
+    )  # fmt: skip
+    """The options that shape how a policy acts (the robot and the joints it drives, how its
+    actions become joint commands, the stance it starts from, how its observations are
+    scaled): a policy that starts a run of another task (``--init-from``) takes them along;
+    the others (observations, reward, starts, episode ends, commands) are the task's own."""
 
     # ---------------------------------------------------------------- observation
     observations: tuple[str, ...] = DEFAULT_OBSERVATIONS

@@ -250,8 +250,10 @@ class TrainConfig:
     a policy learnt on the embedded world, fine-tuned here on ``backend="ode"``, or an exported
     policy, a shipped ``pretrained:NAME`` or an ``.onnx`` file (its actor and recorded action
     noise; under this run's ``env_kwargs``, on the policy's own task the environment it was
-    exported with, on another its ``env_kwargs``). The task's observation and action spaces
-    must match; this run's hyperparameters apply. Empty: start from scratch."""
+    exported with, on another those of its ``env_kwargs`` that shape how it acts: the task
+    config's ``policy_options``). The action spaces must match, and the run must observe what
+    the policy observed (more starts with zero weights); this run's hyperparameters apply.
+    Empty: start from scratch."""
     normalize_obs: bool = False
     """Wrap in ``VecNormalize`` (observations only); off in the paper."""
     checkpoint_freq: int = 100_000

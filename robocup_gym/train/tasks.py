@@ -185,6 +185,17 @@ def _class_defaults(env_id: str, robot: str = "nao"):
     return default_config(robot) if robot != "nao" else default_config()
 
 
+def options_a_policy_takes_along(env_id: str, options: dict[str, Any]) -> dict[str, Any]:
+    """Of a policy's ``options``, those that go with it to a run of the task ``env_id``: the
+    ones that shape how it acts (the task config's ``policy_options``: its stance, the joints
+    it drives, how its actions become commands, a reference motion; a walk's gait). Every one
+    for an environment without a config (a team scenario's)."""
+    base = _class_defaults(env_id, options.get("robot", "nao"))
+    if base is None:
+        return dict(options)
+    return {k: v for k, v in options.items() if k in type(base).policy_options}
+
+
 def _config_of(env_id: str, env_kwargs: dict[str, Any] | None):
     """The task's config as the id ``env_id`` makes it (its version's options over the class's
     defaults) with ``env_kwargs`` applied (validated), without starting any simulator; ``None``

@@ -141,13 +141,16 @@ def _over_exported_options(cfg: TrainConfig) -> TrainConfig:
     """``cfg`` starting from an exported policy (:func:`_init_policy`), under the run's own
     environment options: on the policy's task, every option it was exported with
     (:func:`~robocup_gym.train.pretrained.recorded_env_options`); on another task, the options
-    it was trained with (``env_kwargs``: a walk's gait for a task built on Walk, say).
+    it was trained with that shape how it acts
+    (:func:`~robocup_gym.train.tasks.options_a_policy_takes_along`: a walk's gait for a task
+    built on Walk, say), the task's own otherwise (observations, reward, starts, ends).
 
     Raises:
         ValueError: no such policy, one of another algorithm, or one that normalises its
             observations in its graph (or a run that would normalise them).
     """
     from robocup_gym.train.pretrained import recorded_env_options, with_policy_joints
+    from robocup_gym.train.tasks import options_a_policy_takes_along
 
     meta = _init_policy(cfg).metadata
     if meta.get("algo") != cfg.algo:
@@ -162,7 +165,7 @@ def _over_exported_options(cfg: TrainConfig) -> TrainConfig:
     if meta.get("env_id") == cfg.env_id:
         options = recorded_env_options(meta)
     else:
-        options = dict(meta.get("env_kwargs") or {})
+        options = options_a_policy_takes_along(cfg.env_id, meta.get("env_kwargs") or {})
     options.pop("robot_type", None)  # the run's own (robot_types, or the task's default)
     return cfg.merged(env_kwargs=with_policy_joints(meta, {**options, **cfg.env_kwargs}))
 

@@ -206,3 +206,28 @@ def test_task_options_are_validated():
 def test_normalise_none_with_clip_warns():
     with pytest.warns(UserWarning, match="obs_clip=None"):
         EnvConfig(normalise="none")
+
+
+def test_every_tasks_policy_options_are_options_of_it():
+    """The options a policy takes along to another task (``policy_options``) are options of
+    every registered task's config, and none of them a reward's, an observation list, a start
+    or an episode end."""
+    import dataclasses
+
+    from robocup_gym.train.tasks import _class_defaults, is_robocup_task
+
+    seen = set()
+    for env_id in gym.registry:
+        if not is_robocup_task(env_id):
+            continue
+        base = _class_defaults(env_id)
+        if base is None:
+            continue
+        cls = type(base)
+        seen.add(cls.__name__)
+        names = {f.name for f in dataclasses.fields(cls)}
+        assert cls.policy_options <= names, (cls.__name__, cls.policy_options - names)
+        for option in cls.policy_options:
+            assert not option.startswith(("w_", "ball_", "robot_start", "max_episode"))
+            assert option not in ("observations", "fall_penalty", "terminate_on_fall")
+    assert {"WalkConfig", "RunConfig", "DribbleConfig", "GetUpConfig"} <= seen

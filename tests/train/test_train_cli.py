@@ -430,7 +430,7 @@ def test_init_from_a_shipped_policy(tmp_path):
     """``--init-from pretrained:NAME``: a new run starts from the shipped policy's actor, in the
     environment it was exported with, driving the joints it drives (with learning rate 0 the
     saved policy acts as the shipped one); on another task whose spaces match, with the options
-    it was trained with. A name that
+    that shape how it acts (the task's own otherwise). A name that
     is not shipped, a network of another shape and a folder that does not exist are refused,
     each named."""
     from stable_baselines3 import PPO
@@ -465,6 +465,7 @@ def test_init_from_a_shipped_policy(tmp_path):
     gait = describe("walk")["env_kwargs"]["gait_frequency_hz"]
     assert cfg.env_kwargs["gait_frequency_hz"] == gait
     assert "command_change_steps" not in cfg.env_kwargs  # Dribble's own (its guide's)
+    assert "fall_penalty" not in cfg.env_kwargs  # a reward's: Dribble's own
     tuned = PPO.load(run / "model.zip", device="cpu").predict(obs, deterministic=True)[0]
     np.testing.assert_allclose(tuned, pretrained_policy("walk")(obs), atol=1e-5)
 
@@ -482,6 +483,26 @@ def test_init_from_a_shipped_policy(tmp_path):
     tuned = PPO.load(run / "model.zip", device="cpu").predict(wide, deterministic=True)[0]
     walk_part = wide[:, [mine.index(lab) for lab in walk_labels]]
     np.testing.assert_allclose(tuned, pretrained_policy("walk")(walk_part), atol=1e-5)
+
+    # the run's stance and gait go with it to Dribble; its observations (no ball), reward (no
+    # tracking of a command), starts and episode length do not
+    run_args = [*base[1:-1], "pretrained:run", "--out", tmp_path / "dribble-from-run"]
+    invoke(["train", "dribble", *run_args])
+    (run,) = list((tmp_path / "dribble-from-run").iterdir())
+    cfg = TrainConfig.load(run / "config.yaml")
+    shipped = describe("run")["env_kwargs"]
+    for key in ("gait_frequency_hz", "gait_stride_max_deg", "joint_start_deg"):
+        assert cfg.env_kwargs[key] == shipped[key], key
+    for key in ("observations", "w_tracking_linear", "robot_start_pos", "max_episode_steps"):
+        assert key in shipped and key not in cfg.env_kwargs, key
+    env = make_env(cfg.env_id, backend="ode", env_kwargs=cfg.env_options())
+    mine = env.unwrapped.observation_labels
+    env.close()
+    run_labels = describe("run")["observation_labels"]
+    assert "ball_rel/x" in mine and set(run_labels) < set(mine)
+    tuned = PPO.load(run / "model.zip", device="cpu").predict(wide, deterministic=True)[0]
+    run_part = wide[:, [mine.index(lab) for lab in run_labels]]
+    np.testing.assert_allclose(tuned, pretrained_policy("run")(run_part), atol=1e-5)
 
     for extra, message in (
         (["--init-from", "pretrained:no-such"], "no pretrained policy 'no-such'"),

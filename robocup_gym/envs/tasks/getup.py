@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -208,6 +208,11 @@ LYING_POSE_STOP_MARGIN_DEG = 1.0
 @dataclass
 class GetUpConfig(EnvConfig):
     """:class:`EnvConfig` plus GetUp's start and reward options."""
+
+    policy_options: ClassVar[frozenset[str]] = EnvConfig.policy_options | {
+        "reference_motion", "script_robot_type", "reference_reach_deg",
+    }  # fmt: skip
+    """:class:`EnvConfig`'s and the scripted get-up the actions correct."""
 
     observations: tuple[str, ...] = GETUP_OBSERVATIONS
     action_mode: ActionMode | str = ActionMode.TARGET_ANGLE

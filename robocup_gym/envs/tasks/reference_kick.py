@@ -15,7 +15,7 @@ import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -135,6 +135,11 @@ def _check_keyframes(keyframes: Keyframes) -> None:
 @dataclass
 class ReferenceKickConfig(EnvConfig):
     """:class:`EnvConfig` with the reference kick's options and the defaults it needs."""
+
+    policy_options: ClassVar[frozenset[str]] = EnvConfig.policy_options | {
+        "reference_kick", "kick_keyframes", "kick_keyframes_by_type",
+    }  # fmt: skip
+    """:class:`EnvConfig`'s and the kick the actions correct."""
 
     reference_kick: bool = True
     """Add the reference kick (:func:`reference_kick_deg`) to the target angles: the action

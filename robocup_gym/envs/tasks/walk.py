@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -53,6 +53,16 @@ the gait clock and its last action."""
 @dataclass
 class WalkConfig(EnvConfig):
     """:class:`EnvConfig` plus Walk's command and reward options."""
+
+    policy_options: ClassVar[frozenset[str]] = EnvConfig.policy_options | {
+        "gait_frequency_hz", "swing_share", "reference_gait", "gait_sway_deg", "gait_lift_deg",
+        "gait_stride_deg_per_mps", "gait_stride_max_deg", "gait_side_deg_per_mps",
+        "gait_side_max_deg", "gait_turn_deg_per_dps", "gait_turn_max_deg", "gait_lead_s",
+        "command_feedback_gain", "track_told_command", "forward_speed_range",
+        "sideways_speed_range", "turn_rate_range",
+    }  # fmt: skip
+    """:class:`EnvConfig`'s, the reference gait's, how the walk takes its command and the
+    commands it knows (their ranges also bound the command loop's)."""
 
     observations: tuple[str, ...] = WALK_OBSERVATIONS
     max_episode_steps: int = 500
