@@ -16,7 +16,7 @@ import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
@@ -219,7 +219,7 @@ class EnvConfig:
     can be copied, compared, pickled and logged (:meth:`to_dict`).
     """
 
-    policy_options: ClassVar[frozenset[str]] = frozenset(
+    policy_options = frozenset(
         {
             "robot", "observed_joints", "normalise", "obs_clip", "frame_stack",
             "controlled_joints", "action_mode", "pd_saturation_deg", "pd_damping_s",

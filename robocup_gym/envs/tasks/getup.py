@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
@@ -209,7 +209,7 @@ LYING_POSE_STOP_MARGIN_DEG = 1.0
 class GetUpConfig(EnvConfig):
     """:class:`EnvConfig` plus GetUp's start and reward options."""
 
-    policy_options: ClassVar[frozenset[str]] = EnvConfig.policy_options | {
+    policy_options = EnvConfig.policy_options | {
         "reference_motion", "script_robot_type", "reference_reach_deg",
     }  # fmt: skip
     """:class:`EnvConfig`'s and the scripted get-up the actions correct."""

@@ -15,7 +15,7 @@ import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
@@ -136,7 +136,7 @@ def _check_keyframes(keyframes: Keyframes) -> None:
 class ReferenceKickConfig(EnvConfig):
     """:class:`EnvConfig` with the reference kick's options and the defaults it needs."""
 
-    policy_options: ClassVar[frozenset[str]] = EnvConfig.policy_options | {
+    policy_options = EnvConfig.policy_options | {
         "reference_kick", "kick_keyframes", "kick_keyframes_by_type",
     }  # fmt: skip
     """:class:`EnvConfig`'s and the kick the actions correct."""

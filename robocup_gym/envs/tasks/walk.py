@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
@@ -54,7 +54,7 @@ the gait clock and its last action."""
 class WalkConfig(EnvConfig):
     """:class:`EnvConfig` plus Walk's command and reward options."""
 
-    policy_options: ClassVar[frozenset[str]] = EnvConfig.policy_options | {
+    policy_options = EnvConfig.policy_options | {
         "gait_frequency_hz", "swing_share", "reference_gait", "gait_sway_deg", "gait_lift_deg",
         "gait_stride_deg_per_mps", "gait_stride_max_deg", "gait_side_deg_per_mps",
         "gait_side_max_deg", "gait_turn_deg_per_dps", "gait_turn_max_deg", "gait_lead_s",
