@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from _waits import pid_alive
 
 HERE = Path(__file__).resolve().parent
 HOST = "127.0.0.1"
@@ -74,15 +75,6 @@ class FakeServer:
         raise AssertionError(f"fake server never reported {name!r}; events: {self.events()}")
 
 
-def pid_alive(pid: int) -> bool:
-    """True while ``pid`` runs (a zombie counts as gone)."""
-    try:
-        with open(f"/proc/{pid}/status") as f:
-            return not any(line.startswith("State:") and "Z" in line for line in f)
-    except FileNotFoundError:
-        return False
-
-
 @pytest.fixture
 def fake_server(tmp_path, monkeypatch):
     """A fake rcssserver3d (see ``fake_rcssserver3d.py``) on ``RCSSSERVER3D``; ``fake.use(mode)``
@@ -102,14 +94,6 @@ def fake_server(tmp_path, monkeypatch):
     for pid in fake.pids:
         if pid_alive(pid):
             os.kill(pid, signal.SIGKILL)
-
-
-def wait_until(pred, timeout: float = 10.0, what: str = "condition") -> None:
-    deadline = time.monotonic() + timeout
-    while not pred():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.02)
 
 
 def no_leftover_threads() -> bool:

@@ -11,6 +11,7 @@ import math
 import gymnasium
 import numpy as np
 import pytest
+from _waits import pid_alive, wait_until
 
 import robocup_gym.envs  # noqa: F401  (registers the environments)
 from robocup_gym.backends import RobotPose, make_backend
@@ -20,7 +21,7 @@ from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, resolve_angles
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.types import AgentCommand
 
-from .conftest import HOST, pid_alive, wait_until
+from .conftest import HOST
 
 MODEL = nao_model(0)
 START = resolve_angles(MODEL, PAPER_STANDING_POSE_DEG, "pose")

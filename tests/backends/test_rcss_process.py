@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from _waits import pid_alive, wait_until
 
 from robocup_gym.backends import BackendNotAvailableError, make_backend
 from robocup_gym.backends.process import (
@@ -25,8 +26,6 @@ from robocup_gym.backends.process import (
     render_server_script,
     sweep_stale_folders,
 )
-
-from .conftest import pid_alive, wait_until
 
 # --------------------------------------------------------------------------- finding the binary
 

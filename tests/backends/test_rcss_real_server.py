@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from _waits import pid_alive, wait_until
 
 from robocup_gym.backends import RobotPose
 from robocup_gym.backends.process import RcssServerNotFoundError, find_binary
@@ -14,8 +15,6 @@ from robocup_gym.backends.rcssserver3d_backend import Rcssserver3dBackend
 from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, resolve_angles
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.types import AgentCommand
-
-from .conftest import pid_alive, wait_until
 
 
 @pytest.fixture

@@ -11,6 +11,7 @@ import sys
 
 import numpy as np
 import pytest
+from _waits import wait_until
 
 from robocup_gym.protocol.perceptors import parse_perception
 from robocup_gym.server import SimServer
@@ -184,12 +185,12 @@ def test_a_rejected_player_leaves_the_world_and_is_told_so(sync_server, warnings
     def twelfth() -> None:
         # the eleven are in first (however long their joining takes on a loaded machine)
         teams = sync_server.referee.teams
-        deadline = time.monotonic() + 30.0
-        while time.monotonic() < deadline:
+
+        def eleven_in() -> bool:
             side = teams.side_of("Full")
-            if side is not None and len(teams.members[side]) == 11:
-                break
-            time.sleep(0.02)
+            return side is not None and len(teams.members[side]) == 11
+
+        wait_until(eleven_in, timeout=30.0, what="the eleven to join")
         try:
             with AgentClient(HOST, sync_server.agent_port, timeout=5.0) as extra:
                 extra.send("(scene rsg/agent/nao/nao_hetero.rsg 3)(syn)")

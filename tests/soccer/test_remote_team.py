@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _waits import wait_until
 
 pytest.importorskip("pettingzoo")
 
@@ -97,9 +98,7 @@ def test_two_teams_play_on_serve_from_their_own_perceptors(server):
         threading.Thread(target=play, args=("standing", "B")),
     ]
     threads[0].start()
-    deadline = time.monotonic() + 60.0  # A has its side (left) before B joins
-    while "A" not in teams and not errors and time.monotonic() < deadline:
-        time.sleep(0.05)
+    wait_until(lambda: "A" in teams or errors, timeout=60.0, what="A's side (left) before B joins")
     threads[1].start()
     _kick_off(monitor_port, lambda: len(teams) == 2 or errors)
     for t in threads:

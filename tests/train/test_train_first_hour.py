@@ -10,10 +10,10 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _waits import pid_alive, wait_until
 
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("typer")
@@ -205,23 +205,8 @@ def test_sigterm_and_sighup_save_the_run_and_say_where(tmp_path, sig, child_pids
     assert (run / "model.zip").exists()
     assert f"stopped by {sig}: model saved" in text
     assert f"continue: robocup-gym train --resume {run}" in text
-
-    def running() -> list[int]:
-        alive = []
-        for p in workers:
-            try:
-                state = Path(f"/proc/{p}/stat").read_text().split()[2]
-            except OSError:  # gone
-                continue
-            if state != "Z":
-                alive.append(p)
-        return alive
-
     # the workers end with the run (on a loaded machine not within any fixed sleep)
-    deadline = time.monotonic() + 30.0
-    while running() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert not running()
+    wait_until(lambda: not any(map(pid_alive, workers)), timeout=30.0, what="the workers' end")
 
 
 def test_a_time_checkpoint_comes_early_and_replaces_the_previous_one(tmp_path):
