@@ -52,6 +52,7 @@ minibatch permutations).
 
 from __future__ import annotations
 
+import math
 import threading
 
 import numpy as np
@@ -63,6 +64,8 @@ from stable_baselines3.common.distributions import (
     StateDependentNoiseDistribution,
 )
 from stable_baselines3.common.utils import obs_as_tensor
+from torch import nn
+from torch.nn import functional
 
 from robocup_gym.train.vecenv import BlockVecEnv
 
@@ -350,12 +353,76 @@ class PipelinedPPO(PPO):
         return block_forward(policy, obs, self.device, mats, eps)
 
 
+_LOG_SQRT_2PI = math.log(math.sqrt(2 * math.pi))
+"""The constant of a Gaussian's log-density, as ``torch.distributions.Normal`` computes it."""
+
+
+def _through(module: nn.Module, x: th.Tensor) -> th.Tensor:
+    """``module(x)`` for the layers of an MLP (a ``Sequential`` of ``Linear`` and activations),
+    with each linear layer and common activation applied as the functional op its module calls
+    (the same numbers, without a module call's overhead per layer)."""
+    for layer in module if isinstance(module, nn.Sequential) else (module,):
+        kind = type(layer)
+        if kind is nn.Linear:
+            x = functional.linear(x, layer.weight, layer.bias)
+        elif kind is nn.Tanh:
+            x = th.tanh(x)
+        elif kind is nn.ReLU:
+            x = th.relu(x)
+        else:
+            x = layer(x)
+    return x
+
+
+def _lean_forward(policy, obs_tensor: th.Tensor, mats: th.Tensor | None, eps: th.Tensor | None):
+    """:func:`block_forward` for an actor-critic MLP policy with a Gaussian or gSDE action
+    distribution without squashing: SB3's ops in SB3's order on the policy's own tensors (the
+    same numbers as ``policy(obs)``), without building its distribution objects; ``None`` for a
+    policy of another kind."""
+    dist = policy.action_dist
+    gsde = isinstance(dist, StateDependentNoiseDistribution)
+    if gsde != (eps is None) or getattr(dist, "bijector", None) is not None:
+        return None
+    if not gsde and not isinstance(dist, DiagGaussianDistribution):
+        return None
+    extractor = policy.mlp_extractor
+    features = policy.extract_features(obs_tensor)
+    if policy.share_features_extractor:
+        pi_features = vf_features = features
+    else:
+        pi_features, vf_features = features
+    latent_pi = _through(extractor.policy_net, pi_features)
+    latent_vf = _through(extractor.value_net, vf_features)
+    values = _through(policy.value_net, latent_vf)
+    mean = _through(policy.action_net, latent_pi)
+    if gsde:
+        latent = latent_pi if dist.learn_features else latent_pi.detach()
+        std = th.sqrt(th.mm(latent**2, dist.get_std(policy.log_std) ** 2) + dist.epsilon)
+        if len(latent) == 1:  # SB3 uses the single matrix for a batch of one
+            noise = th.mm(latent, mats[0])
+        else:
+            noise = th.bmm(latent.unsqueeze(dim=1), mats).squeeze(dim=1)
+        actions = mean + noise
+    else:
+        std = th.ones_like(mean) * policy.log_std.exp()
+        actions = mean + std * eps
+    log_prob = -((actions - mean) ** 2) / (2 * std**2) - std.log() - _LOG_SQRT_2PI
+    return actions, values, log_prob.sum(dim=1)
+
+
 def block_forward(policy, obs: np.ndarray, device, mats: th.Tensor | None, eps: th.Tensor | None):
     """``(actions, values, log_probs)`` of a block of environments under ``policy``: with gSDE
     (``eps`` None) the block's exploration matrices ``mats`` (one per environment), else the
     Gaussian noise ``eps`` drawn for them. The same numbers wherever it runs (the learner, or a
-    Ray actor with a copy of the policy)."""
+    Ray actor with a copy of the policy), and the same as SB3's forward pass
+    (:func:`_lean_forward` for the MLP policies training uses)."""
     obs_tensor = obs_as_tensor(obs, device)
+    lean = _lean_forward(policy, obs_tensor, mats, eps)
+    return lean if lean is not None else _sb3_forward(policy, obs_tensor, mats, eps)
+
+
+def _sb3_forward(policy, obs_tensor: th.Tensor, mats: th.Tensor | None, eps: th.Tensor | None):
+    """:func:`block_forward` through SB3's own forward pass (any policy)."""
     if eps is None:
         dist = policy.action_dist
         saved = getattr(dist, "exploration_matrices", None), getattr(dist, "exploration_mat", None)

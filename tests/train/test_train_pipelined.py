@@ -162,3 +162,48 @@ def test_callback_can_stop_a_pipelined_rollout():
         assert obs.shape[0] == 4  # the vector env is still usable (no worker left waiting)
     finally:
         venv.close()
+
+
+@pytest.mark.parametrize("n", [1, 4])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"use_sde": True},
+        {"use_sde": False},
+        {"use_sde": True, "policy_kwargs": {"net_arch": [32, 16], "activation_fn": th.nn.ReLU}},
+        {"use_sde": False, "policy_kwargs": {"net_arch": {"pi": [16], "vf": [32, 32]}}},
+    ],
+    ids=["gsde", "gaussian", "gsde-relu", "gaussian-separate-nets"],
+)
+def test_block_forward_is_sb3_s_forward_pass_to_the_bit(kwargs, n):
+    """The blocks' forward pass (its functional ops, no distribution objects) gives SB3's own
+    actions, values and log-probabilities to the bit, for a batch of one and of several."""
+    from stable_baselines3.common.utils import obs_as_tensor
+
+    from robocup_gym.train import pipelined
+    from robocup_gym.train.vecenv import make_vec_env
+
+    venv = make_vec_env("RobocupGym/VelocityKick-v0", 1, kind="dummy")
+    try:
+        model = small_pipelined_ppo(venv, **kwargs)
+    finally:
+        venv.close()
+    policy = model.policy
+    policy.set_training_mode(False)
+    with th.no_grad():
+        policy.log_std.add_(-1.0)  # away from the initial zeros
+    rng = np.random.default_rng(n)
+    obs = rng.uniform(-1.0, 1.0, (n, *model.observation_space.shape)).astype(np.float32)
+    mats = eps = None
+    if kwargs["use_sde"]:
+        policy.reset_noise(n)
+        mats = policy.action_dist.exploration_matrices
+    else:
+        eps = th.as_tensor(rng.normal(size=(n, *model.action_space.shape)), dtype=th.float32)
+    with th.no_grad():
+        obs_tensor = obs_as_tensor(obs, "cpu")
+        lean = pipelined._lean_forward(policy, obs_tensor, mats, eps)
+        assert lean is not None, "the MLP policies training uses take the lean path"
+        reference = pipelined._sb3_forward(policy, obs_tensor, mats, eps)
+    for name, a, b in zip(("actions", "values", "log_probs"), lean, reference, strict=True):
+        assert th.equal(a.reshape(b.shape), b), name
