@@ -63,6 +63,7 @@ from stable_baselines3.common.distributions import (
     DiagGaussianDistribution,
     StateDependentNoiseDistribution,
 )
+from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.utils import obs_as_tensor
 from torch import nn
 from torch.nn import functional
@@ -379,6 +380,8 @@ def _lean_forward(policy, obs_tensor: th.Tensor, mats: th.Tensor | None, eps: th
     distribution without squashing: SB3's ops in SB3's order on the policy's own tensors (the
     same numbers as ``policy(obs)``), without building its distribution objects; ``None`` for a
     policy of another kind."""
+    if not isinstance(policy, ActorCriticPolicy):
+        return None
     dist = policy.action_dist
     gsde = isinstance(dist, StateDependentNoiseDistribution)
     if gsde != (eps is None) or getattr(dist, "bijector", None) is not None:
