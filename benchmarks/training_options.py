@@ -67,23 +67,20 @@ def _shapes_env(env_id: str):
 
 
 def update_seconds(
-    env_id: str, n_envs: int, repeats: int, threads: int = 1, compiled: bool = False, **over
+    task: str, n_envs: int, repeats: int, threads: int = 1, compiled: bool = False, **over
 ) -> tuple[float, int]:
-    """Seconds of one PPO update with the run's defaults and ``over`` (mean of ``repeats``,
-    after one warm-up update) and the samples it learns from."""
+    """Seconds of one PPO update of ``task`` with the run's defaults and ``over`` (mean of
+    ``repeats``, after one warm-up update) and the samples it learns from."""
     import torch
     from stable_baselines3.common.logger import configure
     from stable_baselines3.common.vec_env import DummyVecEnv
+    from training_speed import fresh_ppo
 
-    from robocup_gym.train.config import TrainConfig
-    from robocup_gym.train.pipelined import PipelinedPPO
+    from robocup_gym.train.tasks import resolve_task
 
     torch.set_num_threads(threads)
-    kwargs = TrainConfig(task="velocity-kick").resolved_algo_kwargs()
-    kwargs.pop("overlap_updates", None)
-    kwargs.update(over)
-    venv = DummyVecEnv([_shapes_env(env_id)] * n_envs)
-    model = PipelinedPPO("MlpPolicy", venv, seed=0, device="cpu", **kwargs)
+    venv = DummyVecEnv([_shapes_env(resolve_task(task))] * n_envs)
+    model = fresh_ppo(task, venv, **over)
     model.set_logger(configure(None, [""]))
     buf = model.rollout_buffer
     rng = np.random.default_rng(0)
@@ -125,21 +122,20 @@ def _echo(conn) -> None:
         conn.send(msg)
 
 
-def transfer_seconds(env_id: str, block: int, n_steps: int, repeats: int) -> float:
-    """Seconds of one worker's round trip of a rollout through a pipe to another process: the
-    policy's weights (its ``state_dict``) out, then the rollout's arrays for ``block``
-    environments and ``n_steps`` steps back (mean of ``repeats``)."""
+def transfer_seconds(task: str, block: int, n_steps: int, repeats: int) -> float:
+    """Seconds of one worker's round trip of a rollout of ``task`` through a pipe to another
+    process: the policy's weights (its ``state_dict``) out, then the rollout's arrays for
+    ``block`` environments and ``n_steps`` steps back (mean of ``repeats``)."""
     import multiprocessing as mp
 
-    from robocup_gym.train.config import TrainConfig
-    from robocup_gym.train.pipelined import PipelinedPPO
-    from robocup_gym.train.vecenv import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv
+    from training_speed import fresh_ppo
 
-    kwargs = TrainConfig(task="velocity-kick").resolved_algo_kwargs()
-    kwargs.pop("overlap_updates", None)
-    template = make_vec_env(env_id, 1, seed=0, kind="dummy")
-    model = PipelinedPPO("MlpPolicy", template, seed=0, device="cpu", **kwargs)
-    template.close()
+    from robocup_gym.train.tasks import resolve_task
+
+    venv = DummyVecEnv([_shapes_env(resolve_task(task))])
+    model = fresh_ppo(task, venv)
+    venv.close()
     state = {k: v.detach().cpu() for k, v in model.policy.state_dict().items()}
     n_obs = model.observation_space.shape[0]
     n_act = model.action_space.shape[0]
@@ -193,7 +189,7 @@ def main(argv: list[str] | None = None) -> dict:
     out: dict = {"task": args.task, "cores": cores, "n_envs": n_envs, "repeats": repeats}
     per_step: dict[str, float] = {}
     for name, over in options.items():
-        seconds, samples = update_seconds(env_id, n_envs, repeats, **over)
+        seconds, samples = update_seconds(args.task, n_envs, repeats, **over)
         per_step[name] = seconds / samples * 1e6
         print(
             f"{name:>16s}: {seconds * 1e3:7.1f} ms per update of {samples} samples, "
@@ -209,12 +205,12 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"   random actions: {random_rate:7.1f} agent steps/s on one core (the limit's unit)")
     blocks = {}
     for block in (1, 2, 4, 8, 16):
-        blocks[str(block)] = round(one_core_policy(env_id, block, steps), 1)
+        blocks[str(block)] = round(one_core_policy(args.task, block, steps), 1)
         print(f"   block of {block:2d}: {blocks[str(block)]:7.1f} agent steps/s on one core")
     out["worker_agent_steps_per_s"] = blocks
     block = max(1, n_envs // cores)
     n_steps = TrainConfig(task=args.task).resolved_algo_kwargs()["n_steps"]
-    transfer = transfer_seconds(env_id, block, n_steps, max(3, repeats))
+    transfer = transfer_seconds(args.task, block, n_steps, max(3, repeats))
     out["transfer_us_per_step"] = round(transfer / (block * n_steps) * 1e6, 2)
     print(
         f"        transfer: {transfer * 1e3:6.2f} ms per rollout of {block} × {n_steps} steps, "

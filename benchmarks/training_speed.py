@@ -76,23 +76,33 @@ def one_core(env_id: str, steps: int, seed: int = 0) -> float:
     return steps / dt
 
 
-def one_core_policy(env_id: str, n_envs: int, steps: int, seed: int = 0) -> float:
-    """Agent steps per second of a block of ``n_envs`` environments stepped in this process
-    with the actions of a fresh PPO policy (the run's defaults, its exploration noise): the
-    episodes a run plays at its start, which end (fall, time limit; then a reset and the wait
-    cycles) at another rate than under random actions."""
+def fresh_ppo(task: str, venv, seed: int = 0, **over):
+    """The PPO model a run of ``task`` starts from (the hyperparameters of ``robocup-gym
+    train``, ``over`` replacing some), on ``venv``, on the CPU."""
+    from robocup_gym.train.config import TrainConfig
+    from robocup_gym.train.pipelined import PipelinedPPO
+
+    kwargs = TrainConfig(task=task).resolved_algo_kwargs()
+    kwargs.pop("overlap_updates", None)
+    kwargs.update(over)
+    return PipelinedPPO("MlpPolicy", venv, seed=seed, device="cpu", **kwargs)
+
+
+def one_core_policy(task: str, n_envs: int, steps: int, seed: int = 0) -> float:
+    """Agent steps per second of a block of ``n_envs`` environments of ``task`` stepped in this
+    process with the actions of a fresh PPO policy (the run's defaults, its exploration noise):
+    the episodes a run plays at its start, which end (fall, time limit; then a reset and the
+    wait cycles) at another rate than under random actions."""
     import cloudpickle
     import torch
 
-    from robocup_gym.train.config import TrainConfig
-    from robocup_gym.train.pipelined import PipelinedPPO
+    from robocup_gym.train.tasks import resolve_task
     from robocup_gym.train.vecenv import EnvBlock, env_factories, make_vec_env
 
     torch.set_num_threads(1)
-    kwargs = TrainConfig(task="velocity-kick").resolved_algo_kwargs()
-    kwargs.pop("overlap_updates", None)
+    env_id = resolve_task(task)
     template = make_vec_env(env_id, 1, seed=seed, kind="dummy")
-    model = PipelinedPPO("MlpPolicy", template, seed=seed, device="cpu", **kwargs)
+    model = fresh_ppo(task, template, seed)
     template.close()
     policy = model.policy
     mats = None
@@ -195,7 +205,7 @@ def main(argv: list[str] | None = None) -> dict:
     timesteps = 4_096 if args.quick else args.timesteps
     one = one_core(env_id, steps)
     per_worker = max(1, cfg.n_envs // cores)
-    one_policy = one_core_policy(env_id, per_worker, steps)
+    one_policy = one_core_policy(args.task, per_worker, steps)
     vec = vectorised(env_id, cfg.n_envs, steps * 2)
     run = training(args.task, timesteps)
     limit = cores * one
