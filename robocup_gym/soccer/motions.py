@@ -16,11 +16,19 @@ Registered here:
 * ``kick-to`` (parameters ``distance`` and ``direction``): the kick TargetKick-v1 plays for that
   command (:func:`~robocup_gym.envs.tasks.commanded_kicks.commanded_kick`), after a prelude
   that drives the joints to the crouched pose it starts from (:func:`kick_to`).
+* ``approach-kick`` (parameters ``distance`` and ``direction``): the player walks to where the
+  ball lies at the spot of the straight ``kick-to`` of that distance, facing the direction
+  (:class:`Approach`), then plays that kick (:class:`ApproachKick`).
+
+A motion may first steer the walk (:class:`Motion`'s optional ``walk_command``): while it
+returns a walking command the player walks with it, and an action that no longer starts the
+motion stops it; once it returns ``None`` the motion plays to its end.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -29,6 +37,7 @@ import numpy as np
 
 from robocup_gym.envs.actions import ActionMapper, ActionMode
 from robocup_gym.envs.config import resolve_angles
+from robocup_gym.envs.observations import heading_frame, in_heading_frame, turn_to_deg
 from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
 from robocup_gym.envs.tasks.reference_kick import (
     Keyframes,
@@ -42,6 +51,9 @@ from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.types import Perception
 
 __all__ = [
+    "APPROACH_LIMITS",
+    "APPROACH_MAX_S",
+    "APPROACH_TOLERANCE",
     "KICK_CYCLES",
     "KICK_FOLLOW_THROUGH_CYCLES",
     "KICK_TO_DIRECTION_DEG",
@@ -50,6 +62,8 @@ __all__ = [
     "KICK_TO_PRELUDE_S",
     "RESERVED_NAMES",
     "WALK_ACTION_LABELS",
+    "Approach",
+    "ApproachKick",
     "KeyframeMotion",
     "Motion",
     "MotionSkill",
@@ -119,6 +133,12 @@ class Motion(Protocol):
     def done(self) -> bool:
         """Whether the motion has ended (the player then walks again)."""
         ...
+
+    # A motion may also have ``walk_command(p) -> np.ndarray | None``, called once a cycle
+    # before ``command`` with the player's perception: while it returns a walking command
+    # (forward m/s, left m/s, turn deg/s) the player walks with it (the game's walk) instead
+    # of playing ``command``, and stops the motion when its action no longer starts it; once
+    # it returns ``None`` it is not called again and the motion plays to its end.
 
 
 class ScriptedMotion:
@@ -358,5 +378,153 @@ register_motion_skill(
     kick_to,
     "the commanded kick of TargetKick-v1 for a distance (2-10 m) and a direction (±45°), "
     f"after {KICK_TO_PRELUDE_S:g} s to its crouched start pose; the ball at kick_to_spot then",
+    parameters=("distance", "direction"),
+)
+
+
+# ---------------------------------------------------------------------------- approach-kick
+APPROACH_STAGE_M = 0.25
+"""An approach first walks to a point this far behind its pose on the kick's line, …"""
+APPROACH_STAGE_TOLERANCE = (0.04, 5.0)
+"""… until within this distance (m) and heading (deg) of it, …"""
+APPROACH_TOLERANCE = (0.015, 3.0)
+"""… then onto the pose at :data:`APPROACH_CREEP` of its speeds until within this distance (m)
+and heading (deg): a kick wants the ball within ~1 cm of its spot."""
+APPROACH_CREEP = 0.15
+"""Share of :data:`APPROACH_LIMITS` on the last part of an approach (nearer than
+:data:`APPROACH_NEAR_M` to the staging point, and after it): a faster walk overshoots."""
+APPROACH_NEAR_M = 0.3
+APPROACH_LIMITS = (0.8, 0.3, 0.3, 45.0)
+"""An approach's walking command at most: forward, backward and sideways (m/s), turn (deg/s)
+(within what the game's walks do without falling)."""
+APPROACH_GAIN = 1.5
+"""Walking speed per metre from the target point, 1/s."""
+APPROACH_TURN_GAIN = 2.0
+"""Turn rate per degree from the kick's direction, (deg/s)/deg."""
+APPROACH_FAR_M = 1.0
+"""Farther than this from the staging point an approach faces where it walks (forwards);
+nearer, the kick's direction."""
+APPROACH_ROUND_M = 0.5
+"""A player in front of the ball (less than :data:`APPROACH_STAGE_M` behind it on the kick's
+line) first walks to a point this far behind the ball and this far to the side it is on."""
+APPROACH_MAX_S = 20.0
+"""An approach that has not arrived after this long (s) gives up: the motion ends unplayed."""
+
+
+class Approach:
+    """Steers a walking robot to the pose from which a ball lies at ``spot`` (ahead, left of the
+    torso's centre in its heading frame, m) with the robot facing ``direction`` (world, rad):
+    round the ball if it is in front of it, to a staging point :data:`APPROACH_STAGE_M`
+    behind the pose, then slowly onto the pose (:data:`APPROACH_TOLERANCE`). The pose follows
+    the ball if it moves. Measured with the omnidirectional ``walk`` on the default engine
+    (``benchmarks/approach_kick.py``): the ball within ~1–2 cm of the spot when it arrives."""
+
+    def __init__(self, spot: tuple[float, float], direction: float) -> None:
+        self.spot = (float(spot[0]), float(spot[1]))
+        self.direction = float(direction)
+        self.line = np.array([math.cos(direction), math.sin(direction)])
+        self.staged = False
+        """Whether it has reached the staging point (and creeps onto the pose)."""
+
+    def pose(self, ball: np.ndarray) -> np.ndarray:
+        """Where the torso's centre must be (world x, y, m) for a ball at ``ball``."""
+        left = np.array([-self.line[1], self.line[0]])
+        return ball[:2] - self.spot[0] * self.line - self.spot[1] * left
+
+    def command(
+        self, pos: np.ndarray, heading: tuple[float, float], ball: np.ndarray
+    ) -> np.ndarray | None:
+        """The walking command (forward m/s, left m/s, turn deg/s) for a torso at ``pos``
+        (world x, y) with heading ``heading`` (cos, sin) and the ball at ``ball``; ``None``
+        once the robot is at the pose."""
+        target = self.pose(ball)
+        if not self.staged:
+            target = target - APPROACH_STAGE_M * self.line
+            rel = pos[:2] - ball[:2]
+            left_of_line = np.array([-self.line[1], self.line[0]])
+            beside = float(np.dot(rel, left_of_line))
+            behind = -float(np.dot(rel, self.line))
+            if behind < APPROACH_STAGE_M and abs(beside) < APPROACH_ROUND_M:  # round the ball
+                side = 1.0 if beside >= 0.0 else -1.0
+                target = ball[:2] - APPROACH_ROUND_M * (self.line - side * left_of_line)
+        d = target - pos[:2]
+        dist = float(np.hypot(*d))
+        error = turn_to_deg(heading, self.direction)
+        staged = dist < APPROACH_STAGE_TOLERANCE[0] and abs(error) < APPROACH_STAGE_TOLERANCE[1]
+        if not self.staged and staged:
+            self.staged = True
+            return self.command(pos, heading, ball)
+        if self.staged and dist < APPROACH_TOLERANCE[0] and abs(error) < APPROACH_TOLERANCE[1]:
+            return None
+        if not self.staged and dist > APPROACH_FAR_M:  # far: face where it walks
+            error = turn_to_deg(heading, math.atan2(d[1], d[0]))
+        top = 1.0 if not self.staged and dist > APPROACH_NEAR_M else APPROACH_CREEP
+        forward, left = in_heading_frame(heading, d[0], d[1])
+        fwd_max, back_max, side_max, turn_max = APPROACH_LIMITS
+        return np.array(
+            [
+                np.clip(APPROACH_GAIN * forward, -back_max * top, fwd_max * top),
+                np.clip(APPROACH_GAIN * left, -side_max * top, side_max * top),
+                np.clip(APPROACH_TURN_GAIN * error, -turn_max, turn_max),
+            ]
+        )
+
+
+class ApproachKick:
+    """``approach-kick``: walk to the ball (:class:`Approach`) facing ``direction_deg`` from the
+    heading the player has when it starts, then play the straight ``kick-to`` of
+    ``distance_m`` (:func:`kick_to`: the library's kick for (``distance_m``, 0°) on this Nao
+    type, after its prelude). It needs the player's ball and pose (the perception's
+    ``ground_truth``: the world's in-process, a player's estimate on a server); without them,
+    or after :data:`APPROACH_MAX_S` without arriving, it ends unplayed (``gave_up``)."""
+
+    def __init__(self, robot_type: int, distance_m: float, direction_deg: float) -> None:
+        self.spot = kick_to_spot(distance_m, 0.0, robot_type)
+        """Where the approach brings the ball (ahead, left of the torso, m): the kick's spot.
+        Where the walk stops and the prelude's move of the torso leave the ball about cancel
+        (medians within 1 cm on every type, ``benchmarks/approach_kick.py``)."""
+        self.direction_deg = float(direction_deg)
+        self._kick = KeyframeMotion(robot_type, commanded_kick(distance_m, 0.0, robot_type)[0])
+        self._approach: Approach | None = None
+        self.arrived = False
+        self.gave_up = False
+        self.walked = 0
+        """Cycles walked so far."""
+
+    def walk_command(self, p: Perception) -> np.ndarray | None:
+        gt = p.ground_truth
+        if gt is None or self.walked * CYCLE_S >= APPROACH_MAX_S:
+            self.gave_up = True
+            return np.zeros(3)
+        heading = heading_frame(gt.torso_quat)
+        if self._approach is None:
+            ahead = math.atan2(heading[1], heading[0])
+            self._approach = Approach(self.spot, ahead + math.radians(self.direction_deg))
+        command = self._approach.command(gt.torso_pos, heading, gt.ball_pos)
+        if command is None:
+            self.arrived = True
+            return None
+        self.walked += 1
+        return command
+
+    def command(self, p: Perception) -> np.ndarray:
+        return self._kick.command(p)
+
+    @property
+    def done(self) -> bool:
+        return self.gave_up or (self.arrived and self._kick.done)
+
+
+def approach_kick(robot_type: int, distance: float, direction: float) -> ApproachKick:
+    """The ``approach-kick`` motion for its action values (as ``kick-to``'s:
+    :func:`kick_to_command`, the direction from the player's heading when it starts)."""
+    return ApproachKick(robot_type, *kick_to_command(distance, direction))
+
+
+register_motion_skill(
+    "approach-kick",
+    approach_kick,
+    "walk to the ball facing a direction (±45° of the heading at the start), then the straight "
+    "kick-to of a distance (2-10 m); best with the omnidirectional walk",
     parameters=("distance", "direction"),
 )

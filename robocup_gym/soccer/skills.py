@@ -294,6 +294,8 @@ class PlayerSkills:
         self.getup = _Skill(getup(self.backend))
         self.mode = "walk"
         self.motion: Motion | None = None
+        self.steered = False
+        """Whether its motion walks this cycle (the motion's ``walk_command`` gave one)."""
         self.failed_getups = 0
         self.command = np.zeros(3)
 
@@ -310,6 +312,7 @@ class PlayerSkills:
         self.getup.env.reset(seed=None if seed is None else seed + 1000)
         self.mode = "walk"
         self.motion = None
+        self.steered = False
         self.failed_getups = 0
 
     def fallen(self, p: Perception) -> bool:
@@ -429,28 +432,46 @@ class SkillSet:
     def decide(self, index: int, action: np.ndarray) -> None:
         """Player ``index``'s skill action (:attr:`action_labels`; checked and clipped by the
         caller): a walk command, or a motion skill started (the first whose value is above
-        0.5), which runs to its end; a fallen player gets up first."""
+        0.5), which runs to its end; a fallen player gets up first. A motion that still steers
+        the walk (``walk_command``) goes on while the action starts it again (its new
+        parameters unused) and stops for any other action."""
         s = self.players[index]
         s.command[:] = (
             action[0] * MAX_FORWARD_MPS,
             action[1] * MAX_SIDEWAYS_MPS,
             action[2] * MAX_TURN_DPS,
         )
+        asked = self._asked_motion(action)
+        if s.steered and (asked is None or asked[0].name != s.mode):
+            s.mode, s.motion, s.steered = "walk", None, False
         if s.mode == "walk":
             s.walk.env.velocity_command[:] = s.command
-            at = len(WALK_ACTION_LABELS)
-            for skill in self.motions.values():
-                if action[at] > 0.5:
-                    values = (float(v) for v in action[at + 1 : at + len(skill.labels)])
-                    s.mode, s.motion = skill.name, skill.start(self.robot_types[index], *values)
-                    break
-                at += len(skill.labels)
+            if asked is not None:
+                skill, values = asked
+                s.mode, s.motion = skill.name, skill.start(self.robot_types[index], *values)
+                s.steered = callable(getattr(s.motion, "walk_command", None))
+
+    def _asked_motion(self, action: np.ndarray) -> tuple[Any, list[float]] | None:
+        """The motion skill ``action`` starts (the first whose value is above 0.5) and its
+        parameters' values, or ``None``."""
+        at = len(WALK_ACTION_LABELS)
+        for skill in self.motions.values():
+            if action[at] > 0.5:
+                return skill, [float(v) for v in action[at + 1 : at + len(skill.labels)]]
+            at += len(skill.labels)
+        return None
 
     def commands(self) -> dict[int, AgentCommand]:
         """This cycle's joint command of every player (the policies batched)."""
         out: dict[int, AgentCommand] = {}
+        for s in self.players:  # motions that steer the walk: this cycle's walking command
+            if s.motion is not None and s.steered:
+                command = s.motion.walk_command(s.backend.perception)
+                s.steered = command is not None
+                if s.steered:
+                    s.walk.env.velocity_command[:] = command
         for mode, policy in (("walk", self.walk_policy), ("get-up", self.getup_policy)):
-            group = [s for s in self.players if s.mode == mode]
+            group = [s for s in self.players if s.mode == mode or (mode == "walk" and s.steered)]
             if not group:
                 continue
             skill = "walk" if mode == "walk" else "getup"
@@ -467,7 +488,7 @@ class SkillSet:
                     a = np.zeros(env.action_space.shape, np.float32)
                 out[s.index] = env.act(a)
         for s in self.players:
-            if s.motion is not None:
+            if s.motion is not None and not s.steered:
                 out[s.index] = AgentCommand(self._motion_command(s))
         return out
 
@@ -495,8 +516,20 @@ class SkillSet:
             p = perceptions[s.index]
             s.see(p)
             if s.motion is not None:
+                if s.steered:  # it walked this cycle
+                    obs, _, terminated, truncated, _ = s.walk.env.observe_step(
+                        s.walk_backend.perception
+                    )
+                    s.walk.obs = obs
+                    if s.fallen(p):
+                        s.motion, s.steered = None, False
+                        self._walk_again(s)  # gets up
+                        continue
+                    if terminated or truncated:  # the walk's episode length: walk on
+                        command = tuple(float(v) for v in s.walk.env.velocity_command)
+                        s.walk.obs, _ = s.walk.env.reset(options={"velocity_command": command})
                 if s.motion.done:
-                    s.motion = None
+                    s.motion, s.steered = None, False
                     self._walk_again(s)
                 continue
             skill, seen = (s.walk, s.walk_backend) if s.mode == "walk" else (s.getup, s.backend)

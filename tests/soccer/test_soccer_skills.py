@@ -292,3 +292,94 @@ def test_a_walk_with_a_command_loop_is_refused_a_turned_view():
         game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk="walk")
     with pytest.raises(ValueError, match="walk must be the name of a shipped walk"):
         game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk=3)
+
+
+class _Stride:
+    """A motion that walks forward at 0.3 m/s for ``walk`` cycles (its ``walk_command``), then
+    holds every joint still for 10 cycles."""
+
+    def __init__(self, robot_type: int, walk: int) -> None:
+        from robocup_gym.robot.nao import nao_model
+
+        self.walk, self.walked, self.played = walk, 0, 0
+        self.size = len(nao_model(robot_type).effector_names)
+
+    def walk_command(self, p):
+        if self.walked == self.walk:
+            return None
+        self.walked += 1
+        return np.array([0.3, 0.0, 0.0])
+
+    def command(self, p):
+        self.played += 1
+        return np.zeros(self.size)
+
+    @property
+    def done(self) -> bool:
+        return self.played >= 10
+
+
+@pytest.fixture
+def stride():
+    """``stride`` registered for the test: 60 cycles of walking, then 10 of holding still."""
+    from robocup_gym.soccer.motions import register_motion_skill, unregister_motion_skill
+
+    started: list[_Stride] = []
+
+    def start(robot_type: int) -> _Stride:
+        started.append(_Stride(robot_type, 60))
+        return started[-1]
+
+    register_motion_skill("stride", start, "walk, then hold still")
+    yield started
+    unregister_motion_skill("stride")
+
+
+def test_a_motion_that_steers_the_walk_walks_then_plays(stride):
+    """A motion with ``walk_command`` walks the player with the game's walk while it returns
+    commands (in the motion's mode), then plays its own commands to its end; an action that
+    no longer starts it stops it while it walks."""
+    env = game_v1.parallel_env(
+        actions="skills", left_types=(0,), right_types=(), max_cycles=10**5, skills=("stride",)
+    )
+    try:
+        env.reset(seed=0)
+        w = env.game.world
+        for _ in range(5):
+            env.step({"left_1": np.zeros(4)})
+        start = w.torso_position(0).copy()
+        go = np.array([0.0, 0.0, 0.0, 1.0])
+        for _ in range(6):  # 60 cycles of walking
+            env.step({"left_1": go})
+            assert env.skills.modes() == ["stride"]
+        assert stride[-1].walked == 60 and stride[-1].played == 0
+        assert w.torso_position(0)[0] - start[0] > 0.1  # it walked forward (+x)
+        env.step({"left_1": go})  # the 10 cycles of its own
+        assert stride[-1].played == 10
+        assert env.skills.modes() == ["walk"]
+        assert len(stride) == 1  # the action while it ran did not start another
+        env.step({"left_1": go})  # a new one, stopped by a walk action while it walks
+        assert env.skills.modes() == ["stride"] and len(stride) == 2
+        env.step({"left_1": np.zeros(4)})
+        assert env.skills.modes() == ["walk"]
+        assert stride[-1].walked == 10 and stride[-1].played == 0
+    finally:
+        env.close()
+
+
+def test_a_game_with_approach_kick_passes_the_api_test():
+    """Random skill actions start, repeat and stop ``approach-kick`` (a motion that steers the
+    walk) at random: the game keeps PettingZoo's parallel API."""
+    env = game_v1.parallel_env(
+        actions="skills",
+        left_types=(0,),
+        right_types=(1,),
+        max_cycles=400,
+        skills=("kick", "approach-kick"),
+        **OMNIDIRECTIONAL,
+    )
+    assert env.skill_action_labels[-3:] == (
+        "approach-kick", "approach-kick.distance", "approach-kick.direction"
+    )  # fmt: skip
+    parallel_api_test(env, num_cycles=40)
+    env.close()
