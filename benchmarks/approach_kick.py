@@ -1,5 +1,7 @@
 """How well does a player kick to a target from where it stands? The ``approach-kick`` motion
-skill: walk to the ball facing the command's direction, then the straight kick of its distance.
+skill: walk to the ball, facing where the kick chosen for the distance sends it along the
+command's direction, then that kick (``--straight``: the library's kick for (distance, 0°)
+facing the command instead).
 
 A one-player game per episode (``game_v1`` with skill actions, ``skills=("approach-kick",)``,
 the referee's rules off, ``--walk``: the omnidirectional ``walk`` by default): the player
@@ -15,6 +17,9 @@ heading), and the action is repeated until the motion ends. Per episode:
 * the time from the command to the player's arrival at the kicking pose, and to the kick's
   contact (the ball's first movement above 0.1 m/s after the arrival);
 * how far the ball was from the kick's spot at the arrival, cm.
+
+``--write-landings`` measures where every kick of the library lands after an approach, on every
+Nao type, and writes the table the choice reads (``robocup_gym/data/approach_kick_landings.json``).
 
 Prints one line per command and, last, one JSON object (``distance_error_median``,
 ``direction_error_deg_median``, ``stand_after_kick_rate``, ``contact_time_s_median``,
@@ -61,9 +66,10 @@ def make_game(robot_type: int, walk: str):
     )
 
 
-def episode(env, seed: int, command: tuple[float, float]) -> dict:
-    """One approach and kick (``command``: distance m, direction deg from the heading)."""
-    from robocup_gym.soccer.motions import KICK_TO_PRELUDE_S, kick_to_values
+def episode(env, seed: int, command: tuple[float, float], kick=None) -> dict:
+    """One approach and kick (``command``: distance m, direction deg from the heading; ``kick``:
+    play this kick of the library, facing the command's direction, instead of the choice)."""
+    from robocup_gym.soccer.motions import KICK_TO_PRELUDE_S, ApproachKick, kick_to_values
 
     rng = np.random.default_rng(seed)
     world = env.game.world
@@ -78,6 +84,9 @@ def episode(env, seed: int, command: tuple[float, float]) -> dict:
     env.game.host.set_ball((spawn[0], spawn[1], BALL_REST_Z), (0.0, 0.0, 0.0))
     action = np.array([0.0, 0.0, 0.0, 1.0, *kick_to_values(*command)])
     player = env.skills.players[0]
+    if kick is not None:
+        motion = ApproachKick(env.skills.robot_types[0], *command, kick=kick)
+        player.mode, player.motion, player.steered = "approach-kick", motion, True
     seen: dict = {"cycle": 0, "arrived": None, "contact": None, "spot_error": None, "shift": None}
     prelude = round(KICK_TO_PRELUDE_S / CYCLE_S)
 
@@ -122,6 +131,9 @@ def episode(env, seed: int, command: tuple[float, float]) -> dict:
         spawn, world.ball_position(), world.ball_velocity(), start_deg, np.array(command)
     )
     out["standing"] = env.skills.modes()[0] == "walk"
+    travel = math.atan2(out["rest_y"] - spawn[1], out["rest_x"] - spawn[0])
+    goes = math.degrees(travel) - start_deg - command[1]
+    out["direction_deg"] = (goes + 180.0) % 360.0 - 180.0  # from where the command points
     out["arrived"] = seen["arrived"] is not None
     out["arrival_time_s"] = None if seen["arrived"] is None else seen["arrived"] * CYCLE_S
     out["contact_time_s"] = None if seen["contact"] is None else seen["contact"] * CYCLE_S
@@ -141,6 +153,60 @@ def _median_pair(values: list) -> list[float] | None:
     return [float(v) for v in np.median(present, axis=0)] if present else None
 
 
+LANDING_EPISODES = 12
+_LANDING_SEED = 20_000
+
+
+def measure_landings(robot_type: int, walk: str = "walk") -> dict[str, list]:
+    """Every kick of the library made for ``robot_type``, played :data:`LANDING_EPISODES` times
+    by ``approach-kick`` facing the command (directions drawn within ±45°, seeds from 20000
+    on): rows of (distance m, direction deg from the player's heading, 1.0 if down 1 s later)."""
+    from robocup_gym.envs.tasks.commanded_kicks import kick_library
+
+    env = make_game(robot_type, walk)
+    out = {}
+    try:
+        for kick in (k for k in kick_library() if robot_type in k.robot_types):
+            rows = []
+            for e in range(LANDING_EPISODES):
+                seed = _LANDING_SEED + e
+                direction = float(np.random.default_rng(seed).uniform(-45.0, 45.0))
+                r = episode(env, seed, (kick.aim[0], direction), kick=kick)
+                rows.append([r["kick_distance_m"], r["direction_deg"], float(not r["standing"])])
+            out[kick.key] = np.round(rows, 4).tolist()
+    finally:
+        env.close()
+    return out
+
+
+def write_landings(jobs: int = 2) -> str:
+    """Measure every type's kicks (:func:`measure_landings`, ``jobs`` processes) and write the
+    table ``robocup_gym.soccer.motions.approach_landings`` reads."""
+    from concurrent.futures import ProcessPoolExecutor
+    from importlib import resources
+
+    from robocup_gym.soccer.motions import APPROACH_LANDINGS_FILE
+
+    types = range(5)
+    with ProcessPoolExecutor(jobs) as pool:
+        landings = dict(zip(map(str, types), pool.map(measure_landings, types), strict=True))
+    doc = {
+        "about": (
+            "Where each kick of the library lands when approach-kick plays it (the "
+            "omnidirectional walk to its pose facing a direction within 45 deg of the heading, "
+            "from 0.6-1.2 m behind the ball), by Nao type and kick (aim distance m / direction "
+            "deg): distance m, direction deg from the player's heading, 1.0 if it was down 1 s "
+            "later; ODE. Written by python benchmarks/approach_kick.py --write-landings."
+        ),
+        "episodes": LANDING_EPISODES,
+        "landings": landings,
+    }
+    path = str(resources.files("robocup_gym.data").joinpath(APPROACH_LANDINGS_FILE))
+    with open(path, "w") as f:
+        f.write(json.dumps(doc, separators=(",", ":")) + "\n")
+    return path
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot-type", type=int, default=0, choices=range(5))
@@ -150,17 +216,37 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument(
         "--distances", type=float, nargs="+", default=DISTANCES_M, help="commanded distances, m"
     )
+    parser.add_argument(
+        "--straight",
+        action="store_true",
+        help="play the library's kick for (distance, 0°), facing the command, instead of the kick "
+        "chosen by its landings after an approach",
+    )
+    parser.add_argument(
+        "--write-landings",
+        action="store_true",
+        help="measure where every kick lands after an approach, on every type, and write the "
+        "package's table (several minutes)",
+    )
     args = parser.parse_args(argv)
+    if args.write_landings:
+        path = write_landings()
+        out = {"written": path}
+        print(json.dumps(out))
+        return out
     if args.episodes < 1:
         parser.error(f"--episodes must be at least 1, got {args.episodes}")
+    from robocup_gym.envs.tasks.commanded_kicks import choose_kick
+
     env = make_game(args.robot_type, args.walk)
     rows, k = [], 0
     try:
         for distance in args.distances:
             for direction in DIRECTIONS_DEG:
                 these = []
+                kick = choose_kick(distance, 0.0, args.robot_type)[0] if args.straight else None
                 for _ in range(args.episodes):
-                    these.append(episode(env, args.seed + k, (distance, direction)))
+                    these.append(episode(env, args.seed + k, (distance, direction), kick))
                     k += 1
                 rows += these
                 print(
@@ -176,6 +262,7 @@ def main(argv: list[str] | None = None) -> dict:
     out = {
         "robot_type": args.robot_type,
         "walk": args.walk,
+        "kicks": "straight" if args.straight else "landings after an approach",
         "episodes": len(rows),
         "distance_error_median": float(np.median([r["distance_error"] for r in rows])),
         "direction_error_deg_median": float(np.median([r["direction_error_deg"] for r in rows])),

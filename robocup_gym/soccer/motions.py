@@ -28,9 +28,11 @@ motion stops it; once it returns ``None`` the motion plays to its end.
 from __future__ import annotations
 
 import functools
+import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from importlib import resources
 from typing import Protocol
 
 import numpy as np
@@ -38,7 +40,12 @@ import numpy as np
 from robocup_gym.envs.actions import ActionMapper, ActionMode
 from robocup_gym.envs.config import resolve_angles
 from robocup_gym.envs.observations import heading_frame, in_heading_frame, turn_to_deg
-from robocup_gym.envs.tasks.commanded_kicks import commanded_kick
+from robocup_gym.envs.tasks.commanded_kicks import (
+    CommandedKick,
+    commanded_kick,
+    kick_library,
+    landing_cost,
+)
 from robocup_gym.envs.tasks.reference_kick import (
     Keyframes,
     ReferenceKickConfig,
@@ -68,6 +75,8 @@ __all__ = [
     "Motion",
     "MotionSkill",
     "ScriptedMotion",
+    "approach_kick_choice",
+    "approach_landings",
     "checked_motion_skills",
     "kick_sequence",
     "kick_to",
@@ -470,21 +479,79 @@ class Approach:
         )
 
 
-class ApproachKick:
-    """``approach-kick``: walk to the ball (:class:`Approach`) facing ``direction_deg`` from the
-    heading the player has when it starts, then play the straight ``kick-to`` of
-    ``distance_m`` (:func:`kick_to`: the library's kick for (``distance_m``, 0°) on this Nao
-    type, after its prelude). It needs the player's ball and pose (the perception's
-    ``ground_truth``: the world's in-process, a player's estimate on a server); without them,
-    or after :data:`APPROACH_MAX_S` without arriving, it ends unplayed (``gave_up``)."""
+APPROACH_LANDINGS_FILE = "approach_kick_landings.json"
 
-    def __init__(self, robot_type: int, distance_m: float, direction_deg: float) -> None:
-        self.spot = kick_to_spot(distance_m, 0.0, robot_type)
+
+@functools.cache
+def approach_landings() -> dict[int, dict[str, np.ndarray]]:
+    """Where each kick of the library lands after an approach (``approach-kick`` with that
+    kick), by Nao type and kick (:attr:`CommandedKick.key`): rows of (distance m, direction deg
+    from the player's heading, 1.0 if it was down 1 s later else 0.0), measured by
+    ``python benchmarks/approach_kick.py --write-landings``."""
+    text = resources.files("robocup_gym.data").joinpath(APPROACH_LANDINGS_FILE).read_text()
+    return {
+        int(t): {key: np.asarray(rows, dtype=float) for key, rows in by_kick.items()}
+        for t, by_kick in json.loads(text)["landings"].items()
+    }
+
+
+def approach_kick_choice(distance_m: float, robot_type: int) -> tuple[CommandedKick, float]:
+    """The kick ``approach-kick`` plays for a distance on a Nao type, and the direction its
+    landings go from the player's heading (deg; the player faces that much to the right of the
+    command's direction): of the library's kicks made for the type, the one whose landings
+    after an approach (:func:`approach_landings`) miss the distance least, with their spread
+    about their median direction and their falls
+    (:func:`~robocup_gym.envs.tasks.commanded_kicks.landing_cost`); the player turns to where a
+    kick goes, so every kick of the library serves every direction.
+
+    Raises:
+        ValueError: a distance that is not a positive finite number, or not a Nao type.
+    """
+    if not (math.isfinite(distance_m) and distance_m > 0.0):
+        raise ValueError(f"a kick's distance must be a positive finite number, got {distance_m!r}")
+    measured = approach_landings().get(robot_type)
+    if measured is None:
+        raise ValueError(f"approach kicks exist for Nao types 0-4, not {robot_type!r}")
+    kicks = [k for k in kick_library() if robot_type in k.robot_types and k.key in measured]
+    rows = np.stack([measured[k.key] for k in kicks])
+    goes = np.median(rows[..., 1], axis=-1)
+    best = int(np.argmin(landing_cost(rows, distance_m, goes)))
+    return kicks[best], float(goes[best])
+
+
+class ApproachKick:
+    """``approach-kick``: walk to the ball (:class:`Approach`) so that a kick sends it
+    ``direction_deg`` from the heading the player has when it starts, then play the kick (after
+    ``kick-to``'s prelude): by default the kick :func:`approach_kick_choice` chooses for
+    ``distance_m``, the player facing where its landings go. It needs the player's ball and
+    pose (the perception's ``ground_truth``: the world's in-process, a player's estimate on a
+    server); without them, or after :data:`APPROACH_MAX_S` without arriving, it ends unplayed
+    (``gave_up``).
+
+    Args:
+        kick: Play this kick of the library instead, the player facing the command's
+            direction (to measure where it lands).
+    """
+
+    def __init__(
+        self,
+        robot_type: int,
+        distance_m: float,
+        direction_deg: float,
+        kick: CommandedKick | None = None,
+    ) -> None:
+        goes = 0.0
+        if kick is None:
+            kick, goes = approach_kick_choice(distance_m, robot_type)
+        self.kick = kick
+        start = ReferenceKickConfig().robot_start_pos  # the kicks were searched from here
+        self.spot = (kick.ball_spot[0] - start[0], kick.ball_spot[1] - start[1])
         """Where the approach brings the ball (ahead, left of the torso, m): the kick's spot.
         Where the walk stops and the prelude's move of the torso leave the ball about cancel
         (medians within 1 cm on every type, ``benchmarks/approach_kick.py``)."""
-        self.direction_deg = float(direction_deg)
-        self._kick = KeyframeMotion(robot_type, commanded_kick(distance_m, 0.0, robot_type)[0])
+        self.direction_deg = float(direction_deg) - goes
+        """Where the player faces, deg from its heading at the start."""
+        self._kick = KeyframeMotion(robot_type, kick.keyframes_for(robot_type))
         self._approach: Approach | None = None
         self.arrived = False
         self.gave_up = False

@@ -34,6 +34,7 @@ __all__ = [
     "commanded_kick",
     "kick_landings",
     "kick_library",
+    "landing_cost",
     "measure_landings",
     "write_landings",
 ]
@@ -136,12 +137,16 @@ def _kicks_for(robot_type: int) -> tuple[tuple[CommandedKick, ...], np.ndarray |
     return kicks, np.stack([by_kick[k.key] for k in kicks])
 
 
-def _cost(landings: np.ndarray, distance_m: float, direction_deg: float) -> np.ndarray:
+def landing_cost(
+    landings: np.ndarray, distance_m: float, direction_deg: float | np.ndarray
+) -> np.ndarray:
     """The median miss of ``landings`` (..., landing, 3) against a command, in units of the
-    tolerances, and the cost of its falls: one number per set of landings."""
+    tolerances, and the cost of its falls: one number per set of landings (``direction_deg``
+    may hold one direction per set)."""
     d, a, down = landings[..., 0], landings[..., 1], landings[..., 2]
+    direction = np.asarray(direction_deg, dtype=float)[..., None]
     miss = ((d - distance_m) / (distance_m * KICK_DISTANCE_TOLERANCE)) ** 2 + (
-        (a - direction_deg) / KICK_DIRECTION_TOLERANCE_DEG
+        (a - direction) / KICK_DIRECTION_TOLERANCE_DEG
     ) ** 2
     return np.median(miss, axis=-1) + _FALL_COST * np.mean(down, axis=-1)
 
@@ -197,7 +202,7 @@ def choose_kick(
     # every kick played both ways, the way the command's side favours first (ties go to it)
     ways = (direction_deg < 0.0, direction_deg >= 0.0)
     rows = np.stack([landings * (1.0, -1.0 if m else 1.0, 1.0) for m in ways], axis=1)
-    best = int(np.argmin(_cost(rows, distance_m, direction_deg)))  # the first of the least
+    best = int(np.argmin(landing_cost(rows, distance_m, direction_deg)))  # the first of the least
     kick, way = divmod(best, len(ways))
     return kicks[kick], ways[way], rows[kick, way]
 
