@@ -21,6 +21,20 @@ from robocup_gym.soccer.motions import (
 )
 
 
+def _perceived(robot_type: int, angles_deg: np.ndarray | None = None):
+    """A Perception of a still Nao of ``robot_type`` with these joint angles (default 0), no
+    ground truth."""
+    from robocup_gym.robot.nao import nao_model
+    from robocup_gym.types import Perception
+
+    model = nao_model(robot_type)
+    angles = np.zeros(len(model.joints)) if angles_deg is None else angles_deg
+    return Perception(
+        time=0.0, game=None, gyro=np.zeros(3), accel=np.zeros(3),
+        joint_names=model.perceptor_names, joint_angles_deg=angles,
+    )  # fmt: skip
+
+
 def test_kick_to_actions_span_the_commanded_kicks():
     assert kick_to_command(-1.0, -1.0) == (2.0, -45.0)
     assert kick_to_command(0.0, 0.5) == (6.0, 22.5)
@@ -40,17 +54,13 @@ def test_a_keyframe_motion_holds_the_pose_then_plays_its_kick():
     then the keyframes' offsets move it; the motion lasts prelude + kick + hold."""
     from robocup_gym.envs.config import PAPER_STANDING_POSE_DEG, resolve_angles
     from robocup_gym.robot.nao import nao_model
-    from robocup_gym.types import Perception
 
     model = nao_model(0)
     pose = resolve_angles(model, PAPER_STANDING_POSE_DEG, "pose")
     keyframes = ((0.0, {}), (0.2, {"rle4": -20.0}), (0.4, {}))
     motion = KeyframeMotion(0, keyframes)
     knee = model.effector_names.index("rle4")
-    seen = Perception(
-        time=0.0, game=None, gyro=np.zeros(3), accel=np.zeros(3),
-        joint_names=model.perceptor_names, joint_angles_deg=pose.copy(),
-    )  # fmt: skip
+    seen = _perceived(0, pose.copy())
     velocities = []
     while not motion.done:
         velocities.append(motion.command(seen)[knee])
@@ -74,13 +84,9 @@ def test_kick_to_kicks_in_a_game_after_walking(run_benchmark):
 
 def test_kick_to_plays_the_kick_of_its_command_and_type():
     from robocup_gym.robot.nao import nao_model
-    from robocup_gym.types import Perception
 
     model = nao_model(4)
-    seen = Perception(
-        time=0.0, game=None, gyro=np.zeros(3), accel=np.zeros(3),
-        joint_names=model.perceptor_names, joint_angles_deg=np.zeros(len(model.joints)),
-    )  # fmt: skip
+    seen = _perceived(4)
     motion, cycles = kick_to(4, 1.0, 0.0), 0
     while not motion.done:
         assert motion.command(seen).shape == (len(model.joints),)  # the toes too
@@ -137,15 +143,9 @@ def test_an_approach_walks_round_to_its_pose_and_stops_there():
 
 def test_approach_kick_without_a_ball_to_see_gives_up():
     """Without the player's pose and ball (no ``ground_truth``) the approach ends unplayed."""
-    from robocup_gym.robot.nao import nao_model
     from robocup_gym.soccer.motions import ApproachKick
-    from robocup_gym.types import Perception
 
-    model = nao_model(0)
-    blind = Perception(
-        time=0.0, game=None, gyro=np.zeros(3), accel=np.zeros(3),
-        joint_names=model.perceptor_names, joint_angles_deg=np.zeros(len(model.joints)),
-    )  # fmt: skip
+    blind = _perceived(0)
     motion = motion_skill("approach-kick").start(0, 0.0, 0.0)
     assert isinstance(motion, ApproachKick) and not motion.done
     assert np.array_equal(motion.walk_command(blind), np.zeros(3))
