@@ -39,6 +39,7 @@ from robocup_gym.soccer.motions import (
     KICK_CYCLES,
     WALK_ACTION_LABELS,
     Motion,
+    MotionSkill,
     checked_motion_skills,
     motion_skill,
 )
@@ -451,7 +452,7 @@ class SkillSet:
                 s.mode, s.motion = skill.name, skill.start(self.robot_types[index], *values)
                 s.steered = callable(getattr(s.motion, "walk_command", None))
 
-    def _asked_motion(self, action: np.ndarray) -> tuple[Any, list[float]] | None:
+    def _asked_motion(self, action: np.ndarray) -> tuple[MotionSkill, list[float]] | None:
         """The motion skill ``action`` starts (the first whose value is above 0.5) and its
         parameters' values, or ``None``."""
         at = len(WALK_ACTION_LABELS)
