@@ -85,8 +85,7 @@ def episode(env, seed: int, command: tuple[float, float], kick=None) -> dict:
     action = np.array([0.0, 0.0, 0.0, 1.0, *kick_to_values(*command)])
     player = env.skills.players[0]
     if kick is not None:
-        motion = ApproachKick(env.skills.robot_types[0], *command, kick=kick)
-        player.mode, player.motion, player.steered = "approach-kick", motion, True
+        player.play("approach-kick", ApproachKick(env.skills.robot_types[0], *command, kick=kick))
     seen: dict = {"cycle": 0, "arrived": None, "contact": None, "spot_error": None, "shift": None}
     prelude = round(KICK_TO_PRELUDE_S / CYCLE_S)
 

@@ -17,8 +17,9 @@ Registered here:
   command (:func:`~robocup_gym.envs.tasks.commanded_kicks.commanded_kick`), after a prelude
   that drives the joints to the crouched pose it starts from (:func:`kick_to`).
 * ``approach-kick`` (parameters ``distance`` and ``direction``): the player walks to where the
-  ball lies at the spot of the straight ``kick-to`` of that distance, facing the direction
-  (:class:`Approach`), then plays that kick (:class:`ApproachKick`).
+  ball lies at the spot of the kick that carries that distance best after an approach, facing
+  so that it goes in that direction (:class:`Approach`), then plays that kick after
+  ``kick-to``'s prelude (:class:`ApproachKick`).
 
 A motion may first steer the walk (:class:`Motion`'s optional ``walk_command``): while it
 returns a walking command the player walks with it, and an action that no longer starts the
@@ -367,9 +368,14 @@ def kick_to_spot(
     left) of the torso's centre in its heading frame, m (the spot the kick was searched with).
     The prelude moves the torso (after walking: 1–3 cm forward, up to ~2 cm sideways, by where
     the walk left the feet), and the kicks are sharp: a ball 3 cm nearer goes ~1.5 m."""
-    _, spot = commanded_kick(distance_m, direction_deg, robot_type)
+    return _from_torso(commanded_kick(distance_m, direction_deg, robot_type)[1])
+
+
+def _from_torso(ball_spot: tuple[float, float]) -> tuple[float, float]:
+    """A kick's ball spot (world x, y, m, for a robot at the kicks' start) as (ahead, left) of
+    the torso's centre, m."""
     start = ReferenceKickConfig().robot_start_pos  # the kicks were searched facing +x from here
-    return float(spot[0] - start[0]), float(spot[1] - start[1])
+    return float(ball_spot[0] - start[0]), float(ball_spot[1] - start[1])
 
 
 def kick_to(robot_type: int, distance: float, direction: float) -> KeyframeMotion:
@@ -432,13 +438,14 @@ class Approach:
         self.spot = (float(spot[0]), float(spot[1]))
         self.direction = float(direction)
         self.line = np.array([math.cos(direction), math.sin(direction)])
+        self.left = np.array([-self.line[1], self.line[0]])
+        """The unit vector to the left of :attr:`line`."""
         self.staged = False
         """Whether it has reached the staging point (and creeps onto the pose)."""
 
     def pose(self, ball: np.ndarray) -> np.ndarray:
         """Where the torso's centre must be (world x, y, m) for a ball at ``ball``."""
-        left = np.array([-self.line[1], self.line[0]])
-        return ball[:2] - self.spot[0] * self.line - self.spot[1] * left
+        return ball[:2] - self.spot[0] * self.line - self.spot[1] * self.left
 
     def command(
         self, pos: np.ndarray, heading: tuple[float, float], ball: np.ndarray
@@ -450,12 +457,11 @@ class Approach:
         if not self.staged:
             target = target - APPROACH_STAGE_M * self.line
             rel = pos[:2] - ball[:2]
-            left_of_line = np.array([-self.line[1], self.line[0]])
-            beside = float(np.dot(rel, left_of_line))
+            beside = float(np.dot(rel, self.left))
             behind = -float(np.dot(rel, self.line))
             if behind < APPROACH_STAGE_M and abs(beside) < APPROACH_ROUND_M:  # round the ball
                 side = 1.0 if beside >= 0.0 else -1.0
-                target = ball[:2] - APPROACH_ROUND_M * (self.line - side * left_of_line)
+                target = ball[:2] - APPROACH_ROUND_M * (self.line - side * self.left)
         d = target - pos[:2]
         dist = float(np.hypot(*d))
         error = turn_to_deg(heading, self.direction)
@@ -544,8 +550,7 @@ class ApproachKick:
         if kick is None:
             kick, goes = approach_kick_choice(distance_m, robot_type)
         self.kick = kick
-        start = ReferenceKickConfig().robot_start_pos  # the kicks were searched from here
-        self.spot = (kick.ball_spot[0] - start[0], kick.ball_spot[1] - start[1])
+        self.spot = _from_torso(kick.ball_spot)
         """Where the approach brings the ball (ahead, left of the torso, m): the kick's spot.
         Where the walk stops and the prelude's move of the torso leave the ball about cancel
         (medians within 1 cm on every type, ``benchmarks/approach_kick.py``)."""
@@ -591,7 +596,8 @@ def approach_kick(robot_type: int, distance: float, direction: float) -> Approac
 register_motion_skill(
     "approach-kick",
     approach_kick,
-    "walk to the ball facing a direction (±45° of the heading at the start), then the straight "
-    "kick-to of a distance (2-10 m); best with the omnidirectional walk",
+    "walk to the ball, then the kick of the library that carries a distance (2-10 m) best after "
+    "an approach, facing so that it goes in a direction (±45° of the heading at the start); "
+    "best with the omnidirectional walk",
     parameters=("distance", "direction"),
 )

@@ -296,9 +296,16 @@ class PlayerSkills:
         self.mode = "walk"
         self.motion: Motion | None = None
         self.steered = False
-        """Whether its motion walks this cycle (the motion's ``walk_command`` gave one)."""
+        """Whether its motion still steers the walk (its ``walk_command`` has not yet returned
+        ``None``)."""
         self.failed_getups = 0
         self.command = np.zeros(3)
+
+    def play(self, name: str, motion: Motion) -> None:
+        """Start ``motion`` (of the motion skill ``name``); one with ``walk_command`` steers the
+        walk first."""
+        self.mode, self.motion = name, motion
+        self.steered = callable(getattr(motion, "walk_command", None))
 
     def see(self, p: Perception) -> None:
         """This cycle's perception, to both skills."""
@@ -449,8 +456,7 @@ class SkillSet:
             s.walk.env.velocity_command[:] = s.command
             if asked is not None:
                 skill, values = asked
-                s.mode, s.motion = skill.name, skill.start(self.robot_types[index], *values)
-                s.steered = callable(getattr(s.motion, "walk_command", None))
+                s.play(skill.name, skill.start(self.robot_types[index], *values))
 
     def _asked_motion(self, action: np.ndarray) -> tuple[MotionSkill, list[float]] | None:
         """The motion skill ``action`` starts (the first whose value is above 0.5) and its
