@@ -16,7 +16,9 @@ heading), and the action is repeated until the motion ends. Per episode:
 * whether the player stands 1 s after the motion;
 * the time from the command to the player's arrival at the kicking pose, and to the kick's
   contact (the ball's first movement above 0.1 m/s after the arrival);
-* how far the ball was from the kick's spot at the arrival, cm.
+* how far the ball was from where the approach brings it at the arrival (the kick's spot,
+  corrected for the type's prelude), cm, and where it lay against the kick's spot when the
+  prelude was over (``kick_offset_cm``: ahead, left).
 
 ``--write-landings`` measures where every kick of the library lands after an approach, on every
 Nao type, and writes the table the choice reads (``robocup_gym/data/approach_kick_landings.json``).
@@ -104,7 +106,7 @@ def episode(env, seed: int, command: tuple[float, float], kick=None) -> dict:
             rel = in_heading_frame(
                 heading_frame(world.torso_quat(0)), *(world.ball_position()[:2] - torso)
             )
-            seen["offset"] = (rel[0] - motion.spot[0], rel[1] - motion.spot[1])
+            seen["offset"] = (rel[0] - motion.kick_spot[0], rel[1] - motion.kick_spot[1])
         if (
             seen["arrived"] is not None
             and seen["contact"] is None

@@ -183,6 +183,21 @@ def test_the_dribble_guide_walks_behind_the_ball_then_through_it():
     assert cmd[2] == 45.0
 
 
+def test_the_dribble_guide_slows_near_the_ball_when_told():
+    from robocup_gym.envs import DribbleConfig
+
+    c = DribbleConfig(guide_speed=1.0, guide_near_m=0.4, guide_near_speed=0.5)
+    ball, target = np.array([0.0, 0.0]), np.array([5.0, 0.0])
+    near = dribble_guide(c, np.array([-0.3, 0.0]), (1.0, 0.0), ball, target)
+    far = dribble_guide(c, np.array([-0.8, 0.0]), (1.0, 0.0), ball, target)
+    assert near == pytest.approx([0.5, 0.0, 0.0])
+    assert far == pytest.approx([1.0, 0.0, 0.0])
+    # off by default: one speed everywhere
+    assert DribbleConfig().guide_near_m == 0.0
+    with pytest.raises(EnvConfigError, match="guide_near_speed"):
+        DribbleConfig(guide_near_speed=float("nan")).validate()
+
+
 def test_dribble_zero_actions_push_the_ball_toward_the_target():
     """The guide and the reference gait alone move the ball toward a target ahead; the episode
     reports the progress, and the task's terms are in the reward."""

@@ -39,6 +39,11 @@ class DribbleConfig(WalkConfig):
     """The ball is lost while farther than this from the torso (ground distance), m."""
     guide_speed: float = 0.5
     """Forward speed the guide commands when the robot faces its aim point, m/s."""
+    guide_near_m: float = 0.0
+    """Within this distance of the ball (torso to ball, on the ground, m) the guide commands
+    ``guide_near_speed`` instead of ``guide_speed``; 0: one speed everywhere."""
+    guide_near_speed: float = 0.5
+    """The guide's speed within ``guide_near_m`` of the ball, m/s."""
     guide_behind: float = 0.2
     """The guide aims this far behind the ball's centre on the line from the target, m."""
     guide_turn_gain: float = 1.5
@@ -69,6 +74,7 @@ class DribbleConfig(WalkConfig):
             )
         for name in (
             "goal_radius", "reach", "guide_speed", "guide_behind", "guide_turn_gain",
+            "guide_near_m", "guide_near_speed",
         ):  # fmt: skip
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0.0):
@@ -91,8 +97,12 @@ def dribble_guide(
     the robot is behind the ball within 0.1 m of that line, a point 0.5 m beyond the ball on it.
     It commands forward ``guide_speed``·cos(bearing of the aim) (not backward), sideways
     ``guide_speed``·sin(bearing) within ±0.3 m/s, and a turn of ``guide_turn_gain`` × the
-    heading error toward the ball-to-target direction within ±45°/s."""
+    heading error toward the ball-to-target direction within ±45°/s; within ``guide_near_m``
+    of the ball ``guide_near_speed`` instead of ``guide_speed``."""
     c = config
+    speed = c.guide_speed
+    if float(np.hypot(*(ball_xy - robot_xy))) < c.guide_near_m:
+        speed = c.guide_near_speed
     to_target = target_xy - ball_xy
     length = float(np.hypot(*to_target))
     u = to_target / length if length > 1e-9 else np.array([heading[0], heading[1]])
@@ -107,8 +117,8 @@ def dribble_guide(
     error = turn_to_deg(heading, math.atan2(u[1], u[0]))
     return np.array(
         [
-            c.guide_speed * max(0.0, math.cos(bearing)),
-            float(np.clip(c.guide_speed * math.sin(bearing), -0.3, 0.3)),
+            speed * max(0.0, math.cos(bearing)),
+            float(np.clip(speed * math.sin(bearing), -0.3, 0.3)),
             float(np.clip(c.guide_turn_gain * error, -45.0, 45.0)),
         ]
     )
