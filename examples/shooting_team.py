@@ -4,8 +4,9 @@ games against the scripted team.
 
     python examples/shooting_team.py --games 20
 
-The game lists the motion skills the teams may start (``skills=("kick", "approach-kick")``) and
-uses the omnidirectional walk the approach was made for (``walk="walk"``). A team is any
+The team names the game it plays in its ``options`` (as a learnt team's record): the motion
+skills the teams may start (``("kick", "approach-kick")``) and the omnidirectional walk the
+approach was made for (``"walk"``); ``play_match`` sets the game up from them. A team is any
 callable ``team(env, agents, obs) -> {agent: skill action}``; the scripted team's actions are
 fitted to the game's layout (``env.skill_action_labels``), so this team only sets the
 ``approach-kick`` values of its shooter. An approach takes ~10 s: the shooter keeps asking for
@@ -21,10 +22,9 @@ import math
 
 import numpy as np
 
-from robocup_gym.soccer import game_v1
+from robocup_gym.soccer.match import GameResult, play_match
 from robocup_gym.soccer.motions import kick_to_values
 from robocup_gym.soccer.scripted import ScriptedTeam
-from robocup_gym.train.metrics import mean_ci95
 
 FREE_M = 2.5
 """A ball with no opponent within this distance (m) is free: the shooter may start."""
@@ -51,16 +51,23 @@ class ShootingTeam(ScriptedTeam):
 
     def __init__(self) -> None:
         super().__init__()
+        self.options = {"skills": ("kick", "approach-kick"), "walk": "walk"}
+        """The game it plays: the motion skills it may start and the walk the approach was
+        made for (``play_match`` sets the game up from a team's ``options``)."""
         self.shooting: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         """Each shooter's ``approach-kick`` values, which it keeps asking for, and where the
         ball was when it started."""
         self.shots = 0
         """Approaches started."""
+        self._game_time = 0.0
 
     def __call__(self, env, agents, obs=None):
         out = super().__call__(env, agents, obs)
         if not agents:
             return out
+        if env.game.referee.game_time < self._game_time:  # a new game: no shot goes on
+            self.shooting.clear()
+        self._game_time = env.game.referee.game_time
         view = env.team_view(agents)
         at = env.skill_action_labels.index("approach-kick")
         nearest_opponent = min(
@@ -102,56 +109,18 @@ class ShootingTeam(ScriptedTeam):
         return np.array([1.0, *kick_to_values(min(distance + 2.5, 10.0), turn)])
 
 
-def play(games: int, seed: int = 0, seconds: float = 120.0) -> list[tuple[int, int]]:
-    """``games`` games of the shooting team against the scripted team (changing sides every
-    game, game k seeded ``seed + k``): the shooting team's (goals for, goals against)."""
-    env = game_v1.parallel_env(
-        actions="skills",
-        skills=("kick", "approach-kick"),
-        walk="walk",
-        walk_faces_x=False,
-        max_cycles=round(seconds / 0.02),
-    )
-    shooting, scripted = ShootingTeam(), ScriptedTeam()
-    results = []
-    try:
-        for k in range(games):
-            side = "left" if k % 2 == 0 else "right"
-            shooting.shooting.clear()
-            obs, _ = env.reset(seed=seed + k)
-            while env.agents:
-                mine = [n for n in env.agents if n.startswith(side)]
-                theirs = [n for n in env.agents if not n.startswith(side)]
-                obs, *_ = env.step({**shooting(env, mine, obs), **scripted(env, theirs, obs)})
-            g = env.game.world.game
-            score = (g.score_left, g.score_right)
-            results.append(score if side == "left" else score[::-1])
-            print(f"game {k}: {results[-1][0]}:{results[-1][1]} ({shooting.shots} shots so far)")
-    finally:
-        env.close()
-    return results
-
-
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--games", type=int, default=20)
     p.add_argument("--seed", type=int, default=0)
     args = p.parse_args()
-    results = play(args.games, args.seed)
-    diffs = np.array([f - a for f, a in results], float)
-    print(
-        json.dumps(
-            {
-                "games": len(results),
-                "wins": int((diffs > 0).sum()),
-                "draws": int((diffs == 0).sum()),
-                "losses": int((diffs < 0).sum()),
-                "goals_for": sum(f for f, _ in results),
-                "goals_against": sum(a for _, a in results),
-                "goal_difference_ci95": mean_ci95(diffs),
-            }
-        )
-    )
+    team = ShootingTeam()
+
+    def on_game(k: int, game: GameResult) -> None:
+        print(f"game {k}: {game.goals_for}:{game.goals_against} ({team.shots} shots so far)")
+
+    result = play_match(team, "scripted", games=args.games, seed=args.seed, on_game=on_game)
+    print(json.dumps(result.summary))
 
 
 if __name__ == "__main__":

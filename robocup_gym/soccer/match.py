@@ -39,13 +39,16 @@ Team = Callable[[Any, list[str], dict[str, np.ndarray]], dict[str, np.ndarray]]
 """A team: ``team(env, agents, obs) → {agent: skill action}``."""
 
 
-def make_team(spec: str) -> Team:
+def make_team(spec: str | Team) -> Team:
     """A team by name: ``scripted``, ``standing``, a team run's folder, an exported team policy
-    (``.onnx``) or a shipped one (``pretrained:NAME``).
+    (``.onnx``) or a shipped one (``pretrained:NAME``); a team object (a callable
+    ``team(env, agents, obs)``) is itself.
 
     Raises:
         ValueError: an unknown team (naming the known ones), or a policy that is not a team's.
     """
+    if not isinstance(spec, str) and callable(spec):
+        return spec
     cls = TEAMS.get(spec)
     if cls is not None:
         return cls()
@@ -109,9 +112,15 @@ class MatchResult:
         }
 
 
+def _team_name(spec: str | Team) -> str:
+    """How a match names a team: its name as given, or a team object's ``name`` (else its
+    class's)."""
+    return spec if isinstance(spec, str) else str(getattr(spec, "name", type(spec).__name__))
+
+
 def play_match(
-    team_a: str,
-    team_b: str,
+    team_a: str | Team,
+    team_b: str | Team,
     *,
     games: int = 20,
     players: int | None = None,
@@ -124,7 +133,9 @@ def play_match(
     scenario: str = "game",
     walk: str | None = None,
 ) -> MatchResult:
-    """Play ``games`` games of ``team_a`` against ``team_b``.
+    """Play ``games`` games of ``team_a`` against ``team_b`` (each a name, as
+    :func:`make_team` takes, or a team object; the game lists the motion skills and walk a
+    team's ``options`` names, as a learnt team's do).
 
     Args:
         players: Players a side (1–11; default 2; a penalty has 1).
@@ -156,7 +167,7 @@ def play_match(
     a, b, types = _match_setup(team_a, team_b, scenario, games, players, seconds, robot_types, seed)
     walk = walk_of_teams(a, b, asked=walk)
     cycles = round(seconds / 0.02)
-    result = MatchResult(team_a, team_b)
+    result = MatchResult(_team_name(team_a), _team_name(team_b))
     recorder = None
     if video is not None:
         from robocup_gym.train.evaluate import FrameRecorder, check_renderer, ensure_gl_backend
@@ -209,8 +220,8 @@ def play_match(
 
 
 def _match_setup(
-    team_a: str,
-    team_b: str,
+    team_a: str | Team,
+    team_b: str | Team,
     scenario: str,
     games: int,
     players: int,

@@ -299,3 +299,26 @@ def test_a_match_can_be_played_with_the_omnidirectional_walk():
         app, ["match", "scripted", "standing", "--walk", "walk", "--on", "serve"]
     )
     assert served.exit_code == 1 and "--walk is for in-process" in served.output
+
+
+def test_a_match_plays_a_team_object_in_the_game_its_options_name():
+    """A team object plays as a named team does; its ``options`` (as a learnt team records
+    them) set the game's motion skills and walk; the result names it by its ``name``."""
+    from robocup_gym.soccer.scripted import StandingTeam
+
+    seen = {}
+
+    class Team(StandingTeam):
+        name = "mine"
+
+        def __init__(self) -> None:
+            self.options = {"skills": ("kick", "approach-kick"), "walk": "walk"}
+
+        def __call__(self, env, agents, obs=None):
+            seen["labels"], seen["walk"] = env.skill_action_labels, env.config.walk
+            return super().__call__(env, agents, obs)
+
+    result = play_match(Team(), "scripted", games=1, seconds=1.0)
+    assert result.summary["team_a"] == "mine" and result.summary["team_b"] == "scripted"
+    assert seen["labels"][3:5] == ("kick", "approach-kick")
+    assert seen["walk"] == "walk"
