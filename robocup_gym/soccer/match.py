@@ -47,8 +47,12 @@ def make_team(spec: str | Team) -> Team:
     Raises:
         ValueError: an unknown team (naming the known ones), or a policy that is not a team's.
     """
-    if not isinstance(spec, str) and callable(spec):
-        return spec
+    if not isinstance(spec, str):
+        if callable(spec):
+            return spec
+        raise ValueError(
+            f"a team is a name or a callable team(env, agents, obs), got {type(spec).__name__}"
+        )
     cls = TEAMS.get(spec)
     if cls is not None:
         return cls()

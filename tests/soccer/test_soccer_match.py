@@ -322,3 +322,5 @@ def test_a_match_plays_a_team_object_in_the_game_its_options_name():
     assert result.summary["team_a"] == "mine" and result.summary["team_b"] == "scripted"
     assert seen["labels"][3:5] == ("kick", "approach-kick")
     assert seen["walk"] == "walk"
+    with pytest.raises(ValueError, match=r"a team is a name or a callable.*got int"):
+        play_match(42, "scripted", games=1)
