@@ -17,12 +17,13 @@ except ImportError:  # pragma: no cover - the CLI needs the train extra
     typer = None
 
 if typer is not None:
-    from robocup_gym.cli.app import app, experiments_app
+    from robocup_gym.cli.app import app, experiments_app, summarise_commands
     from robocup_gym.cli.common import _click
     from robocup_gym.cli.options import _NOT_TRAIN_OPTIONS
 
     for _commands in ("training", "game"):  # they register on `app`, in --help's order
         importlib.import_module(f"robocup_gym.cli.{_commands}")
+    summarise_commands(app, experiments_app)
 
 _MISSING_EXTRA = (
     "robocup-gym's command line needs the training extra: pip install -e '.[train]' "

@@ -1,6 +1,8 @@
 """The ``robocup-gym`` command group and its ``experiments`` subgroup; the commands register
 themselves on them (:mod:`robocup_gym.cli.training`, :mod:`robocup_gym.cli.game`)."""
 
+import inspect
+
 import typer
 
 app = typer.Typer(
@@ -18,3 +20,15 @@ experiments_app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(experiments_app, name="experiments")
+
+
+def summarise_commands(*groups: typer.Typer) -> None:
+    """Give every command of ``groups`` that has none a one-line summary for the groups' command
+    lists: its docstring's first paragraph on one line (rich's help keeps a docstring's line
+    breaks there, which then split the list's sentences mid-way)."""
+    for group in groups:
+        for info in group.registered_commands:
+            doc = info.help or (info.callback.__doc__ if info.callback else None) or ""
+            doc = inspect.cleandoc(doc)
+            if info.short_help is None and doc:
+                info.short_help = " ".join(doc.split("\n\n")[0].split())

@@ -314,6 +314,25 @@ def test_unknown_task_is_a_clear_error(tmp_path):
     assert "unknown task" in result.output and "velocity-kick" in result.output
 
 
+def test_the_command_list_gives_each_command_its_summary_on_whole_lines():
+    """``robocup-gym --help`` lists each command with its docstring's first paragraph, its
+    sentences unbroken by the docstring's line breaks."""
+    from typer.testing import CliRunner
+
+    from robocup_gym.cli import app
+
+    wide = {"TERMINAL_WIDTH": "200", "COLUMNS": "200"}
+    out = CliRunner().invoke(app, ["--help"], env=wide).output
+    rows = [line for line in out.splitlines() if line.startswith("│ ")]
+    train = next(k for k, line in enumerate(rows) if line.split()[1] == "train")
+    text = " ".join(line.strip("│ ").strip() for line in rows[train : train + 3])
+    # at 200 columns the summary wraps only at the panel's edge, never after "or a team"
+    assert "Stable-Baselines3 (defaults: the paper's PPO setup), or a team on a team" in text
+    assert rows[train + 1].split()[1] != "on"
+    exp = CliRunner().invoke(app, ["experiments", "--help"], env=wide).output
+    assert "(PPO vs SAC, SimpleKick vs VelocityKick, wall-clock vs workers)" in exp
+
+
 def test_tiny_ppo_flags_are_valid():
     assert TINY_PPO.count("--hp") == 4
 
