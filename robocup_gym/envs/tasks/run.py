@@ -119,7 +119,7 @@ class Run(Walk):
     torso's speed along the heading the episode started with (``w_progress``; the distance
     covered that way, as FC Portugal's running gym pays), so turning away or falling early costs
     distance. The shipped ``run`` policy, learnt on it, runs 1.77 m/s over its ± 30° residual
-    window and 1.67 m/s over the ± 26° it is shipped with (docs/results.md), where PPO on
+    window and 1.55 m/s over the ± 22° it is shipped with on type 0 (docs/results.md), where PPO on
     Run-v0's tracking reward stayed below the reference gait's 0.65 m/s.
 
     Version history:
