@@ -248,10 +248,11 @@ def test_the_shipped_run_runs_straight_ahead_at_over_a_metre_a_second():
     assert "run" in pretrained_names()
     meta = describe("run")
     assert meta["env_config"]["w_progress"] > 0.0 and meta["env_config"]["reference_gait"]
-    policy = pretrained_policy("run")
     for robot_type, seeds in ((0, (0, 1)), (4, (0,))):
-        env = pretrained_env(policy, "ode")
+        policy = pretrained_policy("run", robot_type)  # type 4: the shared network, its window
+        env = pretrained_env(policy, "ode", {"robot_type": robot_type})
         u = env.unwrapped
+        assert u.config.robot_type == robot_type
         try:
             for seed in seeds:
                 obs, _ = env.reset(seed=seed)
