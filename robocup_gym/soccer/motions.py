@@ -429,9 +429,11 @@ APPROACH_SPOT_CORRECTION: dict[int, tuple[float, float]] = {3: (0.025, 0.013)}
 """Added to a kick's spot for the approach of a Nao type (ahead, left, m), so that the ball
 lies at the spot when the prelude is over: where the prelude left it, measured
 (``benchmarks/approach_kick.py``'s ``kick_offset_cm_median``, seeds 5000 on). Type 3's torso
-moves 3–3.5 cm forward in the prelude (the others' 1–1.5 cm, about what the walk's stop leaves
-in front): its ball lay 2.5 cm nearer and 1.3 cm right of the spot. The other types' medians
-are within 1 cm of it (uncorrected)."""
+moves about 3 cm forward in the prelude after the omnidirectional walk (the others' 1–1.5 cm,
+about what the walk's stop leaves in front): its ball lay 2.5 cm nearer and 1.3 cm right of the
+spot (with the corrected approach 0.4 cm). The other types' medians are within 1 cm of it
+(uncorrected). The prelude's move depends on how the walk stops: measure again after changing
+a type's walk."""
 
 
 class Approach:

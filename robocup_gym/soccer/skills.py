@@ -356,7 +356,9 @@ class SkillSet:
             ``game-walk`` (a 3 Hz walk: up to 0.8 m/s forward, 0.3 m/s sideways, 45°/s), the
             walk the scripted team's play and the game's figures are measured with; the
             omnidirectional ``walk`` (faster, and turning 60°/s) plays the ball differently,
-            which the scripted team is not tuned to; it runs with ``walk_faces_x=False``.
+            which the scripted team is not tuned to; it runs with ``walk_faces_x=False``. A
+            player whose Nao type has a walk of its own under that name
+            (:func:`~robocup_gym.train.pretrained.pretrained_types`) walks with it.
         motions: The registered motion skills (:func:`register_motion_skill`) the players
             can start, in the order of their values in a skill action (:attr:`action_labels`).
         self_collisions: Whether the world runs rcssserver3d's self-collision rule (a real
@@ -379,7 +381,8 @@ class SkillSet:
         walk_faces_x: bool = True,
         motions: Sequence[str] = DEFAULT_MOTION_SKILLS,
     ) -> None:
-        from robocup_gym.train.pretrained import pretrained_env, pretrained_policy
+        from robocup_gym.train.onnx_policy import OnnxPolicy
+        from robocup_gym.train.pretrained import pretrained_env, pretrained_path, pretrained_policy
 
         self.robot_types = tuple(int(t) for t in robot_types)
         self.motions = {name: motion_skill(name) for name in checked_motion_skills(motions)}
@@ -388,6 +391,13 @@ class SkillSet:
         self.action_what = skill_action_what(tuple(self.motions))
         """How error messages describe a skill action of this game."""
         self.walk_policy = pretrained_policy(walk)
+        """The walk's shared policy (the one of every type without its own)."""
+        loaded = {self.walk_policy.path: self.walk_policy}
+        self.walk_policies: dict[int, OnnxPolicy] = {}
+        """The policy each Nao type of the game walks with (a type's own where one ships)."""
+        for t in sorted(set(self.robot_types)):
+            path = pretrained_path(walk, t)
+            self.walk_policies[t] = loaded.setdefault(path, OnnxPolicy(path))
         if walk_faces_x and runs_a_command_loop(walk):
             raise ValueError(
                 f"the walk {walk!r} runs a command loop that holds the torso's heading, which "
@@ -400,7 +410,7 @@ class SkillSet:
         for index, t in enumerate(self.robot_types):
             made = {}
             for skill, policy, extra in (
-                ("walk", self.walk_policy, {"command_change_steps": 0}),
+                ("walk", self.walk_policies[t], {"command_change_steps": 0}),
                 ("get-up", self.getup_policy, {"self_collisions": True} if self_collisions else {}),
             ):
                 made[skill] = self._maker(pretrained_env, policy, skill, index, t, extra)
@@ -458,6 +468,12 @@ class SkillSet:
                 skill, values = asked
                 s.play(skill.name, skill.start(self.robot_types[index], *values))
 
+    def _policy(self, mode: str, index: int):
+        """The policy player ``index`` plays in ``mode`` (``walk`` or ``get-up``)."""
+        if mode == "walk":
+            return self.walk_policies[self.robot_types[index]]
+        return self.getup_policy
+
     def _asked_motion(self, action: np.ndarray) -> tuple[MotionSkill, list[float]] | None:
         """The motion skill ``action`` starts (the first whose value is above 0.5) and its
         parameters' values, or ``None``."""
@@ -477,14 +493,18 @@ class SkillSet:
                 s.steered = command is not None
                 if s.steered:
                     s.walk.env.velocity_command[:] = command
-        for mode, policy in (("walk", self.walk_policy), ("get-up", self.getup_policy)):
+        for mode in ("walk", "get-up"):
             group = [s for s in self.players if s.mode == mode or (mode == "walk" and s.steered)]
             if not group:
                 continue
             skill = "walk" if mode == "walk" else "getup"
-            trained = [s for s in group if s.index in self.uses_policy[mode]]
+            batches: dict[int, tuple[Any, list[PlayerSkills]]] = {}  # by policy, in one batch
+            for s in group:
+                if s.index in self.uses_policy[mode]:
+                    policy = self._policy(mode, s.index)
+                    batches.setdefault(id(policy), (policy, []))[1].append(s)
             actions = {}
-            if trained:
+            for policy, trained in batches.values():
                 batch = np.stack([getattr(s, skill).obs for s in trained])
                 for s, a in zip(trained, policy(batch), strict=True):
                     actions[s.index] = a

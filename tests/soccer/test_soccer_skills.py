@@ -294,6 +294,43 @@ def test_a_walk_with_a_command_loop_is_refused_a_turned_view():
         game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk=3)
 
 
+def test_a_player_walks_with_its_types_own_walk():
+    """A Nao type with a walk of its own under the game's walk's name (``walk`` on type 3:
+    the shared network over a narrower window) walks with it; the other types with the shared
+    one; each policy's players in one batch. Both walk where they are told."""
+    env = game_v1.parallel_env(
+        actions="skills", left_types=(3, 0, 0), right_types=(), max_cycles=10**5, **OMNIDIRECTIONAL
+    )
+    try:
+        skills = env.skills
+        assert skills.walk_policies[0] is skills.walk_policy
+        assert skills.walk_policies[3].path.name == "walk.type3.onnx"
+        windows = [p.walk.env.config.target_around_start_deg for p in skills.players]
+        assert windows == [26.0, 30.0, 30.0]
+        batches = []
+
+        def counted(policy):
+            def act(obs):
+                batches.append((policy.path.name, len(obs)))
+                return policy(obs)
+
+            return act
+
+        skills.walk_policies = {t: counted(p) for t, p in skills.walk_policies.items()}
+        env.reset(seed=0)
+        w = env.game.world
+        start = [w.torso_position(k).copy() for k in range(3)]
+        for _ in range(25):  # 5 s at 0.5 m/s forward (the left team faces +x)
+            env.step({a: np.array([0.625, 0.0, 0.0, 0.0]) for a in env.agents})
+        for k in (0, 2):  # (the second player starts at the ball, and walks into it)
+            moved = w.torso_position(k) - start[k]
+            assert moved[0] > 2.0 and abs(moved[1]) < 1.0, (k, moved)
+            assert w.torso_position(k)[2] > 0.3, k  # still up
+        assert set(batches) == {("walk.onnx", 2), ("walk.type3.onnx", 1)}
+    finally:
+        env.close()
+
+
 class _Stride:
     """A motion that walks forward at 0.3 m/s for ``walk`` cycles (its ``walk_command``), then
     holds every joint still for 10 cycles."""

@@ -168,18 +168,26 @@ def test_the_walk_goes_where_it_is_told_and_stands_when_told(name):
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
-def test_the_walk_meets_the_omnidirectional_targets():
+@pytest.mark.parametrize("robot_type", [0, 3])
+def test_the_walk_meets_the_omnidirectional_targets(robot_type):
     """The shipped ``walk`` (its command loop on, as recorded) by ``benchmarks/walk.py
-    --tracking``'s measure over 4 episodes: over seconds 4 to 10, 0.8 m/s forward, 0.4 m/s to
-    the left and 60°/s each within 10 %; told to stop, slower than 0.05 m/s; no fall."""
+    --tracking``'s measure (type 0 over 4 episodes; type 3 over the benchmark's 10, whose
+    mean the documented figures are): over seconds 4 to 10, 0.8 m/s forward, 0.4 m/s to the left
+    and 60°/s each within 10 %; told to stop, slower than 0.05 m/s; no fall. Nao type 3 plays a
+    file of its own: the shared network over ± 26° of its ± 30° window (steadier on that type at
+    middle speeds; one 10 s episode's drift at 0.8 m/s can be 10–20 % of the command)."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
     from walk import tracking
 
-    policy = pretrained_policy("walk")
-    assert policy.metadata["env_config"]["command_feedback_gain"] > 0.0
+    assert pretrained_types("walk") == [3]
+    policy = pretrained_policy("walk", robot_type)
+    config = policy.metadata["env_config"]
+    assert config["command_feedback_gain"] > 0.0
+    assert config["robot_type"] == robot_type
+    assert config["target_around_start_deg"] == (26 if robot_type == 3 else 30)
     env = pretrained_env(policy, "ode")
     try:
-        out = tracking(env, policy, episodes=4, seed=0)
+        out = tracking(env, policy, episodes=4 if robot_type == 0 else 10, seed=0)
     finally:
         env.close()
     assert out["meets_tracking_target"], out
