@@ -397,7 +397,9 @@ class SkillSet:
         """The policy each Nao type of the game walks with (a type's own where one ships)."""
         for t in sorted(set(self.robot_types)):
             path = pretrained_path(walk, t)
-            self.walk_policies[t] = loaded.setdefault(path, OnnxPolicy(path))
+            if path not in loaded:
+                loaded[path] = OnnxPolicy(path)
+            self.walk_policies[t] = loaded[path]
         if walk_faces_x and runs_a_command_loop(walk):
             raise ValueError(
                 f"the walk {walk!r} runs a command loop that holds the torso's heading, which "
