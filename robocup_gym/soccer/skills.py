@@ -500,13 +500,12 @@ class SkillSet:
             if not group:
                 continue
             skill = "walk" if mode == "walk" else "getup"
-            batches: dict[int, tuple[Any, list[PlayerSkills]]] = {}  # by policy, in one batch
+            batches: dict[Any, list[PlayerSkills]] = {}  # each policy's players, one batch
             for s in group:
                 if s.index in self.uses_policy[mode]:
-                    policy = self._policy(mode, s.index)
-                    batches.setdefault(id(policy), (policy, []))[1].append(s)
+                    batches.setdefault(self._policy(mode, s.index), []).append(s)
             actions = {}
-            for policy, trained in batches.values():
+            for policy, trained in batches.items():
                 batch = np.stack([getattr(s, skill).obs for s in trained])
                 for s, a in zip(trained, policy(batch), strict=True):
                     actions[s.index] = a
