@@ -382,7 +382,14 @@ class SkillSet:
         motions: Sequence[str] = DEFAULT_MOTION_SKILLS,
     ) -> None:
         from robocup_gym.train.onnx_policy import OnnxPolicy
-        from robocup_gym.train.pretrained import pretrained_env, pretrained_path, pretrained_policy
+        from robocup_gym.train.pretrained import (
+            describe,
+            pretrained_env,
+            pretrained_names,
+            pretrained_path,
+            pretrained_policy,
+        )
+        from robocup_gym.train.tasks import task_name
 
         self.robot_types = tuple(int(t) for t in robot_types)
         self.motions = {name: motion_skill(name) for name in checked_motion_skills(motions)}
@@ -392,6 +399,12 @@ class SkillSet:
         """How error messages describe a skill action of this game."""
         self.walk_policy = pretrained_policy(walk)
         """The walk's shared policy (the one of every type without its own)."""
+        if task_name(self.walk_policy.metadata.get("env_id", "")) != "walk":
+            walks = [n for n in pretrained_names() if task_name(describe(n)["env_id"]) == "walk"]
+            raise ValueError(
+                f"{walk!r} is not a walk (a policy of the Walk task, which follows a walking "
+                f"command); the shipped walks: {', '.join(walks)}"
+            )
         loaded = {self.walk_policy.path: self.walk_policy}
         self.walk_policies: dict[int, OnnxPolicy] = {}
         """The policy each Nao type of the game walks with (a type's own where one ships)."""

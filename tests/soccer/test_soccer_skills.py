@@ -292,6 +292,9 @@ def test_a_walk_with_a_command_loop_is_refused_a_turned_view():
         game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk="walk")
     with pytest.raises(ValueError, match="walk must be the name of a shipped walk"):
         game_v1.parallel_env(actions="skills", left_types=(0,), right_types=(), walk=3)
+    for not_a_walk in ("run", "get-up", "penalty-striker"):  # shipped, but no walk
+        with pytest.raises(ValueError, match=rf"'{not_a_walk}' is not a walk .* game-walk, walk"):
+            SkillSet([0], walk=not_a_walk, walk_faces_x=False)
 
 
 def test_a_player_walks_with_its_types_own_walk():
