@@ -430,6 +430,50 @@ def test_the_command_loop_makes_the_gait_go_where_it_is_told():
     env.close()
 
 
+def test_a_limited_command_grows_gradually_and_drops_at_once():
+    # command_accel_limit: each component's magnitude grows at most by its rate (m/s², deg/s²;
+    # 0: at once) from standing; a smaller command is taken at once, one of the other sign
+    # starts from zero; the command given (reward, info) is unchanged
+    env = Walk(command_change_steps=0, command_accel_limit=(0.5, 1.0, 0.0))
+    zero = np.zeros(env.action_space.shape)
+    sl = env.component_slices["velocity_command"]
+    obs, _ = env.reset(seed=0, options={"velocity_command": (0.4, -0.2, 30.0)})
+    assert env.policy_command is not env.velocity_command
+    for k in range(1, 60):  # the reset's perception is the first cycle
+        told = (min(0.4, 0.01 * k), max(-0.2, -0.02 * k), 30.0)
+        np.testing.assert_allclose(env.policy_command, told, atol=1e-12)
+        raw = (obs[sl] - env._offset[sl]) / env._scale[sl]
+        np.testing.assert_allclose(raw, told, atol=1e-5)
+        obs, _, terminated, _, info = env.step(zero)
+        assert not terminated
+        np.testing.assert_array_equal(info["velocity_command"], (0.4, -0.2, 30.0))
+    env.velocity_command[:] = (0.1, 0.2, -30.0)
+    env.step(zero)
+    np.testing.assert_allclose(env.policy_command, (0.1, 0.02, -30.0), atol=1e-12)
+    env.velocity_command[:] = 0.0
+    env.step(zero)
+    assert not env.policy_command.any()
+    env.close()
+    # with the loop: it works for the limited command, and still takes the walk where told
+    env = Walk(command_change_steps=0, command_feedback_gain=1.0, command_accel_limit=(0.5,) * 3)
+    env.reset(seed=0, options={"velocity_command": (0.4, 0.0, 0.0)})
+    for _ in range(4):
+        env.step(zero)
+        assert 0.0 < env.policy_command[0] <= 0.05
+    speed = _speed_along_x(env, (0.4, 0.0, 0.0))
+    assert abs(speed[0] - 0.4) < 0.01, speed
+    env.close()
+    # a limit set by replacing the config never changes the command given
+    env = Walk(command_change_steps=0)
+    env.reset(seed=0, options={"velocity_command": (0.4, 0.0, 0.0)})
+    env.config = env.config.replace(command_accel_limit=(0.5, 0.5, 0.0))
+    env.velocity_command[:] = (-0.2, 0.0, 0.0)
+    env.step(zero)
+    np.testing.assert_array_equal(env.velocity_command, (-0.2, 0.0, 0.0))
+    np.testing.assert_allclose(env.policy_command, (-0.01, 0.0, 0.0), atol=1e-12)
+    env.close()
+
+
 def test_a_walk_can_be_paid_for_following_the_loops_corrections():
     # track_told_command: the tracking terms compare the motion with the command the policy
     # was told when it acted (the loop's), not the one given
@@ -465,6 +509,9 @@ def test_walk_options_are_validated():
         Walk(standing_command_prob=2.0)
     with pytest.raises(EnvConfigError, match="command_feedback_gain"):
         Walk(command_feedback_gain=math.nan)
+    for bad in ((0.5, -1.0, 0.0), (0.5, 0.5), (0.5, math.inf, 0.0), 0.5):
+        with pytest.raises(EnvConfigError, match="command_accel_limit must be 3"):
+            Walk(command_accel_limit=bad)
     with pytest.raises(EnvConfigError, match="single_axis_command_prob"):
         Walk(single_axis_command_prob=-0.1)
     with pytest.raises(EnvConfigError, match="gait_frequency_hz must be in"):

@@ -195,6 +195,33 @@ def test_the_walk_meets_the_omnidirectional_targets(robot_type):
 
 
 @pytest.mark.skipif(not available(), reason="no libode")
+def test_the_shipped_walk_sets_off_gradually():
+    """The shipped ``walk`` records a limit on its command's growth (0.5 m/s² forward and
+    sideways; type 3's own file none): told 0.5 m/s from standing at once, Nao type 1 fell
+    within 1.5 s of three of the 100 starts of ``benchmarks/walk.py --tracking --seed
+    700000``'s stop test; setting off gradually it walks on from them."""
+    policy = pretrained_policy("walk", 1)
+    recorded = policy.metadata["env_config"]["command_accel_limit"]
+    assert tuple(recorded) == (0.5, 0.5, 0.0)
+    assert "command_accel_limit" not in pretrained_policy("walk", 3).metadata["env_config"]
+    for limit, expected in ((recorded, 0), ((0.0, 0.0, 0.0), 3)):
+        overrides = {"robot_type": 1, "command_change_steps": 0, "command_accel_limit": limit}
+        env = pretrained_env(policy, "ode", overrides)
+        falls = 0
+        try:
+            for seed in (700024, 700029, 700057):
+                obs, _ = env.reset(seed=seed, options={"velocity_command": (0.5, 0.0, 0.0)})
+                for _ in range(100):
+                    obs, _, terminated, _, _ = env.step(policy(obs))
+                    if terminated:
+                        falls += 1
+                        break
+        finally:
+            env.close()
+        assert falls == expected, (limit, falls)
+
+
+@pytest.mark.skipif(not available(), reason="no libode")
 def test_the_command_loop_takes_the_shipped_walk_straight():
     """The walk was trained with its command loop on: without it, told 0.5 m/s forward, it
     turns left (~7°/s); with the loop it goes 0.5 m/s straight (seconds 2 to 8). The game's

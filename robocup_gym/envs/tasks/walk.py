@@ -58,7 +58,7 @@ class WalkConfig(EnvConfig):
         "gait_frequency_hz", "swing_share", "reference_gait", "gait_sway_deg", "gait_lift_deg",
         "gait_stride_deg_per_mps", "gait_stride_max_deg", "gait_side_deg_per_mps",
         "gait_side_max_deg", "gait_turn_deg_per_dps", "gait_turn_max_deg", "gait_lead_s",
-        "command_feedback_gain", "track_told_command", "forward_speed_range",
+        "command_feedback_gain", "command_accel_limit", "track_told_command", "forward_speed_range",
         "sideways_speed_range", "turn_rate_range",
     }  # fmt: skip
     """:class:`EnvConfig`'s, the reference gait's, how the walk takes its command and the
@@ -133,6 +133,13 @@ class WalkConfig(EnvConfig):
     walk that drifts or falls short of the command goes where it is told, as far as those ranges
     allow. The velocity and heading are the torso's, as the ``torso_velocity`` and
     ``torso_orientation`` observations give them; a new command starts the loop afresh."""
+    command_accel_limit: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """How fast the command the walk works for may grow toward the command given: forward and
+    sideways in m/s², turn in deg/s² (0: at once). A command asking for less than the last one
+    (slower, or standing) takes effect at once; one of the other sign starts again from zero.
+    Every episode starts from a standing command, so the walk sets off gradually (setting off
+    at once at 0.5 m/s, the shipped walk fell within 1.5 s in 3 of 100 starts on Nao type 1).
+    The command loop (``command_feedback_gain``) works for the command so limited."""
     track_told_command: bool = False
     """The tracking terms pay for following the command the policy is told (``policy_command``:
     with ``command_feedback_gain``, the command corrected by the loop) instead of the command
@@ -191,6 +198,12 @@ class WalkConfig(EnvConfig):
             and self.command_change_steps >= 0
         ):
             raise EnvConfigError("command_change_steps must be an integer >= 0")
+        accel = self.command_accel_limit
+        if not all(math.isfinite(a) and a >= 0.0 for a in accel):  # 3 numbers: checked before
+            raise EnvConfigError(
+                "command_accel_limit must be 3 finite numbers >= 0 (forward m/s², sideways "
+                f"m/s², turn deg/s²; 0: no limit), got {accel!r}"
+            )
         gain = self.command_feedback_gain
         if not (math.isfinite(gain) and 0.0 <= gain <= 100.0):
             raise EnvConfigError(f"command_feedback_gain must be in [0, 100] 1/s, got {gain!r}")
@@ -401,7 +414,8 @@ class Walk(BaseEnv):
     ``standing_command_prob``, one component alone with ``single_axis_command_prob``) and
     draws a new one every ``command_change_steps`` steps; the command is part of the
     observation (``velocity_command``; with ``command_feedback_gain`` the command corrected by
-    the measured motion, ``policy_command``). The robot starts standing in the crouched walking
+    the measured motion, ``policy_command``; with ``command_accel_limit`` the command grows to
+    the one given gradually). The robot starts standing in the crouched walking
     pose, placed instantly. A fall ends the episode (``terminate_on_fall``).
     Actions are target angles around that pose (± ``target_around_start_deg``) added to a
     reference gait (``reference_gait``: an open-loop stepping pattern, :func:`reference_gait_deg`)
@@ -450,7 +464,11 @@ class Walk(BaseEnv):
         self._air = {"lf": 0.0, "rf": 0.0}
         self._prev_action = np.zeros(self.action_space.shape)
         self._loop_command = np.zeros(3)
-        """The command the loop (``command_feedback_gain``) works for: a change restarts it."""
+        """The command given when the loop (``command_feedback_gain``) last started: a change
+        restarts it."""
+        self._working_command = np.zeros(3)
+        """The command the walk works for: the given one, its growth limited
+        (``command_accel_limit``)."""
         self._loop_integral = np.zeros(2)
         self._loop_heading: float | None = None
         """The heading the command asks for, rad (``None``: the torso's at the next update)."""
@@ -489,13 +507,15 @@ class Walk(BaseEnv):
             cmd = reset_numbers(options, "velocity_command", (3,), what, finite=True)
             self.velocity_command[:] = cmd
         self._loop_command[:] = np.nan  # the loop starts afresh at the first perception
-        # with a loop the policy is told a command of its own; without, the given one (read
-        # at each reset: the config may have been replaced since the last)
-        if not self.config.command_feedback_gain:
+        # the command grows from standing at the first perception
+        self._working_command[:] = self.velocity_command if not self._limits_growth else 0.0
+        # with a loop or a limited growth the policy is told a command of its own; without,
+        # the given one (read at each reset: the config may have been replaced since the last)
+        if not (self.config.command_feedback_gain or self._limits_growth):
             self.policy_command = self.velocity_command
         elif self.policy_command is self.velocity_command:
             self.policy_command = self.velocity_command.copy()
-        self.policy_command[:] = self.velocity_command
+        self.policy_command[:] = self._working_command
         self._gait_command = self.policy_command.copy()
         """The command the reference gait follows (the command, low-pass filtered)."""
         return start
@@ -531,17 +551,44 @@ class Walk(BaseEnv):
         ):
             self._draw_command()
 
+    @property
+    def _limits_growth(self) -> bool:
+        """Whether the command's growth is limited (``command_accel_limit``)."""
+        return any(self.config.command_accel_limit)
+
     def _set_perception(self, p: Perception, cycles: int = 1, episode_over: bool = False) -> None:
         super()._set_perception(p, cycles, episode_over)
-        if self.config.command_feedback_gain and not episode_over:
+        if episode_over:
+            return
+        if self.policy_command is self.velocity_command and (
+            self._limits_growth or self.config.command_feedback_gain
+        ):  # a config replaced since the reset: the command given stays as given
+            self.policy_command = self.velocity_command.copy()
+        if self._limits_growth:
+            self._grow_the_command(cycles * CYCLE_S)
+        if self.config.command_feedback_gain:
             self._close_the_loop(cycles * CYCLE_S)
+        elif self._limits_growth:
+            self.policy_command[:] = self._working_command
+
+    def _grow_the_command(self, dt: float) -> None:
+        """The command the walk works for after ``dt`` s: the given one, each component's
+        magnitude grown by at most ``command_accel_limit`` × ``dt`` (cut at once; across zero
+        from zero)."""
+        given, working = self.velocity_command, self._working_command
+        limit = np.asarray(self.config.command_accel_limit, dtype=float)
+        was = np.where(given * working > 0.0, np.abs(working), 0.0)
+        allowed = np.where(limit > 0.0, was + limit * dt, np.inf)
+        working[:] = np.sign(given) * np.minimum(np.abs(given), allowed)
 
     def _close_the_loop(self, dt: float) -> None:
-        """``policy_command`` from ``velocity_command`` and the torso's motion over the last
-        ``dt`` s (``command_feedback_gain``)."""
-        c, target, gt = self.config, self.velocity_command, self.ground_truth
-        if not np.array_equal(target, self._loop_command):  # a new command: start afresh
-            self._loop_command[:] = target
+        """``policy_command`` from the command the walk works for (``velocity_command``, its
+        growth limited by ``command_accel_limit``) and the torso's motion over the last ``dt``
+        s (``command_feedback_gain``)."""
+        c, gt = self.config, self.ground_truth
+        target = self._working_command if self._limits_growth else self.velocity_command
+        if not np.array_equal(self.velocity_command, self._loop_command):  # a new command
+            self._loop_command[:] = self.velocity_command
             self._loop_integral[:] = 0.0
             self._loop_heading = None
         if gt is None or gt.torso_vel is None or not asks_to_move(target):
