@@ -409,6 +409,11 @@ and heading (deg): a kick wants the ball within ~1 cm of its spot."""
 APPROACH_CREEP = 0.15
 """Share of :data:`APPROACH_LIMITS` on the last part of an approach (nearer than
 :data:`APPROACH_NEAR_M` to the staging point, and after it): a faster walk overshoots."""
+APPROACH_CREEP_MIN_MPS = 0.06
+"""Onto the pose an approach walks at least this fast (m/s; forward, backward or sideways,
+whichever it walks most) until it arrives: the walk takes no step for a command below 0.05 m/s
+(:func:`~robocup_gym.envs.tasks.walk.asks_to_move`), and a slower one left the robot standing
+short of the pose until the approach gave up."""
 APPROACH_NEAR_M = 0.3
 APPROACH_LIMITS = (0.8, 0.3, 0.3, 45.0)
 """An approach's walking command at most: forward, backward and sideways (m/s), turn (deg/s)
@@ -486,13 +491,17 @@ class Approach:
         top = 1.0 if not self.staged and dist > APPROACH_NEAR_M else APPROACH_CREEP
         forward, left = in_heading_frame(heading, d[0], d[1])
         fwd_max, back_max, side_max, turn_max = APPROACH_LIMITS
-        return np.array(
+        command = np.array(
             [
                 np.clip(APPROACH_GAIN * forward, -back_max * top, fwd_max * top),
                 np.clip(APPROACH_GAIN * left, -side_max * top, side_max * top),
                 np.clip(APPROACH_TURN_GAIN * error, -turn_max, turn_max),
             ]
         )
+        most = float(np.max(np.abs(command[:2])))
+        if self.staged and dist >= APPROACH_TOLERANCE[0] and 0.0 < most < APPROACH_CREEP_MIN_MPS:
+            command[:2] *= APPROACH_CREEP_MIN_MPS / most
+        return command
 
 
 APPROACH_LANDINGS_FILE = "approach_kick_landings.json"

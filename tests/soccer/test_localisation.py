@@ -114,7 +114,9 @@ def test_the_gyroscope_turns_the_heading_between_sees():
 
 def test_the_estimate_follows_a_walking_robot():
     """The shipped walk at 0.5 m/s for 4 s on the default engine with the server's vision
-    noise: the estimate's position, heading and velocity (leg odometry) against ground truth."""
+    noise, four walks: the estimate's position, heading and velocity (leg odometry) against
+    ground truth, their medians over every step (one walk's median position error ranges over
+    3–15 cm with the noise's draw)."""
     from robocup_gym.backends import make_backend
     from robocup_gym.envs.observations import heading_frame
     from robocup_gym.soccer.localisation import Estimator
@@ -123,22 +125,23 @@ def test_the_estimate_follows_a_walking_robot():
     policy = pretrained_policy("walk")
     backend = make_backend("ode", vision=True)
     env = pretrained_env(policy, backend, {"command_change_steps": 0}).unwrapped
+    pos, heading, vel = [], [], []
     try:
-        obs, _ = env.reset(seed=1, options={"velocity_command": (0.5, 0.0, 0.0)})
-        start = env.ground_truth
-        est = Estimator(env.robot_model)
-        c, s = heading_frame(start.torso_quat)
-        est.place(start.torso_pos[0], start.torso_pos[1], math.degrees(math.atan2(s, c)))
-        pos, heading, vel = [], [], []
-        for _ in range(200):
-            obs, *_ = env.step(policy(obs[None])[0])
-            gt, e = env.ground_truth, est.update(env.perception)
-            pos.append(float(np.hypot(*(e.torso_pos[:2] - gt.torso_pos[:2]))))
-            (c1, s1), (c2, s2) = heading_frame(gt.torso_quat), heading_frame(e.torso_quat)
-            heading.append(abs(math.degrees(math.atan2(c1 * s2 - s1 * c2, c1 * c2 + s1 * s2))))
-            vel.append(float(np.hypot(*(e.torso_vel[:2] - gt.torso_vel[:2]))))
-            assert abs(e.torso_pos[2] - gt.torso_pos[2]) < 0.02  # the height, from kinematics
-        assert np.median(pos) < 0.1 and np.median(heading) < 0.5 and np.median(vel) < 0.1
-        assert gt.torso_pos[0] - start.torso_pos[0] > 1.5  # it walked
+        for seed in range(1, 5):
+            obs, _ = env.reset(seed=seed, options={"velocity_command": (0.5, 0.0, 0.0)})
+            start = env.ground_truth
+            est = Estimator(env.robot_model)
+            c, s = heading_frame(start.torso_quat)
+            est.place(start.torso_pos[0], start.torso_pos[1], math.degrees(math.atan2(s, c)))
+            for _ in range(200):
+                obs, *_ = env.step(policy(obs[None])[0])
+                gt, e = env.ground_truth, est.update(env.perception)
+                pos.append(float(np.hypot(*(e.torso_pos[:2] - gt.torso_pos[:2]))))
+                (c1, s1), (c2, s2) = heading_frame(gt.torso_quat), heading_frame(e.torso_quat)
+                heading.append(abs(math.degrees(math.atan2(c1 * s2 - s1 * c2, c1 * c2 + s1 * s2))))
+                vel.append(float(np.hypot(*(e.torso_vel[:2] - gt.torso_vel[:2]))))
+                assert abs(e.torso_pos[2] - gt.torso_pos[2]) < 0.02  # the height, from kinematics
+            assert gt.torso_pos[0] - start.torso_pos[0] > 1.5  # it walked
     finally:
         env.close()
+    assert np.median(pos) < 0.1 and np.median(heading) < 0.5 and np.median(vel) < 0.1

@@ -141,6 +141,36 @@ def test_an_approach_walks_round_to_its_pose_and_stops_there():
     assert command[0] < 0.0 and command[1] > 0.0  # back, and to its left (the side it is on)
 
 
+def test_an_approach_creeps_fast_enough_for_the_walk_to_step():
+    """Onto the pose, centimetres from it, the approach walks toward it at least
+    ``APPROACH_CREEP_MIN_MPS`` forward, backward or sideways, whichever most (the walk takes
+    no step below 0.05 m/s, and a robot so told stood short of the pose until the approach
+    gave up); within the tolerance it has arrived."""
+    from robocup_gym.envs.tasks.walk import asks_to_move
+    from robocup_gym.soccer.motions import APPROACH_CREEP_MIN_MPS, APPROACH_TOLERANCE, Approach
+
+    ball = np.array([1.0, 0.0])
+    facing_x = (1.0, 0.0)
+    for offset in ((-0.02, 0.0), (0.0, 0.02), (0.015, -0.015)):  # behind, right, ahead-left
+        approach = Approach((0.2, -0.05), 0.0)
+        pose = approach.pose(ball)
+        approach.command(pose - np.array([0.25, 0.0]), facing_x, ball)  # staged
+        command = approach.command(pose + np.array(offset), facing_x, ball)
+        assert np.max(np.abs(command[:2])) == pytest.approx(APPROACH_CREEP_MIN_MPS)
+        assert asks_to_move(command)
+        toward = -np.array(offset) / np.max(np.abs(offset))
+        assert command[:2] / APPROACH_CREEP_MIN_MPS == pytest.approx(toward)
+        assert command[2] == 0.0
+    inside = pose + np.array([0.5 * APPROACH_TOLERANCE[0], 0.0])
+    assert approach.command(inside, facing_x, ball) is None
+    # farther out it creeps as before, faster than the floor
+    approach = Approach((0.2, -0.05), 0.0)
+    pose = approach.pose(ball)
+    approach.command(pose - np.array([0.25, 0.0]), facing_x, ball)
+    command = approach.command(pose - np.array([0.2, 0.0]), facing_x, ball)
+    assert command[0] > APPROACH_CREEP_MIN_MPS and command[1] == 0.0
+
+
 def test_approach_kick_without_a_ball_to_see_gives_up():
     """Without the player's pose and ball (no ``ground_truth``) the approach ends unplayed."""
     from robocup_gym.soccer.motions import ApproachKick

@@ -91,7 +91,8 @@ def test_a_player_facing_the_other_way_walks_and_turns_as_told(module, options):
     assert env.skills.modes() == ["walk"]
     env.close()
     if module is game_v1:
-        assert moved[0] < -2.4 and abs(moved[1]) < 0.5, moved
+        sets_off = "walk" in options  # the omnidirectional walk sets off over 1 s
+        assert moved[0] < (-2.1 if sets_off else -2.4) and abs(moved[1]) < 0.5, moved
         assert turned < -40.0, turned
     else:
         assert abs(moved[1]) > 0.6 or turned > -20.0, (moved, turned)
