@@ -53,6 +53,7 @@ from robocup_gym.envs.tasks.reference_kick import (
     kick_offsets_deg,
     kick_table,
 )
+from robocup_gym.envs.tasks.walk import MOVING_SPEED_MPS
 from robocup_gym.robot.nao import nao_model
 from robocup_gym.sim.fidelity import load_data
 from robocup_gym.sim.physics import CYCLE_S
@@ -409,11 +410,11 @@ and heading (deg): a kick wants the ball within ~1 cm of its spot."""
 APPROACH_CREEP = 0.15
 """Share of :data:`APPROACH_LIMITS` on the last part of an approach (nearer than
 :data:`APPROACH_NEAR_M` to the staging point, and after it): a faster walk overshoots."""
-APPROACH_CREEP_MIN_MPS = 0.06
-"""Onto the pose an approach walks at least this fast (m/s; forward, backward or sideways,
-whichever it walks most) until it arrives: the walk takes no step for a command below 0.05 m/s
-(:func:`~robocup_gym.envs.tasks.walk.asks_to_move`), and a slower one left the robot standing
-short of the pose until the approach gave up."""
+APPROACH_CREEP_MIN_MPS = 1.2 * MOVING_SPEED_MPS
+"""Onto the pose an approach walks at least this fast (0.06 m/s; forward, backward or sideways,
+whichever it walks most) until it arrives: the walk takes no step for a slower command
+(:data:`~robocup_gym.envs.tasks.walk.MOVING_SPEED_MPS`), and one left the robot standing short
+of the pose until the approach gave up."""
 APPROACH_NEAR_M = 0.3
 APPROACH_LIMITS = (0.8, 0.3, 0.3, 45.0)
 """An approach's walking command at most: forward, backward and sideways (m/s), turn (deg/s)

@@ -25,6 +25,8 @@ from robocup_gym.sim.physics import CYCLE_S
 from robocup_gym.types import Perception
 
 __all__ = [
+    "MOVING_SPEED_MPS",
+    "MOVING_TURN_DPS",
     "WALK_OBSERVATIONS",
     "Walk",
     "WalkConfig",
@@ -261,10 +263,20 @@ def capped(value: float, cap: float | None) -> float:
     return value if cap is None else min(value, cap)
 
 
+MOVING_SPEED_MPS = 0.05
+"""A command asks the walk to step when its forward or sideways speed is above this (m/s) …"""
+MOVING_TURN_DPS = 3.0
+"""… or its turn rate above this (deg/s); otherwise the reference gait eases out and it stands."""
+
+
 def asks_to_move(command: np.ndarray) -> bool:
-    """Whether a command (forward m/s, left m/s, turn deg/s) asks to move: more than 0.05 m/s
-    or 3 deg/s."""
-    return bool(abs(command[0]) > 0.05 or abs(command[1]) > 0.05 or abs(command[2]) > 3.0)
+    """Whether a command (forward m/s, left m/s, turn deg/s) asks to move: more than
+    :data:`MOVING_SPEED_MPS` forward or sideways, or :data:`MOVING_TURN_DPS`."""
+    return bool(
+        abs(command[0]) > MOVING_SPEED_MPS
+        or abs(command[1]) > MOVING_SPEED_MPS
+        or abs(command[2]) > MOVING_TURN_DPS
+    )
 
 
 def reference_gait_deg(
