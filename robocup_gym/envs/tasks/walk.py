@@ -521,9 +521,8 @@ class Walk(BaseEnv):
         self._loop_command[:] = np.nan  # the loop starts afresh at the first perception
         # the command grows from standing at the first perception
         self._working_command[:] = self.velocity_command if not self._limits_growth else 0.0
-        # with a loop or a limited growth the policy is told a command of its own; without,
-        # the given one (read at each reset: the config may have been replaced since the last)
-        if not (self.config.command_feedback_gain or self._limits_growth):
+        # read at each reset: the config may have been replaced since the last
+        if not self._tells_its_own_command:
             self.policy_command = self.velocity_command
         elif self.policy_command is self.velocity_command:
             self.policy_command = self.velocity_command.copy()
@@ -568,13 +567,18 @@ class Walk(BaseEnv):
         """Whether the command's growth is limited (``command_accel_limit``)."""
         return any(self.config.command_accel_limit)
 
+    @property
+    def _tells_its_own_command(self) -> bool:
+        """Whether the policy is told a command of its own (``policy_command``: with a loop or
+        a limited growth) rather than the one given."""
+        return bool(self.config.command_feedback_gain) or self._limits_growth
+
     def _set_perception(self, p: Perception, cycles: int = 1, episode_over: bool = False) -> None:
         super()._set_perception(p, cycles, episode_over)
         if episode_over:
             return
-        if self.policy_command is self.velocity_command and (
-            self._limits_growth or self.config.command_feedback_gain
-        ):  # a config replaced since the reset: the command given stays as given
+        if self._tells_its_own_command and self.policy_command is self.velocity_command:
+            # a config replaced since the reset: the command given stays as given
             self.policy_command = self.velocity_command.copy()
         if self._limits_growth:
             self._grow_the_command(cycles * CYCLE_S)
